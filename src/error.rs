@@ -1,0 +1,88 @@
+//! Errors of the library: problems in the data, never broken caller contracts (those assert).
+
+use std::path::PathBuf;
+
+/// Every way the data given to atlasmesh can be wrong. Each variant says what went wrong, where,
+/// and (in its doc) how to fix it.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be read or written. Check the path and its permissions.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file is malformed: its content does not follow its format. Fix the file at the given
+    /// line (1-based; 0 when the position is not a line, as in binary files).
+    #[error("{path}:{line}: {message}")]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    /// A shape cannot be used by the method (too few points, NaN, degenerate, mismatched
+    /// counts). The message names the shape and the problem.
+    #[error("shape {name}: {message}")]
+    InvalidShape { name: String, message: String },
+    /// The population as a whole cannot be used (too few shapes, different point counts,
+    /// mixed dimensions, no variance).
+    #[error("population: {0}")]
+    Population(String),
+    /// A parameter is out of its range. The message says which and the allowed range.
+    #[error("parameter: {0}")]
+    Parameter(String),
+    /// Meshing failed or produced an invalid mesh (self-intersecting outline, inverted
+    /// elements). Try a smaller element size or check the outline.
+    #[error("mesh: {0}")]
+    Mesh(String),
+    /// An atlas file is not a valid atlasmesh atlas (wrong format version, missing tensor).
+    /// Rebuild the atlas with `atlasmesh build`.
+    #[error("{path}: not a valid atlas: {message}")]
+    Atlas { path: PathBuf, message: String },
+    /// A numerical step failed (singular system, SVD did not converge). Usually the input is
+    /// degenerate: identical shapes, collinear points.
+    #[error("numerics: {0}")]
+    Numerical(String),
+}
+
+/// Short for `Result<T, atlasmesh::Error>`.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Exit code of the command-line tool for this class of error: 2 bad input, 3 I/O,
+    /// 4 numerical failure or invalid mesh.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Io { .. } => 3,
+            Error::Parse { .. }
+            | Error::InvalidShape { .. }
+            | Error::Population(_)
+            | Error::Parameter(_)
+            | Error::Atlas { .. } => 2,
+            Error::Mesh(_) | Error::Numerical(_) => 4,
+        }
+    }
+
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    pub(crate) fn parse(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.into(),
+            line,
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn shape(name: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidShape {
+            name: name.into(),
+            message: message.into(),
+        }
+    }
+}

@@ -1,0 +1,109 @@
+//! Element quality by the Jacobians at element corners (section 5.3): for bilinear and
+//! trilinear elements the Jacobian determinant is bounded by its corner values, so an element
+//! is valid when all its corner Jacobians are positive.
+
+use super::FeMesh;
+use crate::geometry::{Point, norm, sub};
+
+/// Corner measures of one element.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ElementQuality {
+    /// Smallest corner Jacobian determinant (area/volume units: length^D).
+    pub jacobian_min: f64,
+    /// Smallest scaled Jacobian: the determinant divided by the product of the corner's edge
+    /// lengths, in [-1, 1]; 1 for a square or cube corner.
+    pub scaled_jacobian_min: f64,
+}
+
+fn det<const D: usize>(v: &[Point<D>; D]) -> f64 {
+    match D {
+        2 => v[0][0] * v[1][1] - v[0][1] * v[1][0],
+        3 => {
+            v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1]) - v[0][1] * (v[1][0] * v[2][2] - v[1][2] * v[2][0])
+                + v[0][2] * (v[1][0] * v[2][1] - v[1][1] * v[2][0])
+        }
+        _ => unreachable!(),
+    }
+}
+
+/// Corner Jacobians of element `e`.
+pub fn element_quality<const D: usize>(mesh: &FeMesh<D>, e: usize) -> ElementQuality {
+    element_quality_at(mesh.kind, mesh.element(e), &mesh.nodes)
+}
+
+/// Corner Jacobians of an element given by its node indices into `nodes`.
+pub fn element_quality_at<const D: usize>(kind: super::ElementKind, el: &[usize], nodes: &[Point<D>]) -> ElementQuality {
+    let mut jmin = f64::INFINITY;
+    let mut smin = f64::INFINITY;
+    for (c, frame) in kind.corner_frames().iter().enumerate() {
+        let x = nodes[el[c]];
+        let v: [Point<D>; D] = std::array::from_fn(|k| sub(nodes[el[frame[k]]], x));
+        let j = det(&v);
+        let l: f64 = v.iter().map(|e| norm(*e)).product();
+        jmin = jmin.min(j);
+        smin = smin.min(if l > 0.0 { j / l } else { -1.0 });
+    }
+    ElementQuality { jacobian_min: jmin, scaled_jacobian_min: smin }
+}
+
+/// Per-element corner measures of a whole mesh.
+pub fn mesh_quality<const D: usize>(mesh: &FeMesh<D>) -> Vec<ElementQuality> {
+    (0..mesh.num_elements()).map(|e| element_quality(mesh, e)).collect()
+}
+
+/// Summary of a mesh's quality.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct QualitySummary {
+    pub jacobian_min: f64,
+    pub scaled_jacobian_min: f64,
+    pub inverted_elements: usize,
+}
+
+/// Minimum Jacobian, minimum scaled Jacobian and the number of elements with a non-positive
+/// corner Jacobian.
+pub fn summarize(q: &[ElementQuality]) -> QualitySummary {
+    QualitySummary {
+        jacobian_min: q.iter().map(|e| e.jacobian_min).fold(f64::INFINITY, f64::min),
+        scaled_jacobian_min: q.iter().map(|e| e.scaled_jacobian_min).fold(f64::INFINITY, f64::min),
+        inverted_elements: q.iter().filter(|e| e.jacobian_min <= 0.0).count(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fe::ElementKind;
+
+    #[test]
+    fn unit_square_has_scaled_jacobian_one() {
+        let m = FeMesh::<2> { nodes: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], kind: ElementKind::Quad4, connectivity: vec![0, 1, 2, 3] };
+        let q = element_quality(&m, 0);
+        assert!((q.scaled_jacobian_min - 1.0).abs() < 1e-15);
+        assert!((q.jacobian_min - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn unit_cube_has_scaled_jacobian_one_and_a_flipped_one_is_inverted() {
+        let nodes = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [0.0, 1.0, 1.0],
+        ];
+        let m = FeMesh::<3> { nodes, kind: ElementKind::Hex8, connectivity: (0..8).collect() };
+        assert!((element_quality(&m, 0).scaled_jacobian_min - 1.0).abs() < 1e-15);
+        let flipped = FeMesh { connectivity: vec![4, 5, 6, 7, 0, 1, 2, 3], ..m };
+        assert!(element_quality(&flipped, 0).jacobian_min < 0.0);
+    }
+
+    #[test]
+    fn a_clockwise_quad_is_inverted() {
+        let m = FeMesh::<2> { nodes: vec![[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]], kind: ElementKind::Quad4, connectivity: vec![0, 1, 2, 3] };
+        let s = summarize(&mesh_quality(&m));
+        assert_eq!(s.inverted_elements, 1);
+    }
+}

@@ -1,0 +1,495 @@
+//! Cubic B-spline free-form deformation (eq. 1) on a regular lattice, its exact smoothing
+//! energy `E_smooth` (section 2.1), and the regularized least-squares fit of eq. 9.
+//!
+//! Lattice convention: `size[d]` control points along axis `d`, spacing `h_d`; control point
+//! `j` rests at `origin + (j - 1) h`, and the lattice's domain (where every point has its full
+//! 4^D supporting control points) is `[origin, origin + (size - 3) h]`. With the control points
+//! at rest the deformation is the identity (uniform cubic B-splines reproduce linear functions).
+
+use crate::error::{Error, Result};
+use crate::geometry::{Point, bounding_box};
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+
+/// The four uniform cubic B-spline bases on a span at local parameter `t ∈ [0, 1]`, and
+/// their first and second derivatives (`order` 0, 1, 2).
+#[inline]
+pub fn cubic_bases(t: f64, order: usize) -> [f64; 4] {
+    let s = 1.0 - t;
+    match order {
+        0 => [
+            s * s * s / 6.0,
+            (3.0 * t * t * t - 6.0 * t * t + 4.0) / 6.0,
+            (-3.0 * t * t * t + 3.0 * t * t + 3.0 * t + 1.0) / 6.0,
+            t * t * t / 6.0,
+        ],
+        1 => [-s * s / 2.0, (3.0 * t * t - 4.0 * t) / 2.0, (-3.0 * t * t + 2.0 * t + 1.0) / 2.0, t * t / 2.0],
+        2 => [s, 3.0 * t - 2.0, 1.0 - 3.0 * t, t],
+        _ => [0.0; 4],
+    }
+}
+
+/// A regular lattice of control points in `D` dimensions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lattice<const D: usize> {
+    /// Start of the lattice's domain (shape units).
+    pub origin: Point<D>,
+    /// Spacing `h` of the control points along each axis (shape units).
+    pub spacing: Point<D>,
+    /// Number of control points along each axis (at least 4).
+    pub size: [usize; D],
+}
+
+impl<const D: usize> Lattice<D> {
+    /// A lattice of `grid` control points per axis whose domain covers the bounding box of
+    /// `points` enlarged by `margin` (a fraction of its extent) on every side.
+    #[track_caller]
+    pub fn around(points: &[Point<D>], grid: usize, margin: f64) -> Self {
+        assert!(grid >= 4, "a cubic B-spline lattice needs at least 4 control points per axis");
+        let (lo, hi) = bounding_box(points);
+        let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let mut origin = [0.0; D];
+        let mut spacing = [0.0; D];
+        for d in 0..D {
+            let e = (hi[d] - lo[d]).max(1e-3 * ext);
+            let m = margin * e;
+            origin[d] = lo[d] - m;
+            spacing[d] = (e + 2.0 * m) / (grid - 3) as f64;
+        }
+        Lattice { origin, spacing, size: [grid; D] }
+    }
+
+    /// Total number of control points.
+    pub fn len(&self) -> usize {
+        self.size.iter().product()
+    }
+
+    /// Whether the lattice has no control points (never, for a valid lattice).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Multi-index of a linear control point index (axis 0 fastest).
+    pub fn multi_index(&self, mut i: usize) -> [usize; D] {
+        std::array::from_fn(|d| {
+            let v = i % self.size[d];
+            i /= self.size[d];
+            v
+        })
+    }
+
+    /// Rest position of control point `i`: `origin + (j - 1) h`.
+    pub fn rest_position(&self, i: usize) -> Point<D> {
+        let j = self.multi_index(i);
+        std::array::from_fn(|d| self.origin[d] + (j[d] as f64 - 1.0) * self.spacing[d])
+    }
+
+    /// The control points at rest (the identity deformation).
+    pub fn rest(&self) -> Vec<Point<D>> {
+        (0..self.len()).map(|i| self.rest_position(i)).collect()
+    }
+
+    /// Calls `f(control index, weight)` for the `4^D` control points supporting `p`, with
+    /// their tensor-product basis values `B_i(u)` (eq. 1). Points outside the domain use the
+    /// polynomial of the nearest span (smooth extrapolation).
+    #[inline]
+    pub fn for_each_basis(&self, p: &Point<D>, mut f: impl FnMut(usize, f64)) {
+        let mut first = [0usize; D];
+        let mut b = [[0.0; 4]; D];
+        for d in 0..D {
+            let u = (p[d] - self.origin[d]) / self.spacing[d];
+            let k = (u.floor().max(0.0) as usize).min(self.size[d] - 4);
+            b[d] = cubic_bases(u - k as f64, 0);
+            first[d] = k;
+        }
+        let n = 4usize.pow(D as u32);
+        for c in 0..n {
+            let mut idx = 0;
+            let mut stride = 1;
+            let mut w = 1.0;
+            let mut cc = c;
+            for d in 0..D {
+                let l = cc % 4;
+                cc /= 4;
+                idx += (first[d] + l) * stride;
+                stride *= self.size[d];
+                w *= b[d][l];
+            }
+            f(idx, w);
+        }
+    }
+
+    /// The 1D Gram matrices `G^(o)[i][j] = ∫ N_i^(o)(u) N_j^(o)(u) du` over the domain of axis
+    /// `d` (in span units), for `o = 0, 1, 2`, stored as `[o][i][j - i + 3]`. Exact: 4-point
+    /// Gauss-Legendre per span integrates the degree-6 products exactly.
+    fn gram_1d(&self, d: usize) -> [Vec<[f64; 7]>; 3] {
+        let n = self.size[d];
+        const GX: [f64; 4] = [0.069_431_844_202_973_71, 0.330_009_478_207_571_9, 0.669_990_521_792_428_1, 0.930_568_155_797_026_3];
+        const GW: [f64; 4] = [0.173_927_422_568_726_9, 0.326_072_577_431_273_1, 0.326_072_577_431_273_1, 0.173_927_422_568_726_9];
+        std::array::from_fn(|o| {
+            let mut g = vec![[0.0; 7]; n];
+            for k in 0..n - 3 {
+                for q in 0..4 {
+                    let b = cubic_bases(GX[q], o);
+                    for l in 0..4 {
+                        for m in 0..4 {
+                            g[k + l][m + 3 - l] += GW[q] * b[l] * b[m];
+                        }
+                    }
+                }
+            }
+            g
+        })
+    }
+}
+
+/// Row-banded symmetric matrix over lattice control points: entry `(i, j)` for
+/// `|i_d - j_d| <= 3` on every axis, stored per row at offset `Σ (j_d - i_d + 3) 7^d`.
+struct Banded<const D: usize> {
+    lattice: Lattice<D>,
+    rows: Vec<f64>,
+    width: usize,
+}
+
+impl<const D: usize> Banded<D> {
+    fn new(lattice: Lattice<D>) -> Self {
+        let width = 7usize.pow(D as u32);
+        Banded { lattice, rows: vec![0.0; lattice.len() * width], width }
+    }
+
+    #[inline]
+    fn offset(&self, i: usize, j: usize) -> usize {
+        let a = self.lattice.multi_index(i);
+        let b = self.lattice.multi_index(j);
+        let mut o = 0;
+        let mut s = 1;
+        for d in 0..D {
+            o += (b[d] + 3 - a[d]) * s;
+            s *= 7;
+        }
+        o
+    }
+
+    /// Column index of row `i`'s offset `o`, if inside the lattice.
+    fn column(&self, i: usize, o: usize) -> Option<usize> {
+        let a = self.lattice.multi_index(i);
+        let mut oo = o;
+        let mut j = 0;
+        let mut stride = 1;
+        for d in 0..D {
+            let v = (a[d] + oo % 7).checked_sub(3)?;
+            oo /= 7;
+            if v >= self.lattice.size[d] {
+                return None;
+            }
+            j += v * stride;
+            stride *= self.lattice.size[d];
+        }
+        Some(j)
+    }
+
+    fn to_sparse_lower(&self) -> Result<SparseColMat<usize, f64>> {
+        let n = self.lattice.len();
+        let mut trip = Vec::new();
+        for i in 0..n {
+            for o in 0..self.width {
+                let v = self.rows[i * self.width + o];
+                if v != 0.0 {
+                    if let Some(j) = self.column(i, o) {
+                        if j <= i {
+                            trip.push(Triplet::new(i, j, v));
+                        }
+                    }
+                }
+            }
+        }
+        SparseColMat::try_new_from_triplets(n, n, &trip).map_err(|e| Error::Numerical(format!("FFD normal matrix: {e:?}")))
+    }
+}
+
+/// The exact smoothing energy matrix `K` of the lattice (section 2.1): `P^T K P` (summed over
+/// the coordinates of the control points `P`) equals
+/// `E_smooth = ∫_Ω Σ_{a,b} ||∂²f/∂x_a∂x_b||² dx` over the lattice's domain, the thin-plate
+/// bending energy, with lengths measured in units of `unit` (so that `E_smooth` is
+/// dimensionless when `unit` is the lattice's extent).
+///
+/// # Deviations from the paper
+/// The paper writes `||(Σ_i ∂/∂x_i)² f||²`; read literally (`(∂_x + ∂_y)² f`) it vanishes on
+/// every function of `x - y` and does not regularize. We take the usual expansion of the
+/// squared gradient operator into all second derivatives (Rueckert et al. 1999), which
+/// vanishes exactly on affine maps (test `smoothing_energy_vanishes_on_affine_maps`).
+fn smoothing_matrix<const D: usize>(lattice: &Lattice<D>, unit: f64) -> Banded<D> {
+    let grams: Vec<[Vec<[f64; 7]>; 3]> = (0..D).map(|d| lattice.gram_1d(d)).collect();
+    let h: Vec<f64> = (0..D).map(|d| lattice.spacing[d] / unit).collect();
+    let mut k = Banded::new(*lattice);
+    for i in 0..lattice.len() {
+        let a = lattice.multi_index(i);
+        for o in 0..k.width {
+            let Some(j) = k.column(i, o) else { continue };
+            let b = lattice.multi_index(j);
+            let mut v = 0.0;
+            for p in 0..D {
+                for q in 0..D {
+                    let mut prod = 1.0;
+                    for d in 0..D {
+                        let ord = usize::from(d == p) + usize::from(d == q);
+                        prod *= grams[d][ord][a[d]][b[d] + 3 - a[d]] * h[d].powi(1 - 2 * ord as i32);
+                    }
+                    v += prod;
+                }
+            }
+            k.rows[i * k.width + o] = v;
+        }
+    }
+    k
+}
+
+/// `E_smooth` of a control point set (see [`smoothing_matrix`]); lengths in units of `unit`.
+pub fn smoothing_energy<const D: usize>(lattice: &Lattice<D>, control: &[Point<D>], unit: f64) -> f64 {
+    let k = smoothing_matrix(lattice, unit);
+    let mut e = 0.0;
+    for i in 0..lattice.len() {
+        for o in 0..k.width {
+            if let Some(j) = k.column(i, o) {
+                let v = k.rows[i * k.width + o];
+                for d in 0..D {
+                    e += control[i][d] * v * control[j][d];
+                }
+            }
+        }
+    }
+    e / (unit * unit)
+}
+
+/// A B-spline deformation `f` (eq. 1): a lattice and its control points.
+#[derive(Clone, Debug)]
+pub struct Ffd<const D: usize> {
+    pub lattice: Lattice<D>,
+    /// Control points `P_i` (shape units), `lattice.len()` of them.
+    pub control: Vec<Point<D>>,
+}
+
+impl<const D: usize> Ffd<D> {
+    /// The identity deformation on `lattice`.
+    pub fn identity(lattice: Lattice<D>) -> Self {
+        Ffd { control: lattice.rest(), lattice }
+    }
+
+    /// `f(p) = Σ_i P_i B_i(u(p))` (eq. 1).
+    pub fn apply(&self, p: &Point<D>) -> Point<D> {
+        let mut out = [0.0; D];
+        self.lattice.for_each_basis(p, |i, w| {
+            for d in 0..D {
+                out[d] += w * self.control[i][d];
+            }
+        });
+        out
+    }
+
+    /// Jacobian matrix `∂f/∂x` at `p` (row `i`: gradient of `f_i`).
+    pub fn jacobian(&self, p: &Point<D>) -> [[f64; D]; D] {
+        let l = &self.lattice;
+        let mut first = [0usize; D];
+        let mut b = [[[0.0; 4]; 2]; D];
+        for d in 0..D {
+            let u = (p[d] - l.origin[d]) / l.spacing[d];
+            let k = (u.floor().max(0.0) as usize).min(l.size[d] - 4);
+            b[d][0] = cubic_bases(u - k as f64, 0);
+            b[d][1] = cubic_bases(u - k as f64, 1);
+            first[d] = k;
+        }
+        let mut jac = [[0.0; D]; D];
+        for c in 0..4usize.pow(D as u32) {
+            let mut idx = 0;
+            let mut stride = 1;
+            let mut cc = c;
+            let mut ls = [0usize; D];
+            for d in 0..D {
+                ls[d] = cc % 4;
+                cc /= 4;
+                idx += (first[d] + ls[d]) * stride;
+                stride *= l.size[d];
+            }
+            for a in 0..D {
+                let mut w = 1.0 / l.spacing[a];
+                for d in 0..D {
+                    w *= b[d][usize::from(d == a)][ls[d]];
+                }
+                for i in 0..D {
+                    jac[i][a] += w * self.control[idx][i];
+                }
+            }
+        }
+        jac
+    }
+}
+
+/// Parameters of an FFD fit (eq. 9).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FfdParams {
+    /// Control points per axis (paper: 20 × 20).
+    pub grid: usize,
+    /// Smoothing weight `alpha` (paper, morph: 50). Dimensionless: lengths are measured in
+    /// units of the lattice's largest extent, as for the paper's hands in the unit box.
+    pub alpha: f64,
+    /// Margin of the lattice around the source points, as a fraction of their extent.
+    pub margin: f64,
+}
+
+impl Default for FfdParams {
+    fn default() -> Self {
+        FfdParams { grid: 20, alpha: 50.0, margin: 0.1 }
+    }
+}
+
+/// The precomputed fit of an FFD to fixed source points (eq. 9): the factorized normal
+/// matrix `B^T B + alpha K`, reusable for any number of target point sets (every subject of an
+/// atlas shares the mean shape as source).
+pub struct FfdFit<const D: usize> {
+    lattice: Lattice<D>,
+    unit: f64,
+    sources: Vec<Point<D>>,
+    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+}
+
+impl<const D: usize> FfdFit<D> {
+    /// Builds and factorizes the normal matrix for the source points `sources` (shape units).
+    pub fn new(sources: &[Point<D>], params: &FfdParams) -> Result<Self> {
+        if params.grid < 4 {
+            return Err(Error::Parameter(format!("FFD grid {} is below 4 control points per axis", params.grid)));
+        }
+        if !(params.alpha.is_finite() && params.alpha >= 0.0) {
+            return Err(Error::Parameter(format!("FFD alpha {} must be finite and non-negative", params.alpha)));
+        }
+        let lattice = Lattice::around(sources, params.grid, params.margin);
+        let unit = (0..D).map(|d| lattice.spacing[d] * (lattice.size[d] - 3) as f64).fold(0.0, f64::max);
+        let mut a = smoothing_matrix(&lattice, unit);
+        for v in a.rows.iter_mut() {
+            *v *= params.alpha;
+        }
+        // Add B^T B (data term of eq. 9, lengths in `unit`).
+        let mut sup: Vec<(usize, f64)> = Vec::with_capacity(4usize.pow(D as u32));
+        for p in sources {
+            sup.clear();
+            lattice.for_each_basis(p, |i, w| sup.push((i, w)));
+            for &(i, wi) in &sup {
+                for &(j, wj) in &sup {
+                    let o = a.offset(i, j);
+                    a.rows[i * a.width + o] += wi * wj;
+                }
+            }
+        }
+        // A tiny ridge keeps control points with no support and alpha = 0 well-posed.
+        let mut diag_max: f64 = 0.0;
+        let centre = a.offset(0, 0);
+        for i in 0..lattice.len() {
+            diag_max = diag_max.max(a.rows[i * a.width + centre]);
+        }
+        for i in 0..lattice.len() {
+            a.rows[i * a.width + centre] += 1e-10 * diag_max.max(1.0);
+        }
+        let m = a.to_sparse_lower()?;
+        let llt = m
+            .sp_cholesky(faer::Side::Lower)
+            .map_err(|e| Error::Numerical(format!("FFD normal matrix is not positive definite: {e:?}")))?;
+        Ok(FfdFit { lattice, unit, sources: sources.to_vec(), llt })
+    }
+
+    /// The lattice used.
+    pub fn lattice(&self) -> &Lattice<D> {
+        &self.lattice
+    }
+
+    /// Solves eq. 9 for targets `targets[j]` of the sources: the control points minimizing
+    /// `Σ_j ||f(p_j) - q_j||² + alpha E_smooth`.
+    #[track_caller]
+    pub fn solve(&self, targets: &[Point<D>]) -> Ffd<D> {
+        assert_eq!(targets.len(), self.sources.len(), "FfdFit::solve: one target per source point");
+        let n = self.lattice.len();
+        let o = self.lattice.origin;
+        let mut rhs = Mat::<f64>::zeros(n, D);
+        for (p, q) in self.sources.iter().zip(targets) {
+            self.lattice.for_each_basis(p, |i, w| {
+                for d in 0..D {
+                    rhs[(i, d)] += w * (q[d] - o[d]) / self.unit;
+                }
+            });
+        }
+        // K annihilates affine maps, so solving for the displacement from rest would be
+        // equivalent; solving for positions relative to `origin` keeps the numbers O(1).
+        let sol = self.llt.solve(&rhs);
+        let control = (0..n).map(|i| std::array::from_fn(|d| o[d] + sol[(i, d)] * self.unit)).collect();
+        Ffd { lattice: self.lattice, control }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bspline_bases_sum_to_one_and_derivatives_to_zero() {
+        for k in 0..=20 {
+            let t = k as f64 / 20.0;
+            assert!((cubic_bases(t, 0).iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            assert!(cubic_bases(t, 1).iter().sum::<f64>().abs() < 1e-14);
+            assert!(cubic_bases(t, 2).iter().sum::<f64>().abs() < 1e-14);
+            assert!(cubic_bases(t, 0).iter().all(|&b| b >= 0.0));
+        }
+    }
+
+    #[test]
+    fn tensor_bases_sum_to_one_3d() {
+        let l = Lattice::<3>::around(&[[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]], 6, 0.1);
+        for p in [[0.1, 0.5, 2.9], [0.9, 1.9, 0.1], [0.5, 1.0, 1.5]] {
+            let mut s = 0.0;
+            l.for_each_basis(&p, |_, w| s += w);
+            assert!((s - 1.0).abs() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn undeformed_ffd_is_the_identity() {
+        let l = Lattice::<2>::around(&[[-1.0, 0.0], [3.0, 2.0]], 8, 0.1);
+        let f = Ffd::identity(l);
+        for p in [[-1.0, 0.0], [0.3, 1.7], [3.0, 2.0], [1.234, 0.001]] {
+            let q = f.apply(&p);
+            assert!((q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12, "{p:?} -> {q:?}");
+            let j = f.jacobian(&p);
+            assert!((j[0][0] - 1.0).abs() < 1e-12 && j[0][1].abs() < 1e-12 && (j[1][1] - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn smoothing_energy_vanishes_on_affine_maps() {
+        let l = Lattice::<2>::around(&[[0.0, 0.0], [1.0, 1.0]], 7, 0.0);
+        let affine: Vec<Point<2>> = l.rest().iter().map(|p| [2.0 * p[0] + 0.5 * p[1] + 1.0, -p[0] + 3.0 * p[1]]).collect();
+        assert!(smoothing_energy(&l, &affine, 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn smoothing_energy_is_exact_for_a_quadratic() {
+        // Control points reproducing f(x, y) = (x², 0): E = ∫∫ (f_xx)² = 4 · area.
+        // Uniform cubic B-splines reproduce x² with control values x_j² - h²/3.
+        let l = Lattice::<2>::around(&[[0.0, 0.0], [1.0, 1.0]], 9, 0.0);
+        let h = l.spacing[0];
+        let ctrl: Vec<Point<2>> = l.rest().iter().map(|p| [p[0] * p[0] - h * h / 3.0, 0.0]).collect();
+        let f = Ffd { lattice: l, control: ctrl.clone() };
+        let q = f.apply(&[0.3, 0.6]);
+        assert!((q[0] - 0.09).abs() < 1e-12, "reproduces x²: {q:?}");
+        let e = smoothing_energy(&l, &ctrl, 1.0);
+        assert!((e - 4.0).abs() < 1e-9, "E = {e}");
+    }
+
+    #[test]
+    fn fit_recovers_a_smooth_deformation() {
+        let src: Vec<Point<2>> = (0..400).map(|i| [(i % 20) as f64 / 19.0, (i / 20) as f64 / 19.0]).collect();
+        let g = |p: &Point<2>| [p[0] + 0.05 * (2.0 * p[1]).sin(), p[1] + 0.03 * p[0] * p[0]];
+        let dst: Vec<Point<2>> = src.iter().map(g).collect();
+        let fit = FfdFit::new(&src, &FfdParams { grid: 10, alpha: 1e-4, margin: 0.1 }).unwrap();
+        let f = fit.solve(&dst);
+        let err: f64 = src.iter().zip(&dst).map(|(p, q)| crate::geometry::dist2(f.apply(p), *q)).sum::<f64>() / 400.0;
+        assert!(err.sqrt() < 1e-3, "rms {}", err.sqrt());
+    }
+}

@@ -1,0 +1,87 @@
+//! Principal component analysis of aligned shapes (section 2.3), by a thin SVD of the centred
+//! data matrix (never the `N·D × N·D` covariance).
+
+use crate::error::{Error, Result};
+use crate::geometry::Point;
+use faer::Mat;
+
+/// Principal components of a set of aligned shapes.
+#[derive(Clone, Debug)]
+pub struct Pca {
+    /// Eigenmodes `Psi`: `N·D × (n_s - 1)`, orthonormal columns, coordinates interleaved
+    /// `[x_1, y_1, (z_1,) x_2, ...]` as in the paper's vectorization.
+    pub modes: Mat<f64>,
+    /// Eigenvalues `lambda_k` of the covariance `Phi Phi^T / (n_s - 1)`, decreasing.
+    pub eigenvalues: Vec<f64>,
+}
+
+impl Pca {
+    /// Cumulative share of the total variance explained by the first `1, 2, …` modes.
+    pub fn cumulative_variance(&self) -> Vec<f64> {
+        let total: f64 = self.eigenvalues.iter().sum();
+        let mut acc = 0.0;
+        self.eigenvalues
+            .iter()
+            .map(|l| {
+                acc += l;
+                if total > 0.0 { acc / total } else { 1.0 }
+            })
+            .collect()
+    }
+
+    /// The number of modes needed to explain at least the share `p` of the variance.
+    pub fn modes_for_variance(&self, p: f64) -> usize {
+        let cum = self.cumulative_variance();
+        cum.iter().position(|&c| c >= p - 1e-12).map_or(cum.len(), |i| i + 1)
+    }
+}
+
+/// PCA of the shapes `aligned` (each `N` points) about `mean` (section 2.3): thin SVD of the
+/// `N·D × n_s` matrix `Phi = [S_k^a - S_bar]`; `Psi = U`, `lambda = sigma² / (n_s - 1)`.
+/// Keeps the `n_s - 1` modes (the last singular value of centred data is zero).
+pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Result<Pca> {
+    let ns = aligned.len();
+    if ns < 2 {
+        return Err(Error::Population("PCA needs at least 2 shapes".into()));
+    }
+    let rows = mean.len() * D;
+    let phi = Mat::<f64>::from_fn(rows, ns, |r, k| aligned[k][r / D][r % D] - mean[r / D][r % D]);
+    let svd = phi.thin_svd().map_or_else(|_| Err(Error::Numerical("the SVD of the shape data did not converge".into())), Ok)?;
+    let keep = ns - 1;
+    let s = svd.S().column_vector();
+    let eigenvalues: Vec<f64> = (0..keep).map(|k| s[k] * s[k] / (ns - 1) as f64).collect();
+    if eigenvalues.first().is_none_or(|&l| l <= 0.0) {
+        return Err(Error::Population("the shapes are identical after alignment: there is no variance to model".into()));
+    }
+    let modes = svd.U().subcols(0, keep).to_owned();
+    Ok(Pca { modes, eigenvalues })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pca_reconstructs_its_data() {
+        let mean: Vec<Point<2>> = (0..10).map(|i| [i as f64, (i * i) as f64 * 0.1]).collect();
+        let shapes: Vec<Vec<Point<2>>> = (0..6)
+            .map(|k| mean.iter().enumerate().map(|(i, p)| [p[0] + 0.1 * ((k * i) as f64).sin(), p[1] + 0.05 * (k as f64 - 2.5)]).collect())
+            .collect();
+        let mut m = vec![[0.0; 2]; 10];
+        for s in &shapes {
+            for (a, p) in m.iter_mut().zip(s) {
+                a[0] += p[0] / 6.0;
+                a[1] += p[1] / 6.0;
+            }
+        }
+        let p = pca(&shapes, &m).unwrap();
+        for s in &shapes {
+            let x: Vec<f64> = (0..20).map(|r| s[r / 2][r % 2] - m[r / 2][r % 2]).collect();
+            for r in 0..20 {
+                let rec: f64 = (0..p.modes.ncols()).map(|k| p.modes[(r, k)] * (0..20).map(|q| p.modes[(q, k)] * x[q]).sum::<f64>()).sum();
+                assert!((rec - x[r]).abs() < 1e-10);
+            }
+        }
+        assert!(p.eigenvalues.windows(2).all(|w| w[0] >= w[1]));
+    }
+}

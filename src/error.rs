@@ -71,7 +71,7 @@ impl Error {
         }
     }
 
-    pub(crate) fn parse(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
+    pub fn parse(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
         Error::Parse {
             path: path.into(),
             line,

@@ -26,3 +26,5 @@ pub mod procrustes;
 pub mod resample;
 
 pub use error::{Error, Result};
+pub mod pipeline;
+pub mod report;

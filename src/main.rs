@@ -1,1 +1,212 @@
-fn main() {}
+//! The `atlasmesh` command-line tool.
+
+use anyhow::Context;
+use atlasmesh::model::{Atlas, ModeSelection};
+use atlasmesh::pipeline::{self, PopulationOptions, RunParams};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Subject-specific finite element meshes from a statistical shape atlas.
+#[derive(Parser)]
+#[command(name = "atlasmesh", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+    /// No progress output.
+    #[arg(long, global = true)]
+    quiet: bool,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Leave-one-out experiment: for each shape, atlas from the others, fit, morph, measure.
+    Loo {
+        #[command(flatten)]
+        pop: PopArgs,
+        #[command(flatten)]
+        run: RunArgs,
+        /// Output folder (report.json, meshes, plots).
+        #[arg(long)]
+        out: PathBuf,
+        /// Worker threads (0 = all cores).
+        #[arg(long, default_value_t = 0)]
+        jobs: usize,
+    },
+    /// Build an atlas (shape model + mean mesh) and save it.
+    Build {
+        #[command(flatten)]
+        pop: PopArgs,
+        #[command(flatten)]
+        run: RunArgs,
+        /// Atlas file to write (safetensors).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Fit subjects with a saved atlas, morph the mean mesh onto them, and measure.
+    Fit {
+        /// Atlas file written by `atlasmesh build`.
+        #[arg(long)]
+        atlas: PathBuf,
+        /// Subject outline file(s) (CSV, text, VTK).
+        #[arg(long, num_args = 1.., required = true)]
+        subject: Vec<PathBuf>,
+        /// Outlines in CSV/text files are open.
+        #[arg(long)]
+        open: bool,
+        #[command(flatten)]
+        run: RunArgs,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Run the whole method on built-in synthetic data (no files needed).
+    Demo {
+        /// Output folder.
+        #[arg(long, default_value = "atlasmesh-demo")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Args)]
+struct PopArgs {
+    /// Shape files: long CSV (shape,point,x,y), text (x y per line) or legacy VTK.
+    #[arg(long, num_args = 1.., required = true)]
+    shapes: Vec<PathBuf>,
+    /// Outlines are open (the hands: the wrist is not part of the outline).
+    #[arg(long, conflicts_with = "closed")]
+    open: bool,
+    /// Outlines are closed (default).
+    #[arg(long)]
+    closed: bool,
+    /// Resample every outline to N points along a smooth curve through its points.
+    #[arg(long, value_name = "N")]
+    resample: Option<usize>,
+    /// Keep M modes.
+    #[arg(long, value_name = "M", conflicts_with = "variance")]
+    modes: Option<usize>,
+    /// Keep the fewest modes explaining this share of the variance (default 0.985).
+    #[arg(long, value_name = "P")]
+    variance: Option<f64>,
+    /// Element edge length of the mean mesh, as a share of the mean's largest extent.
+    #[arg(long, default_value_t = 0.015)]
+    element_size: f64,
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// FFD control points per axis for the morph (paper: 20).
+    #[arg(long, default_value_t = 20)]
+    grid: usize,
+    /// FFD smoothing weight of the morph (paper: 50).
+    #[arg(long, default_value_t = 50.0)]
+    alpha: f64,
+    /// Use only the one-way (instance to subject) closest points in the fit, as the paper.
+    #[arg(long)]
+    one_way: bool,
+    /// Starting rotations tried by the pre-alignment.
+    #[arg(long, default_value_t = 8)]
+    starts: usize,
+    /// Skip the PNG plots.
+    #[arg(long)]
+    no_plots: bool,
+}
+
+impl RunArgs {
+    fn params(&self) -> RunParams {
+        let mut p = RunParams::default();
+        p.morph.grid = self.grid;
+        p.morph.alpha = self.alpha;
+        p.fit.symmetric = !self.one_way;
+        p.fit.starts = self.starts;
+        p.plots = !self.no_plots;
+        p
+    }
+}
+
+fn dataset_name(paths: &[PathBuf]) -> String {
+    paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" ")
+}
+
+fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
+    p.atlas.modes = match (pop.modes, pop.variance) {
+        (Some(m), _) => ModeSelection::Count(m),
+        (None, Some(v)) => ModeSelection::Variance(v),
+        (None, None) => ModeSelection::Variance(0.985),
+    };
+    p.atlas.element_size = pop.element_size;
+}
+
+fn print_summary(r: &atlasmesh::report::Report, out: &std::path::Path) {
+    let s = &r.summary;
+    println!(
+        "{} subjects: {} succeeded, {} meshes valid; median fit {:.1} ms, median relative RMS distance {:.4}, median normal correlation {:.3}",
+        s.subjects,
+        s.succeeded,
+        s.meshes_valid,
+        s.median_fit_seconds * 1e3,
+        s.median_rms_distance_relative,
+        s.median_normal_correlation
+    );
+    println!("report: {}", out.join("report.json").display());
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    faer::set_global_parallelism(faer::Par::Seq);
+    match cli.command {
+        Command::Loo { pop, run, out, jobs } => {
+            let mut params = run.params();
+            apply_pop(&mut params, &pop);
+            let shapes = pipeline::load_population(&pop.shapes, &PopulationOptions { closed: !pop.open, resample: pop.resample })?;
+            let r = pipeline::leave_one_out(&shapes, &dataset_name(&pop.shapes), &params, &out, jobs, cli.quiet)?;
+            print_summary(&r, &out);
+        }
+        Command::Build { pop, run, out } => {
+            let mut params = run.params();
+            apply_pop(&mut params, &pop);
+            let shapes = pipeline::load_population(&pop.shapes, &PopulationOptions { closed: !pop.open, resample: pop.resample })?;
+            let a = pipeline::build(&shapes, &params, &out)?;
+            println!(
+                "atlas: {} ({} shapes, {} points, {} modes explaining {:.4} of the variance, mean mesh {} elements)",
+                out.display(),
+                shapes.len(),
+                a.mean.len(),
+                a.num_modes(),
+                a.cumulative_variance[a.num_modes() - 1],
+                a.mesh.num_elements()
+            );
+        }
+        Command::Fit { atlas, subject, open, run, out } => {
+            let a = Atlas::<2>::load(&atlas)?;
+            let mut params = run.params();
+            params.atlas = a.params;
+            let mut subjects = Vec::new();
+            for p in &subject {
+                for s in atlasmesh::io::read_outlines(p, !open)? {
+                    s.validate().map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;
+                    subjects.push(s);
+                }
+            }
+            let r = pipeline::fit_subjects(&a, &subjects, &dataset_name(&subject), &params, &out, cli.quiet)?;
+            print_summary(&r, &out);
+        }
+        Command::Demo { out } => {
+            let r = pipeline::demo(&out, cli.quiet).context("demo")?;
+            print_summary(&r, &out);
+            println!("meshes (VTU) and plots (PNG) in {}", out.display());
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            let code = e.downcast_ref::<atlasmesh::Error>().map_or(1, |e| e.exit_code());
+            ExitCode::from(code)
+        }
+    }
+}

@@ -1,0 +1,267 @@
+//! The run report: `report.json` (fixed field names, for scripts) and PNG plots (plotters):
+//! cumulative variance (fig. 5), `E_d` per iteration (fig. 11), and per subject the mean,
+//! the subject, the fit's locus and the morphed mesh coloured by scaled Jacobian (fig. 9).
+
+use crate::error::{Error, Result};
+use crate::fe::FeMesh;
+use crate::fe::quality::mesh_quality;
+use crate::geometry::{Point, bounding_box};
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// Per-subject figures.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SubjectReport {
+    pub name: String,
+    /// Correspondence updates of Algorithm 1.
+    pub iterations: usize,
+    /// Wall time of the fit (seconds).
+    pub fit_seconds: f64,
+    /// `E_d` (eq. 6) at the end of the fit, subject units squared.
+    pub e_d: f64,
+    /// Two-way RMS distance between the fitted instance and the subject (subject units).
+    pub rms_distance: f64,
+    /// `rms_distance` / the subject's bounding-box diagonal.
+    pub rms_distance_relative: f64,
+    /// Correlation of normals between mean and subject at corresponding points (eq. 13).
+    pub normal_correlation: f64,
+    pub jacobian_min: f64,
+    pub scaled_jacobian_min: f64,
+    pub inverted_elements: usize,
+    /// `rms_distance_relative < 0.01` and no inverted element.
+    pub success: bool,
+    /// Whether the last inner loop of Algorithm 1 met its tolerance.
+    pub converged: bool,
+    /// `E_d` at every iteration.
+    pub e_d_history: Vec<f64>,
+    /// Output files of this subject, relative to the report.
+    pub files: Vec<String>,
+}
+
+/// Figures over all subjects.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Summary {
+    pub subjects: usize,
+    pub succeeded: usize,
+    pub meshes_valid: usize,
+    pub median_fit_seconds: f64,
+    pub median_rms_distance_relative: f64,
+    pub median_normal_correlation: f64,
+}
+
+/// The mean mesh's figures.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MeanMeshReport {
+    pub nodes: usize,
+    pub elements: usize,
+    pub element_kind: String,
+    pub scaled_jacobian_min: f64,
+    pub jacobian_min: f64,
+}
+
+/// `report.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Report {
+    pub dataset: String,
+    pub dimension: usize,
+    pub modes: usize,
+    /// Cumulative variance share, one value per kept mode.
+    pub variance_explained: Vec<f64>,
+    /// Every parameter of the run (enough to repeat it).
+    pub parameters: serde_json::Value,
+    pub mean_mesh: Option<MeanMeshReport>,
+    pub subjects: Vec<SubjectReport>,
+    pub summary: Summary,
+    pub atlasmesh_version: String,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+impl Summary {
+    /// Summary of the subjects' figures.
+    pub fn of(subjects: &[SubjectReport]) -> Self {
+        Summary {
+            subjects: subjects.len(),
+            succeeded: subjects.iter().filter(|s| s.success).count(),
+            meshes_valid: subjects.iter().filter(|s| s.inverted_elements == 0).count(),
+            median_fit_seconds: median(subjects.iter().map(|s| s.fit_seconds).collect()),
+            median_rms_distance_relative: median(subjects.iter().map(|s| s.rms_distance_relative).collect()),
+            median_normal_correlation: median(subjects.iter().map(|s| s.normal_correlation).collect()),
+        }
+    }
+}
+
+impl Report {
+    /// Writes the report as pretty JSON (atomically). NaN becomes null.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let s = serde_json::to_string_pretty(self).map_err(|e| Error::Numerical(format!("report: {e}")))?;
+        crate::io::write_atomic(path, s.as_bytes())
+    }
+}
+
+/// Registers a font for plot labels from the usual system locations; `false` when none is
+/// found (plots are then drawn without text).
+fn font_available() -> bool {
+    static FONT: OnceLock<bool> = OnceLock::new();
+    *FONT.get_or_init(|| {
+        let candidates = [
+            "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/TTF/DejaVuSans.ttf",
+            "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+            "/Library/Fonts/Arial.ttf",
+            "C:\\Windows\\Fonts\\arial.ttf",
+        ];
+        for c in candidates {
+            if let Ok(b) = std::fs::read(c) {
+                let leaked: &'static [u8] = Box::leak(b.into_boxed_slice());
+                if plotters::style::register_font("sans-serif", FontStyle::Normal, leaked).is_ok() {
+                    return true;
+                }
+            }
+        }
+        false
+    })
+}
+
+fn perr<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::io(path, std::io::Error::other(format!("plot: {e:?}")))
+}
+
+/// Plots the cumulative variance share against the number of modes (fig. 5).
+pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) -> Result<()> {
+    let text = font_available();
+    let root = BitMapBackend::new(path, (640, 420)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let n = cumulative.len().max(1);
+    let lo = cumulative.first().copied().unwrap_or(0.0).min(0.9) - 0.02;
+    let mut b = ChartBuilder::on(&root);
+    b.margin(12).x_label_area_size(if text { 36 } else { 5 }).y_label_area_size(if text { 52 } else { 5 });
+    if text {
+        b.caption("Cumulative variance", ("sans-serif", 20));
+    }
+    let mut chart = b.build_cartesian_2d(0.5f64..n as f64 + 0.5, lo..1.005f64).map_err(perr(path))?;
+    if text {
+        chart.configure_mesh().x_desc("number of modes").y_desc("share of variance").draw().map_err(perr(path))?;
+    }
+    let pts: Vec<(f64, f64)> = cumulative.iter().enumerate().map(|(i, v)| ((i + 1) as f64, *v)).collect();
+    chart.draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2))).map_err(perr(path))?;
+    chart
+        .draw_series(pts.iter().enumerate().map(|(i, p)| Circle::new(*p, 4, if i < kept { RED.filled() } else { BLUE.filled() })))
+        .map_err(perr(path))?;
+    root.present().map_err(perr(path))?;
+    Ok(())
+}
+
+/// Plots `E_d` against the iteration for every subject (fig. 11), log scale.
+pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
+    let text = font_available();
+    let root = BitMapBackend::new(path, (720, 460)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let maxit = histories.iter().map(|h| h.1.len()).max().unwrap_or(1).max(2);
+    let vals: Vec<f64> = histories.iter().flat_map(|h| h.1.iter().copied()).filter(|v| *v > 0.0 && v.is_finite()).collect();
+    let lo = vals.iter().copied().fold(f64::INFINITY, f64::min).max(1e-300);
+    let hi = vals.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
+    let mut b = ChartBuilder::on(&root);
+    b.margin(12).x_label_area_size(if text { 36 } else { 5 }).y_label_area_size(if text { 64 } else { 5 });
+    if text {
+        b.caption("E_d per iteration", ("sans-serif", 20));
+    }
+    let mut chart = b.build_cartesian_2d(0f64..maxit as f64, (lo..hi).log_scale()).map_err(perr(path))?;
+    if text {
+        chart.configure_mesh().x_desc("iteration").y_desc("E_d").draw().map_err(perr(path))?;
+    }
+    for (k, (_, h)) in histories.iter().enumerate() {
+        let color = Palette99::pick(k).to_rgba();
+        chart
+            .draw_series(LineSeries::new(h.iter().enumerate().filter(|(_, v)| **v > 0.0).map(|(i, v)| (i as f64, *v)), color.stroke_width(1)))
+            .map_err(perr(path))?;
+    }
+    root.present().map_err(perr(path))?;
+    Ok(())
+}
+
+/// Colour of a scaled Jacobian in [-1, 1]: red (≤ 0) through yellow to green (1).
+fn jacobian_color(s: f64) -> RGBColor {
+    if s <= 0.0 {
+        return RGBColor(200, 0, 0);
+    }
+    let t = s.clamp(0.0, 1.0);
+    let (r, g) = if t < 0.5 { (255.0, 510.0 * t) } else { (510.0 * (1.0 - t), 255.0) };
+    RGBColor(r as u8, g as u8, 60)
+}
+
+/// Per-subject figure (fig. 9): left, the mean (red), the subject (blue) and the locus of the
+/// instance (green), all in the subject frame; right, the morphed mesh coloured by scaled
+/// Jacobian. Outlines are lists of polylines.
+pub fn plot_subject(path: &Path, title: &str, mean: &[Point<2>], subject: &[Point<2>], locus: &[Vec<Point<2>>], mesh: &FeMesh<2>, closed: bool) -> Result<()> {
+    let text = font_available();
+    let root = BitMapBackend::new(path, (1100, 540)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let (left, right) = root.split_horizontally(550);
+    let mut all: Vec<Point<2>> = subject.to_vec();
+    all.extend_from_slice(mean);
+    all.extend(locus.iter().flatten().copied());
+    all.extend_from_slice(&mesh.nodes);
+    let (lo, hi) = bounding_box(&all);
+    let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.55 + 1e-12;
+    let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    // Image convention of the data (y down) is kept: y axis reversed.
+    let xr = c[0] - ext..c[0] + ext;
+    let yr = c[1] + ext..c[1] - ext;
+    let line = |pts: &[Point<2>]| -> Vec<(f64, f64)> {
+        let mut v: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
+        if closed {
+            if let Some(f) = v.first().copied() {
+                v.push(f);
+            }
+        }
+        v
+    };
+    {
+        let mut b = ChartBuilder::on(&left);
+        b.margin(10);
+        if text {
+            b.caption(format!("{title}: fit"), ("sans-serif", 18));
+        }
+        let mut ch = b.build_cartesian_2d(xr.clone(), yr.clone()).map_err(perr(path))?;
+        for l in locus {
+            ch.draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1))).map_err(perr(path))?;
+        }
+        ch.draw_series(LineSeries::new(line(mean), RED.stroke_width(2))).map_err(perr(path))?;
+        ch.draw_series(LineSeries::new(line(subject), BLUE.stroke_width(2))).map_err(perr(path))?;
+    }
+    {
+        let mut b = ChartBuilder::on(&right);
+        b.margin(10);
+        if text {
+            b.caption(format!("{title}: mesh (scaled Jacobian)"), ("sans-serif", 18));
+        }
+        let mut ch = b.build_cartesian_2d(xr, yr).map_err(perr(path))?;
+        let q = mesh_quality(mesh);
+        ch.draw_series((0..mesh.num_elements()).map(|e| {
+            let pts: Vec<(f64, f64)> = mesh.element(e).iter().map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1])).collect();
+            Polygon::new(pts, jacobian_color(q[e].scaled_jacobian_min).filled())
+        }))
+        .map_err(perr(path))?;
+        ch.draw_series((0..mesh.num_elements()).map(|e| {
+            let mut pts: Vec<(f64, f64)> = mesh.element(e).iter().map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1])).collect();
+            pts.push(pts[0]);
+            PathElement::new(pts, BLACK.mix(0.6).stroke_width(1))
+        }))
+        .map_err(perr(path))?;
+        ch.draw_series(LineSeries::new(line(subject), BLUE.mix(0.7).stroke_width(1))).map_err(perr(path))?;
+    }
+    root.present().map_err(perr(path))?;
+    Ok(())
+}

@@ -1,1 +1,86 @@
-fn main() {}
+//! Benchmarks of issue 2: one hand fit (2001 points, 11 modes) on one core, and the whole
+//! 40-hand leave-one-out. Reads `$ATLASMESH_DATA/imm-hands-2d`; without it, a seeded
+//! synthetic population of the same size stands in.
+
+use atlasmesh::fit::{FitParams, Fitter};
+use atlasmesh::geometry::{ClosestPointIndex, Shape};
+use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
+use atlasmesh::pipeline::{
+    PopulationOptions, RunParams, demo_population, leave_one_out, load_population,
+};
+use atlasmesh::resample::resample_corresponding;
+use criterion::{Criterion, criterion_group, criterion_main};
+
+fn hands() -> (Vec<Shape<2>>, bool) {
+    if let Some(d) = std::env::var_os("ATLASMESH_DATA") {
+        let p = std::path::Path::new(&d).join("imm-hands-2d/hands_long.csv");
+        let s = load_population(
+            &[p],
+            &PopulationOptions {
+                closed: false,
+                resample: Some(2001),
+            },
+        )
+        .expect("hands data");
+        return (s, true);
+    }
+    let pop = demo_population(40, 56, 7);
+    (
+        resample_corresponding(&pop, 2001, true)
+            .expect("synthetic")
+            .0,
+        false,
+    )
+}
+
+fn bench(c: &mut Criterion) {
+    faer::set_global_parallelism(faer::Par::Seq);
+    let (shapes, real) = hands();
+    let label = if real { "imm-hands" } else { "synthetic" };
+    let params = AtlasParams {
+        modes: ModeSelection::Count(11),
+        ..AtlasParams::default()
+    };
+    let atlas = Atlas::build(&shapes[1..], &params).expect("atlas");
+    let fitter = Fitter::new(&atlas);
+    let subject = &shapes[0];
+    let index = ClosestPointIndex::from_shape(subject);
+    let mut g = c.benchmark_group("issue2");
+    g.sample_size(10);
+    g.bench_function(format!("hand_fit_2001pts_11modes_{label}"), |b| {
+        b.iter(|| {
+            fitter
+                .fit(subject, &index, &FitParams::default())
+                .expect("fit")
+        })
+    });
+    g.bench_function(format!("hand_fit_one_way_one_start_{label}"), |b| {
+        b.iter(|| {
+            fitter
+                .fit(
+                    subject,
+                    &index,
+                    &FitParams {
+                        symmetric: false,
+                        starts: 1,
+                        full_starts: 1,
+                        ..FitParams::default()
+                    },
+                )
+                .expect("fit")
+        })
+    });
+    let mut run = RunParams::default();
+    run.atlas = params;
+    run.plots = false;
+    let out = std::env::temp_dir().join("atlasmesh-bench-loo");
+    g.sample_size(10);
+    g.measurement_time(std::time::Duration::from_secs(60));
+    g.bench_function(format!("hands_loo_40_{label}"), |b| {
+        b.iter(|| leave_one_out(&shapes, label, &run, &out, 0, true).expect("loo"))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -6,7 +6,12 @@ use crate::geometry::{ClosestPointIndex, Point, Shape, SurfacePoint, normalize};
 /// Root mean square distance between two shapes taken both ways:
 /// `sqrt((mean_a d(a_i, B)² + mean_b d(b_j, A)²) / 2)`, with `d` the distance to the closest
 /// point on the other shape's facets. Units of the shapes.
-pub fn two_way_rms<const D: usize>(a: &[Point<D>], a_facets: &[[usize; D]], b: &Shape<D>, b_index: &ClosestPointIndex<D>) -> f64 {
+pub fn two_way_rms<const D: usize>(
+    a: &[Point<D>],
+    a_facets: &[[usize; D]],
+    b: &Shape<D>,
+    b_index: &ClosestPointIndex<D>,
+) -> f64 {
     let fwd = a.iter().map(|p| b_index.closest(p).dist2).sum::<f64>() / a.len() as f64;
     let ai = ClosestPointIndex::new(a, a_facets);
     let bwd = b.points.iter().map(|q| ai.closest(q).dist2).sum::<f64>() / b.points.len() as f64;
@@ -43,12 +48,18 @@ pub fn normals_at<const D: usize>(subject: &Shape<D>, points: &[SurfacePoint<D>]
 /// of either set, so the normals may be in different frames.
 #[track_caller]
 pub fn normal_correlation<const D: usize>(x: &[Point<D>], y: &[Point<D>]) -> f64 {
-    assert_eq!(x.len(), y.len(), "normal_correlation: corresponding samples");
+    assert_eq!(
+        x.len(),
+        y.len(),
+        "normal_correlation: corresponding samples"
+    );
     let n = x.len() as f64;
     if x.len() < 2 {
         return 0.0;
     }
-    let mean = |v: &[Point<D>]| -> Point<D> { std::array::from_fn(|d| v.iter().map(|p| p[d]).sum::<f64>() / n) };
+    let mean = |v: &[Point<D>]| -> Point<D> {
+        std::array::from_fn(|d| v.iter().map(|p| p[d]).sum::<f64>() / n)
+    };
     let (mx, my) = (mean(x), mean(y));
     let mut sxy = [[0.0; D]; D];
     let mut syy = [[0.0; D]; D];
@@ -67,7 +78,11 @@ pub fn normal_correlation<const D: usize>(x: &[Point<D>], y: &[Point<D>]) -> f64
         return 0.0;
     }
     // Σ22^{-1} Σ21 for every component by Gaussian elimination with a tiny ridge.
-    let ridge = 1e-12 * (0..D).map(|i| syy[i][i]).sum::<f64>().max(f64::MIN_POSITIVE);
+    let ridge = 1e-12
+        * (0..D)
+            .map(|i| syy[i][i])
+            .sum::<f64>()
+            .max(f64::MIN_POSITIVE);
     let mut explained = 0.0;
     for i in 0..D {
         let mut a = syy;
@@ -77,7 +92,9 @@ pub fn normal_correlation<const D: usize>(x: &[Point<D>], y: &[Point<D>]) -> f64
         let mut b = sxy[i];
         // Solve a z = b.
         for c in 0..D {
-            let piv = (c..D).max_by(|&p, &q| a[p][c].abs().total_cmp(&a[q][c].abs())).unwrap_or(c);
+            let piv = (c..D)
+                .max_by(|&p, &q| a[p][c].abs().total_cmp(&a[q][c].abs()))
+                .unwrap_or(c);
             a.swap(c, piv);
             b.swap(c, piv);
             if a[c][c].abs() < f64::MIN_POSITIVE {
@@ -94,7 +111,11 @@ pub fn normal_correlation<const D: usize>(x: &[Point<D>], y: &[Point<D>]) -> f64
         let mut z = [0.0; D];
         for c in (0..D).rev() {
             let s: f64 = (c + 1..D).map(|k| a[c][k] * z[k]).sum();
-            z[c] = if a[c][c].abs() < f64::MIN_POSITIVE { 0.0 } else { (b[c] - s) / a[c][c] };
+            z[c] = if a[c][c].abs() < f64::MIN_POSITIVE {
+                0.0
+            } else {
+                (b[c] - s) / a[c][c]
+            };
         }
         explained += (0..D).map(|k| sxy[i][k] * z[k]).sum::<f64>();
     }
@@ -107,11 +128,24 @@ mod tests {
 
     #[test]
     fn normals_correlate_perfectly_with_a_rotated_copy_and_not_with_noise() {
-        let x: Vec<Point<2>> = (0..100).map(|i| { let t = i as f64 * 0.1; [t.cos(), t.sin()] }).collect();
+        let x: Vec<Point<2>> = (0..100)
+            .map(|i| {
+                let t = i as f64 * 0.1;
+                [t.cos(), t.sin()]
+            })
+            .collect();
         let (s, c) = 0.8f64.sin_cos();
-        let y: Vec<Point<2>> = x.iter().map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]]).collect();
+        let y: Vec<Point<2>> = x
+            .iter()
+            .map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]])
+            .collect();
         assert!((normal_correlation(&x, &y) - 1.0).abs() < 1e-9);
-        let z: Vec<Point<2>> = (0..100).map(|i| { let t = (i * 7919 % 101) as f64; [t.cos(), t.sin()] }).collect();
+        let z: Vec<Point<2>> = (0..100)
+            .map(|i| {
+                let t = (i * 7919 % 101) as f64;
+                [t.cos(), t.sin()]
+            })
+            .collect();
         assert!(normal_correlation(&x, &z) < 0.4);
     }
 }

@@ -20,18 +20,33 @@ fn points_xml<const D: usize>(out: &mut String, pts: &[Point<D>]) {
 /// Writes an FE mesh as VTU (readable by ParaView and meshio), with cell data `jacobian_min`
 /// and `scaled_jacobian_min` (corner minima, section 5.3), and, when `reference` is given (the
 /// same mesh before morphing), point data `displacement` (node position minus reference).
-pub fn write_vtu<const D: usize>(path: &Path, mesh: &FeMesh<D>, reference: Option<&FeMesh<D>>) -> Result<()> {
+pub fn write_vtu<const D: usize>(
+    path: &Path,
+    mesh: &FeMesh<D>,
+    reference: Option<&FeMesh<D>>,
+) -> Result<()> {
     let q = mesh_quality(mesh);
     let k = mesh.kind.nodes();
     let ne = mesh.num_elements();
     let mut s = String::with_capacity(mesh.nodes.len() * 80 + ne * 60);
     s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n");
-    let _ = writeln!(s, "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">", mesh.nodes.len(), ne);
+    let _ = writeln!(
+        s,
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        mesh.nodes.len(),
+        ne
+    );
     if let Some(r) = reference {
         s.push_str("      <PointData Vectors=\"displacement\">\n        <DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n");
         for (p, o) in mesh.nodes.iter().zip(&r.nodes) {
             let z = if D > 2 { p[2] - o[2] } else { 0.0 };
-            let _ = writeln!(s, "          {:.17e} {:.17e} {:.17e}", p[0] - o[0], p[1] - o[1], z);
+            let _ = writeln!(
+                s,
+                "          {:.17e} {:.17e} {:.17e}",
+                p[0] - o[0],
+                p[1] - o[1],
+                z
+            );
         }
         s.push_str("        </DataArray>\n      </PointData>\n");
     }
@@ -61,7 +76,9 @@ pub fn write_vtu<const D: usize>(path: &Path, mesh: &FeMesh<D>, reference: Optio
     for _ in 0..ne {
         let _ = writeln!(s, "          {}", mesh.kind.vtk_type());
     }
-    s.push_str("        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
+    s.push_str(
+        "        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n",
+    );
     crate::io::write_atomic(path, s.as_bytes())
 }
 
@@ -70,17 +87,38 @@ pub fn write_vtp<const D: usize>(path: &Path, shape: &Shape<D>) -> Result<()> {
     let mut s = String::new();
     s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <PolyData>\n");
     let tag = if D == 2 { "Lines" } else { "Polys" };
-    let (nl, np) = if D == 2 { (shape.facets.len(), 0) } else { (0, shape.facets.len()) };
-    let _ = writeln!(s, "    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"{nl}\" NumberOfStrips=\"0\" NumberOfPolys=\"{np}\">", shape.points.len());
+    let (nl, np) = if D == 2 {
+        (shape.facets.len(), 0)
+    } else {
+        (0, shape.facets.len())
+    };
+    let _ = writeln!(
+        s,
+        "    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"{nl}\" NumberOfStrips=\"0\" NumberOfPolys=\"{np}\">",
+        shape.points.len()
+    );
     points_xml(&mut s, &shape.points);
-    let _ = writeln!(s, "      <{tag}>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">");
+    let _ = writeln!(
+        s,
+        "      <{tag}>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+    );
     for f in &shape.facets {
-        let _ = writeln!(s, "          {}", f.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(" "));
+        let _ = writeln!(
+            s,
+            "          {}",
+            f.iter()
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
     }
     s.push_str("        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
     for i in 0..shape.facets.len() {
         let _ = writeln!(s, "          {}", (i + 1) * D);
     }
-    let _ = writeln!(s, "        </DataArray>\n      </{tag}>\n    </Piece>\n  </PolyData>\n</VTKFile>");
+    let _ = writeln!(
+        s,
+        "        </DataArray>\n      </{tag}>\n    </Piece>\n  </PolyData>\n</VTKFile>"
+    );
     crate::io::write_atomic(path, s.as_bytes())
 }

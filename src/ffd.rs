@@ -24,7 +24,12 @@ pub fn cubic_bases(t: f64, order: usize) -> [f64; 4] {
             (-3.0 * t * t * t + 3.0 * t * t + 3.0 * t + 1.0) / 6.0,
             t * t * t / 6.0,
         ],
-        1 => [-s * s / 2.0, (3.0 * t * t - 4.0 * t) / 2.0, (-3.0 * t * t + 2.0 * t + 1.0) / 2.0, t * t / 2.0],
+        1 => [
+            -s * s / 2.0,
+            (3.0 * t * t - 4.0 * t) / 2.0,
+            (-3.0 * t * t + 2.0 * t + 1.0) / 2.0,
+            t * t / 2.0,
+        ],
         2 => [s, 3.0 * t - 2.0, 1.0 - 3.0 * t, t],
         _ => [0.0; 4],
     }
@@ -46,9 +51,15 @@ impl<const D: usize> Lattice<D> {
     /// `points` enlarged by `margin` (a fraction of its extent) on every side.
     #[track_caller]
     pub fn around(points: &[Point<D>], grid: usize, margin: f64) -> Self {
-        assert!(grid >= 4, "a cubic B-spline lattice needs at least 4 control points per axis");
+        assert!(
+            grid >= 4,
+            "a cubic B-spline lattice needs at least 4 control points per axis"
+        );
         let (lo, hi) = bounding_box(points);
-        let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let ext = (0..D)
+            .map(|d| hi[d] - lo[d])
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
         let mut origin = [0.0; D];
         let mut spacing = [0.0; D];
         for d in 0..D {
@@ -57,7 +68,11 @@ impl<const D: usize> Lattice<D> {
             origin[d] = lo[d] - m;
             spacing[d] = (e + 2.0 * m) / (grid - 3) as f64;
         }
-        Lattice { origin, spacing, size: [grid; D] }
+        Lattice {
+            origin,
+            spacing,
+            size: [grid; D],
+        }
     }
 
     /// Total number of control points.
@@ -125,8 +140,18 @@ impl<const D: usize> Lattice<D> {
     /// Gauss-Legendre per span integrates the degree-6 products exactly.
     fn gram_1d(&self, d: usize) -> [Vec<[f64; 7]>; 3] {
         let n = self.size[d];
-        const GX: [f64; 4] = [0.069_431_844_202_973_71, 0.330_009_478_207_571_9, 0.669_990_521_792_428_1, 0.930_568_155_797_026_3];
-        const GW: [f64; 4] = [0.173_927_422_568_726_9, 0.326_072_577_431_273_1, 0.326_072_577_431_273_1, 0.173_927_422_568_726_9];
+        const GX: [f64; 4] = [
+            0.069_431_844_202_973_71,
+            0.330_009_478_207_571_9,
+            0.669_990_521_792_428_1,
+            0.930_568_155_797_026_3,
+        ];
+        const GW: [f64; 4] = [
+            0.173_927_422_568_726_9,
+            0.326_072_577_431_273_1,
+            0.326_072_577_431_273_1,
+            0.173_927_422_568_726_9,
+        ];
         std::array::from_fn(|o| {
             let mut g = vec![[0.0; 7]; n];
             for k in 0..n - 3 {
@@ -155,7 +180,11 @@ struct Banded<const D: usize> {
 impl<const D: usize> Banded<D> {
     fn new(lattice: Lattice<D>) -> Self {
         let width = 7usize.pow(D as u32);
-        Banded { lattice, rows: vec![0.0; lattice.len() * width], width }
+        Banded {
+            lattice,
+            rows: vec![0.0; lattice.len() * width],
+            width,
+        }
     }
 
     #[inline]
@@ -204,7 +233,8 @@ impl<const D: usize> Banded<D> {
                 }
             }
         }
-        SparseColMat::try_new_from_triplets(n, n, &trip).map_err(|e| Error::Numerical(format!("FFD normal matrix: {e:?}")))
+        SparseColMat::try_new_from_triplets(n, n, &trip)
+            .map_err(|e| Error::Numerical(format!("FFD normal matrix: {e:?}")))
     }
 }
 
@@ -234,7 +264,8 @@ fn smoothing_matrix<const D: usize>(lattice: &Lattice<D>, unit: f64) -> Banded<D
                     let mut prod = 1.0;
                     for d in 0..D {
                         let ord = usize::from(d == p) + usize::from(d == q);
-                        prod *= grams[d][ord][a[d]][b[d] + 3 - a[d]] * h[d].powi(1 - 2 * ord as i32);
+                        prod *=
+                            grams[d][ord][a[d]][b[d] + 3 - a[d]] * h[d].powi(1 - 2 * ord as i32);
                     }
                     v += prod;
                 }
@@ -246,7 +277,11 @@ fn smoothing_matrix<const D: usize>(lattice: &Lattice<D>, unit: f64) -> Banded<D
 }
 
 /// `E_smooth` of a control point set (see [`smoothing_matrix`]); lengths in units of `unit`.
-pub fn smoothing_energy<const D: usize>(lattice: &Lattice<D>, control: &[Point<D>], unit: f64) -> f64 {
+pub fn smoothing_energy<const D: usize>(
+    lattice: &Lattice<D>,
+    control: &[Point<D>],
+    unit: f64,
+) -> f64 {
     let k = smoothing_matrix(lattice, unit);
     let mut e = 0.0;
     for i in 0..lattice.len() {
@@ -273,7 +308,10 @@ pub struct Ffd<const D: usize> {
 impl<const D: usize> Ffd<D> {
     /// The identity deformation on `lattice`.
     pub fn identity(lattice: Lattice<D>) -> Self {
-        Ffd { control: lattice.rest(), lattice }
+        Ffd {
+            control: lattice.rest(),
+            lattice,
+        }
     }
 
     /// `f(p) = Σ_i P_i B_i(u(p))` (eq. 1).
@@ -339,7 +377,11 @@ pub struct FfdParams {
 
 impl Default for FfdParams {
     fn default() -> Self {
-        FfdParams { grid: 20, alpha: 50.0, margin: 0.1 }
+        FfdParams {
+            grid: 20,
+            alpha: 50.0,
+            margin: 0.1,
+        }
     }
 }
 
@@ -357,13 +399,21 @@ impl<const D: usize> FfdFit<D> {
     /// Builds and factorizes the normal matrix for the source points `sources` (shape units).
     pub fn new(sources: &[Point<D>], params: &FfdParams) -> Result<Self> {
         if params.grid < 4 {
-            return Err(Error::Parameter(format!("FFD grid {} is below 4 control points per axis", params.grid)));
+            return Err(Error::Parameter(format!(
+                "FFD grid {} is below 4 control points per axis",
+                params.grid
+            )));
         }
         if !(params.alpha.is_finite() && params.alpha >= 0.0) {
-            return Err(Error::Parameter(format!("FFD alpha {} must be finite and non-negative", params.alpha)));
+            return Err(Error::Parameter(format!(
+                "FFD alpha {} must be finite and non-negative",
+                params.alpha
+            )));
         }
         let lattice = Lattice::around(sources, params.grid, params.margin);
-        let unit = (0..D).map(|d| lattice.spacing[d] * (lattice.size[d] - 3) as f64).fold(0.0, f64::max);
+        let unit = (0..D)
+            .map(|d| lattice.spacing[d] * (lattice.size[d] - 3) as f64)
+            .fold(0.0, f64::max);
         let mut a = smoothing_matrix(&lattice, unit);
         for v in a.rows.iter_mut() {
             *v *= params.alpha;
@@ -390,10 +440,15 @@ impl<const D: usize> FfdFit<D> {
             a.rows[i * a.width + centre] += 1e-10 * diag_max.max(1.0);
         }
         let m = a.to_sparse_lower()?;
-        let llt = m
-            .sp_cholesky(faer::Side::Lower)
-            .map_err(|e| Error::Numerical(format!("FFD normal matrix is not positive definite: {e:?}")))?;
-        Ok(FfdFit { lattice, unit, sources: sources.to_vec(), llt })
+        let llt = m.sp_cholesky(faer::Side::Lower).map_err(|e| {
+            Error::Numerical(format!("FFD normal matrix is not positive definite: {e:?}"))
+        })?;
+        Ok(FfdFit {
+            lattice,
+            unit,
+            sources: sources.to_vec(),
+            llt,
+        })
     }
 
     /// The lattice used.
@@ -405,7 +460,11 @@ impl<const D: usize> FfdFit<D> {
     /// `Σ_j ||f(p_j) - q_j||² + alpha E_smooth`.
     #[track_caller]
     pub fn solve(&self, targets: &[Point<D>]) -> Ffd<D> {
-        assert_eq!(targets.len(), self.sources.len(), "FfdFit::solve: one target per source point");
+        assert_eq!(
+            targets.len(),
+            self.sources.len(),
+            "FfdFit::solve: one target per source point"
+        );
         let n = self.lattice.len();
         let o = self.lattice.origin;
         let mut rhs = Mat::<f64>::zeros(n, D);
@@ -419,8 +478,13 @@ impl<const D: usize> FfdFit<D> {
         // K annihilates affine maps, so solving for the displacement from rest would be
         // equivalent; solving for positions relative to `origin` keeps the numbers O(1).
         let sol = self.llt.solve(&rhs);
-        let control = (0..n).map(|i| std::array::from_fn(|d| o[d] + sol[(i, d)] * self.unit)).collect();
-        Ffd { lattice: self.lattice, control }
+        let control = (0..n)
+            .map(|i| std::array::from_fn(|d| o[d] + sol[(i, d)] * self.unit))
+            .collect();
+        Ffd {
+            lattice: self.lattice,
+            control,
+        }
     }
 }
 
@@ -455,16 +519,27 @@ mod tests {
         let f = Ffd::identity(l);
         for p in [[-1.0, 0.0], [0.3, 1.7], [3.0, 2.0], [1.234, 0.001]] {
             let q = f.apply(&p);
-            assert!((q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12, "{p:?} -> {q:?}");
+            assert!(
+                (q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12,
+                "{p:?} -> {q:?}"
+            );
             let j = f.jacobian(&p);
-            assert!((j[0][0] - 1.0).abs() < 1e-12 && j[0][1].abs() < 1e-12 && (j[1][1] - 1.0).abs() < 1e-12);
+            assert!(
+                (j[0][0] - 1.0).abs() < 1e-12
+                    && j[0][1].abs() < 1e-12
+                    && (j[1][1] - 1.0).abs() < 1e-12
+            );
         }
     }
 
     #[test]
     fn smoothing_energy_vanishes_on_affine_maps() {
         let l = Lattice::<2>::around(&[[0.0, 0.0], [1.0, 1.0]], 7, 0.0);
-        let affine: Vec<Point<2>> = l.rest().iter().map(|p| [2.0 * p[0] + 0.5 * p[1] + 1.0, -p[0] + 3.0 * p[1]]).collect();
+        let affine: Vec<Point<2>> = l
+            .rest()
+            .iter()
+            .map(|p| [2.0 * p[0] + 0.5 * p[1] + 1.0, -p[0] + 3.0 * p[1]])
+            .collect();
         assert!(smoothing_energy(&l, &affine, 1.0).abs() < 1e-9);
     }
 
@@ -474,8 +549,15 @@ mod tests {
         // Uniform cubic B-splines reproduce x² with control values x_j² - h²/3.
         let l = Lattice::<2>::around(&[[0.0, 0.0], [1.0, 1.0]], 9, 0.0);
         let h = l.spacing[0];
-        let ctrl: Vec<Point<2>> = l.rest().iter().map(|p| [p[0] * p[0] - h * h / 3.0, 0.0]).collect();
-        let f = Ffd { lattice: l, control: ctrl.clone() };
+        let ctrl: Vec<Point<2>> = l
+            .rest()
+            .iter()
+            .map(|p| [p[0] * p[0] - h * h / 3.0, 0.0])
+            .collect();
+        let f = Ffd {
+            lattice: l,
+            control: ctrl.clone(),
+        };
         let q = f.apply(&[0.3, 0.6]);
         assert!((q[0] - 0.09).abs() < 1e-12, "reproduces x²: {q:?}");
         let e = smoothing_energy(&l, &ctrl, 1.0);
@@ -484,12 +566,27 @@ mod tests {
 
     #[test]
     fn fit_recovers_a_smooth_deformation() {
-        let src: Vec<Point<2>> = (0..400).map(|i| [(i % 20) as f64 / 19.0, (i / 20) as f64 / 19.0]).collect();
+        let src: Vec<Point<2>> = (0..400)
+            .map(|i| [(i % 20) as f64 / 19.0, (i / 20) as f64 / 19.0])
+            .collect();
         let g = |p: &Point<2>| [p[0] + 0.05 * (2.0 * p[1]).sin(), p[1] + 0.03 * p[0] * p[0]];
         let dst: Vec<Point<2>> = src.iter().map(g).collect();
-        let fit = FfdFit::new(&src, &FfdParams { grid: 10, alpha: 1e-4, margin: 0.1 }).unwrap();
+        let fit = FfdFit::new(
+            &src,
+            &FfdParams {
+                grid: 10,
+                alpha: 1e-4,
+                margin: 0.1,
+            },
+        )
+        .unwrap();
         let f = fit.solve(&dst);
-        let err: f64 = src.iter().zip(&dst).map(|(p, q)| crate::geometry::dist2(f.apply(p), *q)).sum::<f64>() / 400.0;
+        let err: f64 = src
+            .iter()
+            .zip(&dst)
+            .map(|(p, q)| crate::geometry::dist2(f.apply(p), *q))
+            .sum::<f64>()
+            / 400.0;
         assert!(err.sqrt() < 1e-3, "rms {}", err.sqrt());
     }
 }

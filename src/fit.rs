@@ -5,7 +5,9 @@
 //! (its file's units). `t_{R,T,s}` maps reference to subject.
 
 use crate::error::{Error, Result};
-use crate::geometry::{ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, centroid, dist2, norm, sub};
+use crate::geometry::{
+    ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, centroid, dist2, norm, sub,
+};
 use crate::model::Atlas;
 use crate::procrustes::fit_similarity;
 use faer::Mat;
@@ -105,7 +107,12 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 psi[r * m + k] = atlas.modes[(r, k)];
             }
         }
-        Fitter { atlas, psi, m, lambda_inv: atlas.eigenvalues.iter().map(|l| 1.0 / l).collect() }
+        Fitter {
+            atlas,
+            psi,
+            m,
+            lambda_inv: atlas.eigenvalues.iter().map(|l| 1.0 / l).collect(),
+        }
     }
 
     fn instance(&self, w: &[f64], out: &mut Vec<Point<D>>) {
@@ -142,10 +149,18 @@ impl<'a, const D: usize> Fitter<'a, D> {
     ///   RMS-radius match, try `params.starts` rotations with a similarity-only ICP (w = 0),
     ///   run Algorithm 1 from the `full_starts` best distinct ones, and keep the result of
     ///   least two-way distance (test `symmetric_fit_recovers_a_far_instance`).
-    pub fn fit(&self, subject: &Shape<D>, subject_index: &ClosestPointIndex<D>, params: &FitParams) -> Result<FitResult<D>> {
+    pub fn fit(
+        &self,
+        subject: &Shape<D>,
+        subject_index: &ClosestPointIndex<D>,
+        params: &FitParams,
+    ) -> Result<FitResult<D>> {
         subject.validate()?;
         if subject.facets.is_empty() {
-            return Err(Error::shape(&subject.name, "has no segments/facets to fit to"));
+            return Err(Error::shape(
+                &subject.name,
+                "has no segments/facets to fit to",
+            ));
         }
         let n = self.atlas.mean.len();
         let subj = &subject.points;
@@ -154,7 +169,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
         // Pre-alignment.
         let cs = centroid(subj);
         let cm = centroid(&self.atlas.mean);
-        let rms = |pts: &[Point<D>], c: Point<D>| (pts.iter().map(|p| dist2(*p, c)).sum::<f64>() / pts.len() as f64).sqrt();
+        let rms = |pts: &[Point<D>], c: Point<D>| {
+            (pts.iter().map(|p| dist2(*p, c)).sum::<f64>() / pts.len() as f64).sqrt()
+        };
         let s0 = rms(subj, cs) / rms(&self.atlas.mean, cm).max(f64::MIN_POSITIVE);
         let starts = if D == 2 { params.starts.max(1) } else { 1 };
         let zero = vec![0.0; self.m];
@@ -168,7 +185,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
             let rc = sim.apply(&cm);
             sim.t = sub(cs, rc);
             for _ in 0..15 {
-                let (src, dst, wts) = self.correspondences(&x, &sim, subject, subject_index, w_back, true);
+                let (src, dst, wts) =
+                    self.correspondences(&x, &sim, subject, subject_index, w_back, true);
                 sim = fit_similarity(&src, &dst, Some(&wts));
             }
             let d = self.two_way_ms(&x, &sim, subject, subject_index);
@@ -195,17 +213,29 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let mut best: Option<(f64, FitResult<D>)> = None;
         for sim in chosen {
             let r = self.fit_from(sim, subject, subject_index, params, w_back)?;
-            let x_ref: Vec<Point<D>> = r.instance.iter().map(|p| r.similarity.apply_inverse(p)).collect();
+            let x_ref: Vec<Point<D>> = r
+                .instance
+                .iter()
+                .map(|p| r.similarity.apply_inverse(p))
+                .collect();
             let d = self.two_way_ms(&x_ref, &r.similarity, subject, subject_index);
             if best.as_ref().is_none_or(|(b, _)| d < *b) {
                 best = Some((d, r));
             }
         }
-        best.map(|b| b.1).ok_or_else(|| Error::Numerical("no start was tried".into()))
+        best.map(|b| b.1)
+            .ok_or_else(|| Error::Numerical("no start was tried".into()))
     }
 
     /// Algorithm 1 from the pose `sim` with `w = 0`.
-    fn fit_from(&self, mut sim: Similarity<D>, subject: &Shape<D>, subject_index: &ClosestPointIndex<D>, params: &FitParams, w_back: f64) -> Result<FitResult<D>> {
+    fn fit_from(
+        &self,
+        mut sim: Similarity<D>,
+        subject: &Shape<D>,
+        subject_index: &ClosestPointIndex<D>,
+        params: &FitParams,
+        w_back: f64,
+    ) -> Result<FitResult<D>> {
         let n = self.atlas.mean.len();
         let mut w = vec![0.0; self.m];
         let mut x = Vec::new();
@@ -221,8 +251,22 @@ impl<'a, const D: usize> Fitter<'a, D> {
             for _ in 0..params.max_iterations {
                 iterations += 1;
                 // (i) correspondence.
-                let (src_idx, dst, wts) = self.correspondence_sets(&x, &sim, subject, subject_index, w_back, params.symmetric);
-                e_d_history.push(src_idx.iter().zip(&dst).take(n).map(|(c, y)| dist2(sim.apply(&x[c.0[0]]), *y)).sum());
+                let (src_idx, dst, wts) = self.correspondence_sets(
+                    &x,
+                    &sim,
+                    subject,
+                    subject_index,
+                    w_back,
+                    params.symmetric,
+                );
+                e_d_history.push(
+                    src_idx
+                        .iter()
+                        .zip(&dst)
+                        .take(n)
+                        .map(|(c, y)| dist2(sim.apply(&x[c.0[0]]), *y))
+                        .sum(),
+                );
                 // (ii) similarity and weights for this correspondence.
                 let w_old = w.clone();
                 for _ in 0..params.protocol_iterations.max(1) {
@@ -232,7 +276,12 @@ impl<'a, const D: usize> Fitter<'a, D> {
                     // (iii) instantiate.
                     self.instance(&w, &mut x);
                 }
-                let dw = w.iter().zip(&w_old).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+                let dw = w
+                    .iter()
+                    .zip(&w_old)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt();
                 if dw < params.tolerance {
                     converged = true;
                     break;
@@ -242,7 +291,16 @@ impl<'a, const D: usize> Fitter<'a, D> {
         }
         let instance: Vec<Point<D>> = x.iter().map(|p| sim.apply(p)).collect();
         let projected = project_along_normals(&instance, &self.atlas.facets, subject_index);
-        Ok(FitResult { weights: w, similarity: sim, instance, projected, e_d_history, locus, iterations, converged })
+        Ok(FitResult {
+            weights: w,
+            similarity: sim,
+            instance,
+            projected,
+            e_d_history,
+            locus,
+            iterations,
+            converged,
+        })
     }
 
     /// Correspondences as (model point combination, subject-frame target, weight): first the
@@ -300,11 +358,22 @@ impl<'a, const D: usize> Fitter<'a, D> {
 
     /// Mean of the two one-way mean squared distances between the instance `t ∘ x` and the
     /// subject (subject units squared).
-    fn two_way_ms(&self, x: &[Point<D>], sim: &Similarity<D>, subject: &Shape<D>, index: &ClosestPointIndex<D>) -> f64 {
+    fn two_way_ms(
+        &self,
+        x: &[Point<D>],
+        sim: &Similarity<D>,
+        subject: &Shape<D>,
+        index: &ClosestPointIndex<D>,
+    ) -> f64 {
         let xs: Vec<Point<D>> = x.iter().map(|p| sim.apply(p)).collect();
         let f = xs.iter().map(|p| index.closest(p).dist2).sum::<f64>() / xs.len() as f64;
         let inst = ClosestPointIndex::new(&xs, &self.atlas.facets);
-        let b = subject.points.iter().map(|q| inst.closest(q).dist2).sum::<f64>() / subject.points.len() as f64;
+        let b = subject
+            .points
+            .iter()
+            .map(|q| inst.closest(q).dist2)
+            .sum::<f64>()
+            / subject.points.len() as f64;
         0.5 * (f + b)
     }
 
@@ -359,13 +428,20 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 // Forward pairs: their Σ A^T A is Ψ^T Ψ = I, added once below.
             }
         }
-        let forward: f64 = src.iter().zip(wts).filter(|(c, _)| c.1[0] == 1.0 && c.1[1..].iter().all(|&b| b == 0.0)).map(|(_, w)| *w).sum::<f64>();
+        let forward: f64 = src
+            .iter()
+            .zip(wts)
+            .filter(|(c, _)| c.1[0] == 1.0 && c.1[1..].iter().all(|&b| b == 0.0))
+            .map(|(_, w)| *w)
+            .sum::<f64>();
         // Forward pairs cover all N model points with weight 1: their Gram matrix is Ψ^T Ψ = I.
         let nf = forward / self.atlas.mean.len() as f64;
         for k in 0..m {
             a[(k, k)] += nf;
         }
-        let llt = a.llt(faer::Side::Lower).map_err(|_| Error::Numerical("the weight system of eq. 8 is singular".into()))?;
+        let llt = a
+            .llt(faer::Side::Lower)
+            .map_err(|_| Error::Numerical("the weight system of eq. 8 is singular".into()))?;
         let sol = llt.solve(&rhs);
         let w: Vec<f64> = (0..m).map(|k| sol[(k, 0)]).collect();
         if w.iter().any(|v| !v.is_finite()) {
@@ -392,8 +468,17 @@ fn combo<const D: usize>(x: &[Point<D>], c: &([usize; D], [f64; D])) -> Point<D>
 /// onto the indexed subject along its normal (section 3, last step of Algorithm 1): the
 /// nearest crossing of the normal line within three times the closest-point distance plus
 /// half the local edge length; the closest point where the normal misses.
-pub fn project_along_normals<const D: usize>(points: &[Point<D>], facets: &[[usize; D]], subject: &ClosestPointIndex<D>) -> Vec<SurfacePoint<D>> {
-    let shape = Shape { name: String::new(), points: points.to_vec(), facets: facets.to_vec(), landmarks: Vec::new() };
+pub fn project_along_normals<const D: usize>(
+    points: &[Point<D>],
+    facets: &[[usize; D]],
+    subject: &ClosestPointIndex<D>,
+) -> Vec<SurfacePoint<D>> {
+    let shape = Shape {
+        name: String::new(),
+        points: points.to_vec(),
+        facets: facets.to_vec(),
+        landmarks: Vec::new(),
+    };
     let normals = shape.vertex_normals();
     let h = 0.5 * shape.median_edge_length();
     points
@@ -426,47 +511,79 @@ mod tests {
                         let t = i as f64 / 120.0 * std::f64::consts::TAU;
                         // An egg (no symmetry, so the pose is identifiable) with three modes.
                         let egg = 1.0 + 0.25 * t.cos();
-                        [egg * (a * t.cos() + c * (3.0 * t).cos()), egg * (b * t.sin() + c * (2.0 * t).sin())]
+                        [
+                            egg * (a * t.cos() + c * (3.0 * t).cos()),
+                            egg * (b * t.sin() + c * (2.0 * t).sin()),
+                        ]
                     })
                     .collect();
                 Shape::polyline(format!("s{k}"), pts, true)
             })
             .collect();
-        Atlas::build(&shapes, &AtlasParams { modes: ModeSelection::Count(3), element_size: 0.05, smoothing_passes: 2 }).unwrap()
+        Atlas::build(
+            &shapes,
+            &AtlasParams {
+                modes: ModeSelection::Count(3),
+                element_size: 0.05,
+                smoothing_passes: 2,
+            },
+        )
+        .unwrap()
     }
 
     fn subject(atlas: &Atlas<2>, w: &[f64], sim: &Similarity<2>) -> Shape<2> {
         let pts: Vec<Point<2>> = atlas.instance(w).iter().map(|p| sim.apply(p)).collect();
         // Resample coarser and shifted so that no point coincides with a model point.
         let n = pts.len();
-        let sub_pts = (0..n / 2).map(|i| {
-            let a = pts[(2 * i) % n];
-            let b = pts[(2 * i + 1) % n];
-            [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
-        }).collect();
+        let sub_pts = (0..n / 2)
+            .map(|i| {
+                let a = pts[(2 * i) % n];
+                let b = pts[(2 * i + 1) % n];
+                [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
+            })
+            .collect();
         Shape::polyline("subject", sub_pts, true)
     }
 
     #[test]
     fn fit_recovers_the_weights_and_pose_of_a_model_instance() {
         let a = atlas();
-        let w: Vec<f64> = a.eigenvalues.iter().zip([1.5, -1.0, 0.8]).map(|(l, f)| f * l.sqrt()).collect();
+        let w: Vec<f64> = a
+            .eigenvalues
+            .iter()
+            .zip([1.5, -1.0, 0.8])
+            .map(|(l, f)| f * l.sqrt())
+            .collect();
         let mut sim = Similarity::<2>::planar_rotation(2.0);
         sim.s = 40.0;
         sim.t = [100.0, -20.0];
         let s = subject(&a, &w, &sim);
         let idx = ClosestPointIndex::from_shape(&s);
-        let r = Fitter::new(&a).fit(&s, &idx, &FitParams::default()).unwrap();
+        let r = Fitter::new(&a)
+            .fit(&s, &idx, &FitParams::default())
+            .unwrap();
         for (k, (got, want)) in r.weights.iter().zip(&w).enumerate() {
-            assert!((got - want).abs() < 0.05 * a.eigenvalues[0].sqrt(), "mode {k}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 0.05 * a.eigenvalues[0].sqrt(),
+                "mode {k}: {got} vs {want}"
+            );
         }
-        assert!((r.similarity.s - 40.0).abs() < 0.4, "scale {}", r.similarity.s);
+        assert!(
+            (r.similarity.s - 40.0).abs() < 0.4,
+            "scale {}",
+            r.similarity.s
+        );
     }
 
     #[test]
     fn fit_is_invariant_to_the_subject_units() {
         let a = atlas();
-        let w: Vec<f64> = a.eigenvalues.iter().zip([-1.0, 1.0, 0.5]).map(|(l, f)| f * l.sqrt()).collect();
+        let w: Vec<f64> = a
+            .eigenvalues
+            .iter()
+            .zip([-1.0, 1.0, 0.5])
+            .map(|(l, f)| f * l.sqrt())
+            .collect();
         let mut small = Similarity::<2>::identity();
         small.s = 1.0;
         let mut big = small;
@@ -474,21 +591,49 @@ mod tests {
         let fa = Fitter::new(&a);
         let s1 = subject(&a, &w, &small);
         let s2 = subject(&a, &w, &big);
-        let r1 = fa.fit(&s1, &ClosestPointIndex::from_shape(&s1), &FitParams::default()).unwrap();
-        let r2 = fa.fit(&s2, &ClosestPointIndex::from_shape(&s2), &FitParams::default()).unwrap();
+        let r1 = fa
+            .fit(
+                &s1,
+                &ClosestPointIndex::from_shape(&s1),
+                &FitParams::default(),
+            )
+            .unwrap();
+        let r2 = fa
+            .fit(
+                &s2,
+                &ClosestPointIndex::from_shape(&s2),
+                &FitParams::default(),
+            )
+            .unwrap();
         for (x, y) in r1.weights.iter().zip(&r2.weights) {
-            assert!((x - y).abs() < 1e-6 * a.eigenvalues[0].sqrt() + 1e-9, "{x} vs {y}");
+            assert!(
+                (x - y).abs() < 1e-6 * a.eigenvalues[0].sqrt() + 1e-9,
+                "{x} vs {y}"
+            );
         }
     }
 
     #[test]
     fn symmetric_fit_recovers_a_far_instance() {
         let a = atlas();
-        let w: Vec<f64> = a.eigenvalues.iter().zip([2.8, -2.5, 2.5]).map(|(l, f)| f * l.sqrt()).collect();
+        let w: Vec<f64> = a
+            .eigenvalues
+            .iter()
+            .zip([2.8, -2.5, 2.5])
+            .map(|(l, f)| f * l.sqrt())
+            .collect();
         let s = subject(&a, &w, &Similarity::identity());
         let idx = ClosestPointIndex::from_shape(&s);
-        let r = Fitter::new(&a).fit(&s, &idx, &FitParams::default()).unwrap();
-        let err: f64 = r.weights.iter().zip(&w).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt();
+        let r = Fitter::new(&a)
+            .fit(&s, &idx, &FitParams::default())
+            .unwrap();
+        let err: f64 = r
+            .weights
+            .iter()
+            .zip(&w)
+            .map(|(x, y)| (x - y).powi(2))
+            .sum::<f64>()
+            .sqrt();
         assert!(err < 0.1 * a.eigenvalues[0].sqrt(), "weight error {err}");
     }
 }

@@ -67,13 +67,21 @@ impl<const D: usize> Shape<D> {
                 ),
             ));
         }
-        if let Some(i) = self.points.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+        if let Some(i) = self
+            .points
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
             return Err(Error::shape(
                 &self.name,
                 format!("point {i} has a coordinate that is NaN or infinite"),
             ));
         }
-        if let Some(f) = self.facets.iter().position(|f| f.iter().any(|&i| i >= self.points.len())) {
+        if let Some(f) = self
+            .facets
+            .iter()
+            .position(|f| f.iter().any(|&i| i >= self.points.len()))
+        {
             return Err(Error::shape(
                 &self.name,
                 format!("facet {f} refers to a point that does not exist"),
@@ -82,7 +90,10 @@ impl<const D: usize> Shape<D> {
         if let Some(&l) = self.landmarks.iter().find(|&&l| l >= self.points.len()) {
             return Err(Error::shape(
                 &self.name,
-                format!("landmark index {l} is out of range (the shape has {} points)", self.points.len()),
+                format!(
+                    "landmark index {l} is out of range (the shape has {} points)",
+                    self.points.len()
+                ),
             ));
         }
         let (lo, hi) = bounding_box(&self.points);
@@ -294,7 +305,10 @@ impl<const D: usize> ClosestPointIndex<D> {
     /// Builds the index. The shape must have at least one facet.
     #[track_caller]
     pub fn new(points: &[Point<D>], facets: &[[usize; D]]) -> Self {
-        assert!(!facets.is_empty(), "ClosestPointIndex needs at least one facet");
+        assert!(
+            !facets.is_empty(),
+            "ClosestPointIndex needs at least one facet"
+        );
         let centroids: Vec<Point<D>> = facets
             .iter()
             .map(|f| {
@@ -331,7 +345,8 @@ impl<const D: usize> ClosestPointIndex<D> {
                 weights[1] = t;
             }
             3 => {
-                let w = closest_on_triangle(p, self.points[f[0]], self.points[f[1]], self.points[f[2]]);
+                let w =
+                    closest_on_triangle(p, self.points[f[0]], self.points[f[1]], self.points[f[2]]);
                 weights.copy_from_slice(&w);
             }
             _ => unreachable!(),
@@ -378,7 +393,13 @@ impl<const D: usize> ClosestPointIndex<D> {
             let f = self.facets[fi];
             let hit = match D {
                 2 => ray_segment(*p, *n, self.points[f[0]], self.points[f[1]]),
-                3 => ray_triangle(*p, *n, self.points[f[0]], self.points[f[1]], self.points[f[2]]),
+                3 => ray_triangle(
+                    *p,
+                    *n,
+                    self.points[f[0]],
+                    self.points[f[1]],
+                    self.points[f[2]],
+                ),
                 _ => unreachable!(),
             };
             if let Some((t, w)) = hit {
@@ -412,7 +433,12 @@ impl<const D: usize> ClosestPointIndex<D> {
 }
 
 /// Line `p + t n` against segment `ab` (2D); returns `t` and the weights `(1-u, u, 0)`.
-fn ray_segment<const D: usize>(p: Point<D>, n: Point<D>, a: Point<D>, b: Point<D>) -> Option<(f64, [f64; 3])> {
+fn ray_segment<const D: usize>(
+    p: Point<D>,
+    n: Point<D>,
+    a: Point<D>,
+    b: Point<D>,
+) -> Option<(f64, [f64; 3])> {
     let e = sub(b, a);
     let den = n[0] * e[1] - n[1] * e[0];
     if den.abs() < 1e-300 {
@@ -437,7 +463,11 @@ fn ray_triangle<const D: usize>(
     c: Point<D>,
 ) -> Option<(f64, [f64; 3])> {
     let cross = |x: Point<D>, y: Point<D>| -> [f64; 3] {
-        [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]]
+        [
+            x[1] * y[2] - x[2] * y[1],
+            x[2] * y[0] - x[0] * y[2],
+            x[0] * y[1] - x[1] * y[0],
+        ]
     };
     let d3 = |x: [f64; 3], y: Point<D>| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
     let e1 = sub(b, a);
@@ -493,7 +523,9 @@ impl<const D: usize> Similarity<D> {
     /// `s R p + T`.
     #[inline]
     pub fn apply(&self, p: &Point<D>) -> Point<D> {
-        std::array::from_fn(|i| self.s * (0..D).map(|j| self.r[i][j] * p[j]).sum::<f64>() + self.t[i])
+        std::array::from_fn(|i| {
+            self.s * (0..D).map(|j| self.r[i][j] * p[j]).sum::<f64>() + self.t[i]
+        })
     }
 
     /// `R^T (q - T) / s`.
@@ -560,9 +592,14 @@ mod tests {
         let s = Shape::polyline("star", pts, true);
         let idx = ClosestPointIndex::from_shape(&s);
         for k in 0..500 {
-            let q = [((k * 37) % 101) as f64 / 40.0 - 1.25, ((k * 53) % 97) as f64 / 38.0 - 1.25];
+            let q = [
+                ((k * 37) % 101) as f64 / 40.0 - 1.25,
+                ((k * 53) % 97) as f64 / 38.0 - 1.25,
+            ];
             let c = idx.closest(&q);
-            let brute = (0..s.facets.len()).map(|f| idx.closest_on_facet(q, f).dist2).fold(f64::INFINITY, f64::min);
+            let brute = (0..s.facets.len())
+                .map(|f| idx.closest_on_facet(q, f).dist2)
+                .fold(f64::INFINITY, f64::min);
             assert!((c.dist2 - brute).abs() < 1e-12, "query {q:?}");
         }
     }

@@ -125,7 +125,11 @@ impl RunArgs {
 }
 
 fn dataset_name(paths: &[PathBuf]) -> String {
-    paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" ")
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
@@ -154,17 +158,41 @@ fn print_summary(r: &atlasmesh::report::Report, out: &std::path::Path) {
 fn run(cli: Cli) -> anyhow::Result<()> {
     faer::set_global_parallelism(faer::Par::Seq);
     match cli.command {
-        Command::Loo { pop, run, out, jobs } => {
+        Command::Loo {
+            pop,
+            run,
+            out,
+            jobs,
+        } => {
             let mut params = run.params();
             apply_pop(&mut params, &pop);
-            let shapes = pipeline::load_population(&pop.shapes, &PopulationOptions { closed: !pop.open, resample: pop.resample })?;
-            let r = pipeline::leave_one_out(&shapes, &dataset_name(&pop.shapes), &params, &out, jobs, cli.quiet)?;
+            let shapes = pipeline::load_population(
+                &pop.shapes,
+                &PopulationOptions {
+                    closed: !pop.open,
+                    resample: pop.resample,
+                },
+            )?;
+            let r = pipeline::leave_one_out(
+                &shapes,
+                &dataset_name(&pop.shapes),
+                &params,
+                &out,
+                jobs,
+                cli.quiet,
+            )?;
             print_summary(&r, &out);
         }
         Command::Build { pop, run, out } => {
             let mut params = run.params();
             apply_pop(&mut params, &pop);
-            let shapes = pipeline::load_population(&pop.shapes, &PopulationOptions { closed: !pop.open, resample: pop.resample })?;
+            let shapes = pipeline::load_population(
+                &pop.shapes,
+                &PopulationOptions {
+                    closed: !pop.open,
+                    resample: pop.resample,
+                },
+            )?;
             let a = pipeline::build(&shapes, &params, &out)?;
             println!(
                 "atlas: {} ({} shapes, {} points, {} modes explaining {:.4} of the variance, mean mesh {} elements)",
@@ -176,18 +204,32 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 a.mesh.num_elements()
             );
         }
-        Command::Fit { atlas, subject, open, run, out } => {
+        Command::Fit {
+            atlas,
+            subject,
+            open,
+            run,
+            out,
+        } => {
             let a = Atlas::<2>::load(&atlas)?;
             let mut params = run.params();
             params.atlas = a.params;
             let mut subjects = Vec::new();
             for p in &subject {
                 for s in atlasmesh::io::read_outlines(p, !open)? {
-                    s.validate().map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;
+                    s.validate()
+                        .map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;
                     subjects.push(s);
                 }
             }
-            let r = pipeline::fit_subjects(&a, &subjects, &dataset_name(&subject), &params, &out, cli.quiet)?;
+            let r = pipeline::fit_subjects(
+                &a,
+                &subjects,
+                &dataset_name(&subject),
+                &params,
+                &out,
+                cli.quiet,
+            )?;
             print_summary(&r, &out);
         }
         Command::Demo { out } => {
@@ -205,7 +247,9 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            let code = e.downcast_ref::<atlasmesh::Error>().map_or(1, |e| e.exit_code());
+            let code = e
+                .downcast_ref::<atlasmesh::Error>()
+                .map_or(1, |e| e.exit_code());
             ExitCode::from(code)
         }
     }

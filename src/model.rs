@@ -41,7 +41,11 @@ pub struct AtlasParams {
 
 impl Default for AtlasParams {
     fn default() -> Self {
-        AtlasParams { modes: ModeSelection::Variance(0.985), element_size: 0.015, smoothing_passes: 8 }
+        AtlasParams {
+            modes: ModeSelection::Variance(0.985),
+            element_size: 0.015,
+            smoothing_passes: 8,
+        }
     }
 }
 
@@ -75,7 +79,11 @@ fn same_dim<const D: usize, const E: usize>(p: &Point<D>) -> Point<E> {
 }
 
 /// Meshes the mean shape: quadrilaterals in 2D (hexahedral meshing is not available yet).
-pub fn mesh_mean_shape<const D: usize>(mean: &Shape<D>, element_size: f64, smoothing_passes: usize) -> Result<FeMesh<D>> {
+pub fn mesh_mean_shape<const D: usize>(
+    mean: &Shape<D>,
+    element_size: f64,
+    smoothing_passes: usize,
+) -> Result<FeMesh<D>> {
     match D {
         2 => {
             let s2 = Shape::<2> {
@@ -84,10 +92,22 @@ pub fn mesh_mean_shape<const D: usize>(mean: &Shape<D>, element_size: f64, smoot
                 facets: mean.facets.iter().map(|f| [f[0], f[1]]).collect(),
                 landmarks: Vec::new(),
             };
-            let m = quad_mesh(&s2, &QuadMeshParams { element_size, smoothing_passes })?;
-            Ok(FeMesh { nodes: m.nodes.iter().map(same_dim::<2, D>).collect(), kind: m.kind, connectivity: m.connectivity })
+            let m = quad_mesh(
+                &s2,
+                &QuadMeshParams {
+                    element_size,
+                    smoothing_passes,
+                },
+            )?;
+            Ok(FeMesh {
+                nodes: m.nodes.iter().map(same_dim::<2, D>).collect(),
+                kind: m.kind,
+                connectivity: m.connectivity,
+            })
         }
-        _ => Err(Error::Mesh("automatic meshing of 3D shapes is not available yet; bring a template mesh".into())),
+        _ => Err(Error::Mesh(
+            "automatic meshing of 3D shapes is not available yet; bring a template mesh".into(),
+        )),
     }
 }
 
@@ -113,12 +133,17 @@ impl<const D: usize> Atlas<D> {
                 )));
             }
         }
-        let gpa = generalized_procrustes(&shapes.iter().map(|s| s.points.clone()).collect::<Vec<_>>())?;
+        let gpa =
+            generalized_procrustes(&shapes.iter().map(|s| s.points.clone()).collect::<Vec<_>>())?;
         let (lo, hi) = bounding_box(&gpa.mean);
         let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
         let c = 1.0 / ext;
         let mean: Vec<Point<D>> = gpa.mean.iter().map(|p| scale(*p, c)).collect();
-        let aligned: Vec<Vec<Point<D>>> = gpa.aligned.iter().map(|s| s.iter().map(|p| scale(*p, c)).collect()).collect();
+        let aligned: Vec<Vec<Point<D>>> = gpa
+            .aligned
+            .iter()
+            .map(|s| s.iter().map(|p| scale(*p, c)).collect())
+            .collect();
         let p = pca(&aligned, &mean)?;
         let m = match params.modes {
             ModeSelection::Count(m) => {
@@ -133,12 +158,19 @@ impl<const D: usize> Atlas<D> {
             }
             ModeSelection::Variance(v) => {
                 if !(v > 0.0 && v <= 1.0) {
-                    return Err(Error::Parameter(format!("--variance {v} must be in (0, 1]")));
+                    return Err(Error::Parameter(format!(
+                        "--variance {v} must be in (0, 1]"
+                    )));
                 }
                 p.modes_for_variance(v)
             }
         };
-        let mean_shape = Shape { name: "mean".into(), points: mean.clone(), facets: shapes[0].facets.clone(), landmarks: Vec::new() };
+        let mean_shape = Shape {
+            name: "mean".into(),
+            points: mean.clone(),
+            facets: shapes[0].facets.clone(),
+            landmarks: Vec::new(),
+        };
         let mesh = mesh_mean_shape(&mean_shape, params.element_size, params.smoothing_passes)?;
         Ok(Atlas {
             mean,
@@ -160,7 +192,12 @@ impl<const D: usize> Atlas<D> {
 
     /// The mean as a shape.
     pub fn mean_shape(&self) -> Shape<D> {
-        Shape { name: "mean".into(), points: self.mean.clone(), facets: self.facets.clone(), landmarks: self.landmarks.clone() }
+        Shape {
+            name: "mean".into(),
+            points: self.mean.clone(),
+            facets: self.facets.clone(),
+            landmarks: self.landmarks.clone(),
+        }
     }
 
     /// `S_tilde = S_bar + Psi w` (eq. 4), reference frame. `w.len() == m`.
@@ -186,11 +223,19 @@ impl<const D: usize> Atlas<D> {
     /// in correspondence) into the model.
     #[track_caller]
     pub fn coefficients(&self, x: &[Point<D>]) -> Vec<f64> {
-        assert_eq!(x.len(), self.mean.len(), "coefficients: one point per model point");
+        assert_eq!(
+            x.len(),
+            self.mean.len(),
+            "coefficients: one point per model point"
+        );
         (0..self.num_modes())
             .map(|k| {
                 let col = self.modes.col(k);
-                x.iter().zip(&self.mean).enumerate().map(|(i, (p, m))| (0..D).map(|d| col[i * D + d] * (p[d] - m[d])).sum::<f64>()).sum()
+                x.iter()
+                    .zip(&self.mean)
+                    .enumerate()
+                    .map(|(i, (p, m))| (0..D).map(|d| col[i * D + d] * (p[d] - m[d])).sum::<f64>())
+                    .sum()
             })
             .collect()
     }
@@ -203,33 +248,90 @@ impl<const D: usize> Atlas<D> {
     pub fn save(&self, path: &Path) -> Result<()> {
         use safetensors::{Dtype, tensor::TensorView};
         let f64s = |v: Vec<f64>| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
-        let i64s = |v: Vec<usize>| -> Vec<u8> { v.iter().flat_map(|&x| (x as i64).to_le_bytes()).collect() };
+        let i64s = |v: Vec<usize>| -> Vec<u8> {
+            v.iter().flat_map(|&x| (x as i64).to_le_bytes()).collect()
+        };
         let n = self.mean.len();
         let m = self.num_modes();
         let k = self.mesh.kind.nodes();
-        let modes: Vec<f64> = (0..n * D).flat_map(|r| (0..m).map(move |c| (r, c))).map(|(r, c)| self.modes[(r, c)]).collect();
+        let modes: Vec<f64> = (0..n * D)
+            .flat_map(|r| (0..m).map(move |c| (r, c)))
+            .map(|(r, c)| self.modes[(r, c)])
+            .collect();
         let bufs: Vec<(&str, Dtype, Vec<usize>, Vec<u8>)> = vec![
-            ("mean", Dtype::F64, vec![n, D], f64s(self.mean.iter().flatten().copied().collect())),
+            (
+                "mean",
+                Dtype::F64,
+                vec![n, D],
+                f64s(self.mean.iter().flatten().copied().collect()),
+            ),
             ("modes", Dtype::F64, vec![n * D, m], f64s(modes)),
-            ("eigenvalues", Dtype::F64, vec![m], f64s(self.eigenvalues.clone())),
-            ("cumulative_variance", Dtype::F64, vec![self.cumulative_variance.len()], f64s(self.cumulative_variance.clone())),
-            ("facets", Dtype::I64, vec![self.facets.len(), D], i64s(self.facets.iter().flatten().copied().collect())),
-            ("landmarks", Dtype::I64, vec![self.landmarks.len()], i64s(self.landmarks.clone())),
-            ("mesh_nodes", Dtype::F64, vec![self.mesh.nodes.len(), D], f64s(self.mesh.nodes.iter().flatten().copied().collect())),
-            ("mesh_elements", Dtype::I64, vec![self.mesh.num_elements(), k], i64s(self.mesh.connectivity.clone())),
+            (
+                "eigenvalues",
+                Dtype::F64,
+                vec![m],
+                f64s(self.eigenvalues.clone()),
+            ),
+            (
+                "cumulative_variance",
+                Dtype::F64,
+                vec![self.cumulative_variance.len()],
+                f64s(self.cumulative_variance.clone()),
+            ),
+            (
+                "facets",
+                Dtype::I64,
+                vec![self.facets.len(), D],
+                i64s(self.facets.iter().flatten().copied().collect()),
+            ),
+            (
+                "landmarks",
+                Dtype::I64,
+                vec![self.landmarks.len()],
+                i64s(self.landmarks.clone()),
+            ),
+            (
+                "mesh_nodes",
+                Dtype::F64,
+                vec![self.mesh.nodes.len(), D],
+                f64s(self.mesh.nodes.iter().flatten().copied().collect()),
+            ),
+            (
+                "mesh_elements",
+                Dtype::I64,
+                vec![self.mesh.num_elements(), k],
+                i64s(self.mesh.connectivity.clone()),
+            ),
         ];
         let mut views = Vec::new();
         for (name, dt, shape, data) in &bufs {
-            views.push((*name, TensorView::new(*dt, shape.clone(), data).map_err(|e| Error::Numerical(format!("atlas tensor {name}: {e}")))?));
+            views.push((
+                *name,
+                TensorView::new(*dt, shape.clone(), data)
+                    .map_err(|e| Error::Numerical(format!("atlas tensor {name}: {e}")))?,
+            ));
         }
         let mut meta = HashMap::new();
         meta.insert("format".to_string(), "atlasmesh-atlas".to_string());
-        meta.insert("format_version".to_string(), ATLAS_FORMAT_VERSION.to_string());
+        meta.insert(
+            "format_version".to_string(),
+            ATLAS_FORMAT_VERSION.to_string(),
+        );
         meta.insert("dimension".to_string(), D.to_string());
-        meta.insert("element_kind".to_string(), self.mesh.kind.name().to_string());
-        meta.insert("training_shapes".to_string(), self.training_shapes.to_string());
-        meta.insert("params".to_string(), serde_json::to_string(&self.params).unwrap_or_default());
-        let bytes = safetensors::serialize(views, Some(meta)).map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
+        meta.insert(
+            "element_kind".to_string(),
+            self.mesh.kind.name().to_string(),
+        );
+        meta.insert(
+            "training_shapes".to_string(),
+            self.training_shapes.to_string(),
+        );
+        meta.insert(
+            "params".to_string(),
+            serde_json::to_string(&self.params).unwrap_or_default(),
+        );
+        let bytes = safetensors::serialize(views, Some(meta))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
         crate::io::write_atomic(path, &bytes)
     }
 
@@ -237,66 +339,121 @@ impl<const D: usize> Atlas<D> {
     /// shapes of every tensor.
     pub fn load(path: &Path) -> Result<Self> {
         use safetensors::{Dtype, SafeTensors};
-        let bad = |m: String| Error::Atlas { path: path.to_path_buf(), message: m };
+        let bad = |m: String| Error::Atlas {
+            path: path.to_path_buf(),
+            message: m,
+        };
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let (_, meta) = SafeTensors::read_metadata(&bytes).map_err(|e| bad(format!("not a safetensors file ({e})")))?;
+        let (_, meta) = SafeTensors::read_metadata(&bytes)
+            .map_err(|e| bad(format!("not a safetensors file ({e})")))?;
         let meta = meta.metadata().clone().unwrap_or_default();
         if meta.get("format").map(String::as_str) != Some("atlasmesh-atlas") {
-            return Err(bad("no atlasmesh metadata; write atlases with `atlasmesh build`".into()));
+            return Err(bad(
+                "no atlasmesh metadata; write atlases with `atlasmesh build`".into(),
+            ));
         }
         let version = meta.get("format_version").cloned().unwrap_or_default();
         if version != ATLAS_FORMAT_VERSION {
-            return Err(bad(format!("format version {version:?}, this build reads version {ATLAS_FORMAT_VERSION}; rebuild the atlas")));
+            return Err(bad(format!(
+                "format version {version:?}, this build reads version {ATLAS_FORMAT_VERSION}; rebuild the atlas"
+            )));
         }
-        let dim: usize = meta.get("dimension").and_then(|s| s.parse().ok()).unwrap_or(0);
+        let dim: usize = meta
+            .get("dimension")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
         if dim != D {
             return Err(bad(format!("the atlas is {dim}D, {D}D was expected")));
         }
-        let kind = meta.get("element_kind").and_then(|s| ElementKind::from_name(s)).ok_or_else(|| bad("unknown element kind".into()))?;
-        let params: AtlasParams = meta.get("params").and_then(|s| serde_json::from_str(s).ok()).ok_or_else(|| bad("missing or malformed params".into()))?;
-        let training_shapes = meta.get("training_shapes").and_then(|s| s.parse().ok()).unwrap_or(0);
+        let kind = meta
+            .get("element_kind")
+            .and_then(|s| ElementKind::from_name(s))
+            .ok_or_else(|| bad("unknown element kind".into()))?;
+        let params: AtlasParams = meta
+            .get("params")
+            .and_then(|s| serde_json::from_str(s).ok())
+            .ok_or_else(|| bad("missing or malformed params".into()))?;
+        let training_shapes = meta
+            .get("training_shapes")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
         let st = SafeTensors::deserialize(&bytes).map_err(|e| bad(format!("{e}")))?;
         let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
-            let t = st.tensor(name).map_err(|_| bad(format!("tensor {name} is missing")))?;
+            let t = st
+                .tensor(name)
+                .map_err(|_| bad(format!("tensor {name} is missing")))?;
             if t.dtype() != dt {
-                return Err(bad(format!("tensor {name} has type {:?}, {dt:?} expected", t.dtype())));
+                return Err(bad(format!(
+                    "tensor {name} has type {:?}, {dt:?} expected",
+                    t.dtype()
+                )));
             }
             if let Some(c) = cols {
                 if t.shape().len() != 2 || t.shape()[1] != c {
-                    return Err(bad(format!("tensor {name} has shape {:?}, [_, {c}] expected", t.shape())));
+                    return Err(bad(format!(
+                        "tensor {name} has shape {:?}, [_, {c}] expected",
+                        t.shape()
+                    )));
                 }
             }
             Ok((t.shape().to_vec(), t.data().to_vec()))
         };
-        let f64v = |b: &[u8]| -> Vec<f64> { b.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect() };
+        let f64v = |b: &[u8]| -> Vec<f64> {
+            b.chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                .collect()
+        };
         let idxv = |b: &[u8], limit: usize, what: &str| -> Result<Vec<usize>> {
             b.chunks_exact(8)
                 .map(|c| {
                     let v = i64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
-                    if v < 0 || v as usize >= limit { Err(bad(format!("{what} index {v} out of range"))) } else { Ok(v as usize) }
+                    if v < 0 || v as usize >= limit {
+                        Err(bad(format!("{what} index {v} out of range")))
+                    } else {
+                        Ok(v as usize)
+                    }
                 })
                 .collect()
         };
         let (ms, mb) = get("mean", Dtype::F64, Some(D))?;
         let n = ms[0];
-        let mean: Vec<Point<D>> = f64v(&mb).chunks_exact(D).map(|c| std::array::from_fn(|d| c[d])).collect();
+        let mean: Vec<Point<D>> = f64v(&mb)
+            .chunks_exact(D)
+            .map(|c| std::array::from_fn(|d| c[d]))
+            .collect();
         let (es, eb) = get("eigenvalues", Dtype::F64, None)?;
         let m = es.first().copied().unwrap_or(0);
         let (mds, mdb) = get("modes", Dtype::F64, Some(m))?;
         if mds[0] != n * D {
-            return Err(bad(format!("modes have {} rows, {} expected", mds[0], n * D)));
+            return Err(bad(format!(
+                "modes have {} rows, {} expected",
+                mds[0],
+                n * D
+            )));
         }
         let mv = f64v(&mdb);
         let modes = Mat::from_fn(n * D, m, |r, c| mv[r * m + c]);
         let (_, cvb) = get("cumulative_variance", Dtype::F64, None)?;
         let (_, fb) = get("facets", Dtype::I64, Some(D))?;
-        let facets = idxv(&fb, n, "facet")?.chunks_exact(D).map(|c| std::array::from_fn(|d| c[d])).collect();
+        let facets = idxv(&fb, n, "facet")?
+            .chunks_exact(D)
+            .map(|c| std::array::from_fn(|d| c[d]))
+            .collect();
         let (_, lb) = get("landmarks", Dtype::I64, None)?;
         let (_, nb) = get("mesh_nodes", Dtype::F64, Some(D))?;
-        let nodes: Vec<Point<D>> = f64v(&nb).chunks_exact(D).map(|c| std::array::from_fn(|d| c[d])).collect();
+        let nodes: Vec<Point<D>> = f64v(&nb)
+            .chunks_exact(D)
+            .map(|c| std::array::from_fn(|d| c[d]))
+            .collect();
         let (_, elb) = get("mesh_elements", Dtype::I64, Some(kind.nodes()))?;
         let connectivity = idxv(&elb, nodes.len(), "mesh node")?;
-        let all: Vec<f64> = mean.iter().flatten().chain(nodes.iter().flatten()).copied().chain(mv.iter().copied()).collect();
+        let all: Vec<f64> = mean
+            .iter()
+            .flatten()
+            .chain(nodes.iter().flatten())
+            .copied()
+            .chain(mv.iter().copied())
+            .collect();
         if all.iter().any(|x| !x.is_finite()) {
             return Err(bad("contains NaN or infinite values".into()));
         }
@@ -307,7 +464,11 @@ impl<const D: usize> Atlas<D> {
             cumulative_variance: f64v(&cvb),
             facets,
             landmarks: idxv(&lb, n, "landmark")?,
-            mesh: FeMesh { nodes, kind, connectivity },
+            mesh: FeMesh {
+                nodes,
+                kind,
+                connectivity,
+            },
             params,
             training_shapes,
         })
@@ -337,8 +498,21 @@ mod tests {
 
     #[test]
     fn a_model_instance_gives_back_its_weights() {
-        let atlas = Atlas::build(&ellipses(8), &AtlasParams { modes: ModeSelection::Count(3), element_size: 0.05, smoothing_passes: 2 }).unwrap();
-        let w: Vec<f64> = atlas.eigenvalues.iter().enumerate().map(|(k, l)| l.sqrt() * (k as f64 - 1.0)).collect();
+        let atlas = Atlas::build(
+            &ellipses(8),
+            &AtlasParams {
+                modes: ModeSelection::Count(3),
+                element_size: 0.05,
+                smoothing_passes: 2,
+            },
+        )
+        .unwrap();
+        let w: Vec<f64> = atlas
+            .eigenvalues
+            .iter()
+            .enumerate()
+            .map(|(k, l)| l.sqrt() * (k as f64 - 1.0))
+            .collect();
         let x = atlas.instance(&w);
         let back = atlas.coefficients(&x);
         for (a, b) in w.iter().zip(&back) {
@@ -348,7 +522,15 @@ mod tests {
 
     #[test]
     fn atlas_survives_a_save_load_round_trip() {
-        let atlas = Atlas::build(&ellipses(6), &AtlasParams { modes: ModeSelection::Count(2), element_size: 0.05, smoothing_passes: 2 }).unwrap();
+        let atlas = Atlas::build(
+            &ellipses(6),
+            &AtlasParams {
+                modes: ModeSelection::Count(2),
+                element_size: 0.05,
+                smoothing_passes: 2,
+            },
+        )
+        .unwrap();
         let dir = std::env::temp_dir().join(format!("atlasmesh-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("a.safetensors");

@@ -16,7 +16,10 @@ pub struct Morpher<const D: usize> {
 impl<const D: usize> Morpher<D> {
     /// Prepares the morph of `atlas.mesh` (factorizes `B^T B + alpha K` on the mean points).
     pub fn new(atlas: &Atlas<D>, params: &FfdParams) -> Result<Self> {
-        Ok(Morpher { fit: FfdFit::new(&atlas.mean, params)?, mesh: atlas.mesh.clone() })
+        Ok(Morpher {
+            fit: FfdFit::new(&atlas.mean, params)?,
+            mesh: atlas.mesh.clone(),
+        })
     }
 
     /// Morphs the mean mesh onto the subject of `fit`: the FFD `f` minimizing
@@ -25,8 +28,18 @@ impl<const D: usize> Morpher<D> {
     /// the mean mesh, then `t` back to the subject frame. The result is in the subject frame.
     pub fn morph(&self, fit: &FitResult<D>) -> FeMesh<D> {
         let t = &fit.similarity;
-        let targets: Vec<_> = fit.projected.iter().map(|p| t.apply_inverse(&p.point)).collect();
+        let targets: Vec<_> = fit
+            .projected
+            .iter()
+            .map(|p| t.apply_inverse(&p.point))
+            .collect();
         let f = self.fit.solve(&targets);
-        self.mesh.with_nodes(self.mesh.nodes.iter().map(|p| t.apply(&f.apply(p))).collect())
+        self.mesh.with_nodes(
+            self.mesh
+                .nodes
+                .iter()
+                .map(|p| t.apply(&f.apply(p)))
+                .collect(),
+        )
     }
 }

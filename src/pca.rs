@@ -32,7 +32,9 @@ impl Pca {
     /// The number of modes needed to explain at least the share `p` of the variance.
     pub fn modes_for_variance(&self, p: f64) -> usize {
         let cum = self.cumulative_variance();
-        cum.iter().position(|&c| c >= p - 1e-12).map_or(cum.len(), |i| i + 1)
+        cum.iter()
+            .position(|&c| c >= p - 1e-12)
+            .map_or(cum.len(), |i| i + 1)
     }
 }
 
@@ -45,13 +47,24 @@ pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Resu
         return Err(Error::Population("PCA needs at least 2 shapes".into()));
     }
     let rows = mean.len() * D;
-    let phi = Mat::<f64>::from_fn(rows, ns, |r, k| aligned[k][r / D][r % D] - mean[r / D][r % D]);
-    let svd = phi.thin_svd().map_or_else(|_| Err(Error::Numerical("the SVD of the shape data did not converge".into())), Ok)?;
+    let phi = Mat::<f64>::from_fn(rows, ns, |r, k| {
+        aligned[k][r / D][r % D] - mean[r / D][r % D]
+    });
+    let svd = phi.thin_svd().map_or_else(
+        |_| {
+            Err(Error::Numerical(
+                "the SVD of the shape data did not converge".into(),
+            ))
+        },
+        Ok,
+    )?;
     let keep = ns - 1;
     let s = svd.S().column_vector();
     let eigenvalues: Vec<f64> = (0..keep).map(|k| s[k] * s[k] / (ns - 1) as f64).collect();
     if eigenvalues.first().is_none_or(|&l| l <= 0.0) {
-        return Err(Error::Population("the shapes are identical after alignment: there is no variance to model".into()));
+        return Err(Error::Population(
+            "the shapes are identical after alignment: there is no variance to model".into(),
+        ));
     }
     let modes = svd.U().subcols(0, keep).to_owned();
     Ok(Pca { modes, eigenvalues })
@@ -65,7 +78,17 @@ mod tests {
     fn pca_reconstructs_its_data() {
         let mean: Vec<Point<2>> = (0..10).map(|i| [i as f64, (i * i) as f64 * 0.1]).collect();
         let shapes: Vec<Vec<Point<2>>> = (0..6)
-            .map(|k| mean.iter().enumerate().map(|(i, p)| [p[0] + 0.1 * ((k * i) as f64).sin(), p[1] + 0.05 * (k as f64 - 2.5)]).collect())
+            .map(|k| {
+                mean.iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        [
+                            p[0] + 0.1 * ((k * i) as f64).sin(),
+                            p[1] + 0.05 * (k as f64 - 2.5),
+                        ]
+                    })
+                    .collect()
+            })
             .collect();
         let mut m = vec![[0.0; 2]; 10];
         for s in &shapes {
@@ -78,7 +101,9 @@ mod tests {
         for s in &shapes {
             let x: Vec<f64> = (0..20).map(|r| s[r / 2][r % 2] - m[r / 2][r % 2]).collect();
             for r in 0..20 {
-                let rec: f64 = (0..p.modes.ncols()).map(|k| p.modes[(r, k)] * (0..20).map(|q| p.modes[(q, k)] * x[q]).sum::<f64>()).sum();
+                let rec: f64 = (0..p.modes.ncols())
+                    .map(|k| p.modes[(r, k)] * (0..20).map(|q| p.modes[(q, k)] * x[q]).sum::<f64>())
+                    .sum();
                 assert!((rec - x[r]).abs() < 1e-10);
             }
         }

@@ -11,7 +11,10 @@ use crate::fit::{FitParams, Fitter};
 use crate::geometry::{ClosestPointIndex, Point, Shape, Similarity};
 use crate::model::{Atlas, AtlasParams};
 use crate::morph::Morpher;
-use crate::report::{MeanMeshReport, Report, SubjectReport, Summary, plot_cumulative_variance, plot_e_d, plot_subject};
+use crate::report::{
+    MeanMeshReport, Report, SubjectReport, Summary, plot_cumulative_variance, plot_e_d,
+    plot_subject,
+};
 use crate::resample::{resample_corresponding, resample_uniform};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -38,7 +41,12 @@ pub struct RunParams {
 
 impl Default for RunParams {
     fn default() -> Self {
-        RunParams { atlas: AtlasParams::default(), fit: FitParams::default(), morph: FfdParams::default(), plots: true }
+        RunParams {
+            atlas: AtlasParams::default(),
+            fit: FitParams::default(),
+            morph: FfdParams::default(),
+            plots: true,
+        }
     }
 }
 
@@ -57,20 +65,31 @@ pub fn load_population(paths: &[PathBuf], opts: &PopulationOptions) -> Result<Ve
         shapes.extend(s);
     }
     for (s, p) in shapes.iter().zip(&origin) {
-        s.validate().map_err(|e| Error::parse(p, 0, e.to_string()))?;
+        s.validate()
+            .map_err(|e| Error::parse(p, 0, e.to_string()))?;
     }
     let n0 = shapes[0].points.len();
     let same = shapes.iter().all(|s| s.points.len() == n0);
     let closed = shapes[0].is_closed();
     if shapes.iter().any(|s| s.is_closed() != closed) {
-        return Err(Error::Population("some outlines are open and others closed".into()));
+        return Err(Error::Population(
+            "some outlines are open and others closed".into(),
+        ));
     }
     match opts.resample {
         Some(n) if same => Ok(resample_corresponding(&shapes, n, closed)?.0),
-        Some(n) => shapes.iter().map(|s| resample_uniform(s, n, closed)).collect(),
+        Some(n) => shapes
+            .iter()
+            .map(|s| resample_uniform(s, n, closed))
+            .collect(),
         None if same => Ok(shapes),
         None => {
-            let (k, s) = shapes.iter().enumerate().find(|(_, s)| s.points.len() != n0).map(|(k, s)| (k, s)).ok_or_else(|| Error::Population("counts differ".into()))?;
+            let (k, s) = shapes
+                .iter()
+                .enumerate()
+                .find(|(_, s)| s.points.len() != n0)
+                .map(|(k, s)| (k, s))
+                .ok_or_else(|| Error::Population("counts differ".into()))?;
             Err(Error::Population(format!(
                 "{}: shape {} has {} points but {}: shape {} has {n0}; shapes without correspondence need --resample N",
                 origin[k].display(),
@@ -84,12 +103,27 @@ pub fn load_population(paths: &[PathBuf], opts: &PopulationOptions) -> Result<Ve
 }
 
 fn file_name(name: &str) -> String {
-    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' { c } else { '_' }).collect()
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// Fits `subject` with the atlas, morphs the mean mesh, measures, and writes the subject's
 /// mesh (VTU), its fitted outline (VTP) and its plot into `out`.
-pub fn process_subject(atlas: &Atlas<2>, fitter: &Fitter<2>, morpher: &Morpher<2>, subject: &Shape<2>, out: &Path, params: &RunParams) -> Result<SubjectReport> {
+pub fn process_subject(
+    atlas: &Atlas<2>,
+    fitter: &Fitter<2>,
+    morpher: &Morpher<2>,
+    subject: &Shape<2>,
+    out: &Path,
+    params: &RunParams,
+) -> Result<SubjectReport> {
     let index = ClosestPointIndex::from_shape(subject);
     let t0 = Instant::now();
     let fit = fitter.fit(subject, &index, &params.fit)?;
@@ -103,10 +137,22 @@ pub fn process_subject(atlas: &Atlas<2>, fitter: &Fitter<2>, morpher: &Morpher<2
     let base = file_name(&subject.name);
     let mut files = Vec::new();
     let mesh_file = format!("{base}_mesh.vtu");
-    let mean_in_subject = atlas.mesh.with_nodes(atlas.mesh.nodes.iter().map(|p| fit.similarity.apply(p)).collect());
+    let mean_in_subject = atlas.mesh.with_nodes(
+        atlas
+            .mesh
+            .nodes
+            .iter()
+            .map(|p| fit.similarity.apply(p))
+            .collect(),
+    );
     write_vtu(&out.join(&mesh_file), &mesh, Some(&mean_in_subject))?;
     files.push(mesh_file);
-    let fitted = Shape { name: subject.name.clone(), points: fit.projected.iter().map(|p| p.point).collect(), facets: atlas.facets.clone(), landmarks: atlas.landmarks.clone() };
+    let fitted = Shape {
+        name: subject.name.clone(),
+        points: fit.projected.iter().map(|p| p.point).collect(),
+        facets: atlas.facets.clone(),
+        landmarks: atlas.landmarks.clone(),
+    };
     let outline_file = format!("{base}_fit.vtp");
     write_vtp(&out.join(&outline_file), &fitted)?;
     files.push(outline_file);
@@ -114,7 +160,15 @@ pub fn process_subject(atlas: &Atlas<2>, fitter: &Fitter<2>, morpher: &Morpher<2
         let png = format!("{base}.png");
         let mean_pts: Vec<Point<2>> = atlas.mean.iter().map(|p| fit.similarity.apply(p)).collect();
         let closed = subject.is_closed();
-        plot_subject(&out.join(&png), &subject.name, &mean_pts, &subject.points, &fit.locus, &mesh, closed)?;
+        plot_subject(
+            &out.join(&png),
+            &subject.name,
+            &mean_pts,
+            &subject.points,
+            &fit.locus,
+            &mesh,
+            closed,
+        )?;
         files.push(png);
     }
     Ok(SubjectReport {
@@ -163,12 +217,28 @@ impl Progress {
     pub fn new(label: &str, total: usize, quiet: bool) -> Self {
         use std::io::IsTerminal;
         let tty = std::io::stderr().is_terminal() && !quiet;
-        let bar = if tty { indicatif::ProgressBar::new(total as u64) } else { indicatif::ProgressBar::hidden() };
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {per_sec} eta {eta}") {
+        let bar = if tty {
+            indicatif::ProgressBar::new(total as u64)
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:30}] {pos}/{len} {per_sec} eta {eta}",
+        ) {
             bar.set_style(style.progress_chars("=> "));
         }
         bar.set_message(label.to_string());
-        Progress { bar, tty, label: if quiet { String::new() } else { label.to_string() }, total: total as u64, done: 0.into() }
+        Progress {
+            bar,
+            tty,
+            label: if quiet {
+                String::new()
+            } else {
+                label.to_string()
+            },
+            total: total as u64,
+            done: 0.into(),
+        }
     }
     pub fn tick(&self, what: &str) {
         let d = self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
@@ -184,11 +254,25 @@ impl Progress {
 }
 
 /// Writes the population-level plots and the report.
-fn finish_report(out: &Path, dataset: &str, atlas_for_variance: &Atlas<2>, subjects: Vec<SubjectReport>, params: &RunParams, mean_mesh: Option<MeanMeshReport>) -> Result<Report> {
+fn finish_report(
+    out: &Path,
+    dataset: &str,
+    atlas_for_variance: &Atlas<2>,
+    subjects: Vec<SubjectReport>,
+    params: &RunParams,
+    mean_mesh: Option<MeanMeshReport>,
+) -> Result<Report> {
     let m = atlas_for_variance.num_modes();
     if params.plots {
-        plot_cumulative_variance(&out.join("cumulative_variance.png"), &atlas_for_variance.cumulative_variance, m)?;
-        let hist: Vec<(String, Vec<f64>)> = subjects.iter().map(|s| (s.name.clone(), s.e_d_history.clone())).collect();
+        plot_cumulative_variance(
+            &out.join("cumulative_variance.png"),
+            &atlas_for_variance.cumulative_variance,
+            m,
+        )?;
+        let hist: Vec<(String, Vec<f64>)> = subjects
+            .iter()
+            .map(|s| (s.name.clone(), s.e_d_history.clone()))
+            .collect();
         plot_e_d(&out.join("e_d.png"), &hist)?;
     }
     let report = Report {
@@ -210,20 +294,38 @@ fn finish_report(out: &Path, dataset: &str, atlas_for_variance: &Atlas<2>, subje
 /// others, a fit of the held-out shape (its known correspondence unused: it is fitted as an
 /// outline), the morphed mesh and the measures. Writes `out/report.json`, each subject's VTU,
 /// VTP and plot, and the population plots. `jobs` threads (0 = all cores).
-pub fn leave_one_out(shapes: &[Shape<2>], dataset: &str, params: &RunParams, out: &Path, jobs: usize, quiet: bool) -> Result<Report> {
+pub fn leave_one_out(
+    shapes: &[Shape<2>],
+    dataset: &str,
+    params: &RunParams,
+    out: &Path,
+    jobs: usize,
+    quiet: bool,
+) -> Result<Report> {
     if shapes.len() < 4 {
-        return Err(Error::Population(format!("leave-one-out needs at least 4 shapes, got {}", shapes.len())));
+        return Err(Error::Population(format!(
+            "leave-one-out needs at least 4 shapes, got {}",
+            shapes.len()
+        )));
     }
     create_dir(out)?;
     // The full atlas, for the variance figures and to check the population once.
     let full = Atlas::build(shapes, &params.atlas)?;
     let progress = Progress::new("leave-one-out", shapes.len(), quiet);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().map_err(|e| Error::Parameter(format!("--jobs: {e}")))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| Error::Parameter(format!("--jobs: {e}")))?;
     let results: Vec<Result<SubjectReport>> = pool.install(|| {
         (0..shapes.len())
             .into_par_iter()
             .map(|k| {
-                let training: Vec<Shape<2>> = shapes.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, s)| s.clone()).collect();
+                let training: Vec<Shape<2>> = shapes
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i != k)
+                    .map(|(_, s)| s.clone())
+                    .collect();
                 let atlas = Atlas::build(&training, &params.atlas)?;
                 let fitter = Fitter::new(&atlas);
                 let morpher = Morpher::new(&atlas, &params.morph)?;
@@ -235,7 +337,14 @@ pub fn leave_one_out(shapes: &[Shape<2>], dataset: &str, params: &RunParams, out
     });
     progress.finish();
     let subjects = results.into_iter().collect::<Result<Vec<_>>>()?;
-    finish_report(out, dataset, &full, subjects, params, Some(mean_mesh_report(&full)))
+    finish_report(
+        out,
+        dataset,
+        &full,
+        subjects,
+        params,
+        Some(mean_mesh_report(&full)),
+    )
 }
 
 /// Builds an atlas from a population and writes it, with the mean mesh as VTU and the mean
@@ -247,13 +356,27 @@ pub fn build(shapes: &[Shape<2>], params: &RunParams, atlas_path: &Path) -> Resu
     }
     atlas.save(atlas_path)?;
     let stem = atlas_path.with_extension("");
-    write_vtu(&PathBuf::from(format!("{}_mean_mesh.vtu", stem.display())), &atlas.mesh, None)?;
-    write_vtp(&PathBuf::from(format!("{}_mean.vtp", stem.display())), &atlas.mean_shape())?;
+    write_vtu(
+        &PathBuf::from(format!("{}_mean_mesh.vtu", stem.display())),
+        &atlas.mesh,
+        None,
+    )?;
+    write_vtp(
+        &PathBuf::from(format!("{}_mean.vtp", stem.display())),
+        &atlas.mean_shape(),
+    )?;
     Ok(atlas)
 }
 
 /// Fits subjects with a saved atlas; writes their meshes and `out/report.json`.
-pub fn fit_subjects(atlas: &Atlas<2>, subjects: &[Shape<2>], dataset: &str, params: &RunParams, out: &Path, quiet: bool) -> Result<Report> {
+pub fn fit_subjects(
+    atlas: &Atlas<2>,
+    subjects: &[Shape<2>],
+    dataset: &str,
+    params: &RunParams,
+    out: &Path,
+    quiet: bool,
+) -> Result<Report> {
     create_dir(out)?;
     let fitter = Fitter::new(atlas);
     let morpher = Morpher::new(atlas, &params.morph)?;
@@ -267,7 +390,14 @@ pub fn fit_subjects(atlas: &Atlas<2>, subjects: &[Shape<2>], dataset: &str, para
         })
         .collect::<Result<Vec<_>>>()?;
     progress.finish();
-    finish_report(out, dataset, atlas, reports, params, Some(mean_mesh_report(atlas)))
+    finish_report(
+        out,
+        dataset,
+        atlas,
+        reports,
+        params,
+        Some(mean_mesh_report(atlas)),
+    )
 }
 
 /// Standard normal deviate (Box-Muller) from a seeded generator.
@@ -289,13 +419,19 @@ pub fn demo_population(n: usize, points: usize, seed: u64) -> Vec<Shape<2>> {
             let c: [f64; 4] = std::array::from_fn(|_| normal(&mut rng));
             let mut pose = Similarity::<2>::planar_rotation(rng.random_range(-0.6..0.6));
             pose.s = rng.random_range(20.0..60.0);
-            pose.t = [rng.random_range(-100.0..100.0), rng.random_range(-100.0..100.0)];
+            pose.t = [
+                rng.random_range(-100.0..100.0),
+                rng.random_range(-100.0..100.0),
+            ];
             let pts = (0..points)
                 .map(|i| {
                     let t = i as f64 / points as f64 * std::f64::consts::TAU;
                     let lobe = 0.18 * (-((t - 1.2) / 0.45).powi(2)).exp();
                     let notch = -0.1 * (-((t - 4.0) / 0.3).powi(2)).exp();
-                    let r = 1.0 + 0.3 * t.cos() + lobe * (1.0 + 0.35 * c[1]) + notch * (1.0 + 0.4 * c[3]);
+                    let r = 1.0
+                        + 0.3 * t.cos()
+                        + lobe * (1.0 + 0.35 * c[1])
+                        + notch * (1.0 + 0.4 * c[3]);
                     let x = r * t.cos() * (1.0 + 0.08 * c[0]);
                     let y = r * t.sin() * 0.7 + 0.06 * c[2] * x * x;
                     pose.apply(&[x, y])
@@ -317,5 +453,12 @@ pub fn demo(out: &Path, quiet: bool) -> Result<Report> {
     params.atlas.element_size = 0.03;
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<2>::load(&out.join("atlas.safetensors"))?;
-    fit_subjects(&loaded, test, "demo (synthetic, seed 20261122)", &params, out, quiet)
+    fit_subjects(
+        &loaded,
+        test,
+        "demo (synthetic, seed 20261122)",
+        &params,
+        out,
+        quiet,
+    )
 }

@@ -10,8 +10,16 @@ use faer::Mat;
 /// Frames: `src` in the reference frame, `dst` in the subject frame; `t` maps the former to the
 /// latter.
 #[track_caller]
-pub fn fit_similarity<const D: usize>(src: &[Point<D>], dst: &[Point<D>], weights: Option<&[f64]>) -> Similarity<D> {
-    assert_eq!(src.len(), dst.len(), "fit_similarity: lists of different lengths");
+pub fn fit_similarity<const D: usize>(
+    src: &[Point<D>],
+    dst: &[Point<D>],
+    weights: Option<&[f64]>,
+) -> Similarity<D> {
+    assert_eq!(
+        src.len(),
+        dst.len(),
+        "fit_similarity: lists of different lengths"
+    );
     let w = |j: usize| weights.map_or(1.0, |w| w[j]);
     let wsum: f64 = (0..src.len()).map(w).sum();
     let mut ms = [0.0; D];
@@ -39,7 +47,11 @@ pub fn fit_similarity<const D: usize>(src: &[Point<D>], dst: &[Point<D>], weight
         }
     }
     let (r, trace) = optimal_rotation(&h);
-    let s = if var > 0.0 { (trace / var).max(f64::MIN_POSITIVE) } else { 1.0 };
+    let s = if var > 0.0 {
+        (trace / var).max(f64::MIN_POSITIVE)
+    } else {
+        1.0
+    };
     let mut t = Similarity { s, r, t: [0.0; D] };
     let rms = t.apply(&ms);
     t.t = sub(md, rms);
@@ -67,7 +79,8 @@ fn optimal_rotation<const D: usize>(h: &[[f64; D]; D]) -> ([[f64; D]; D], f64) {
     let (u, sv, v) = (svd.U(), svd.S(), svd.V());
     let det = |x: faer::MatRef<f64>| -> f64 {
         // 3x3 determinant (D = 3 is the only other supported dimension).
-        x[(0, 0)] * (x[(1, 1)] * x[(2, 2)] - x[(1, 2)] * x[(2, 1)]) - x[(0, 1)] * (x[(1, 0)] * x[(2, 2)] - x[(1, 2)] * x[(2, 0)])
+        x[(0, 0)] * (x[(1, 1)] * x[(2, 2)] - x[(1, 2)] * x[(2, 1)])
+            - x[(0, 1)] * (x[(1, 0)] * x[(2, 2)] - x[(1, 2)] * x[(2, 0)])
             + x[(0, 2)] * (x[(1, 0)] * x[(2, 1)] - x[(1, 1)] * x[(2, 0)])
     };
     let sign = if det(u) * det(v) < 0.0 { -1.0 } else { 1.0 };
@@ -105,11 +118,16 @@ pub struct Gpa<const D: usize> {
 /// `shapes`: `n_s` shapes of `N` corresponding points each, `n_s >= 2`.
 pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Result<Gpa<D>> {
     if shapes.len() < 2 {
-        return Err(Error::Population(format!("{} shape(s); at least 2 are needed", shapes.len())));
+        return Err(Error::Population(format!(
+            "{} shape(s); at least 2 are needed",
+            shapes.len()
+        )));
     }
     let n = shapes[0].len();
     if shapes.iter().any(|s| s.len() != n) {
-        return Err(Error::Population("shapes have different point counts".into()));
+        return Err(Error::Population(
+            "shapes have different point counts".into(),
+        ));
     }
     let normalized = |s: &[Point<D>]| -> Option<Vec<Point<D>>> {
         let c = centroid(s);
@@ -119,7 +137,9 @@ pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Resul
     };
     let mut x: Vec<Vec<Point<D>>> = Vec::with_capacity(shapes.len());
     for (k, s) in shapes.iter().enumerate() {
-        x.push(normalized(s).ok_or_else(|| Error::Population(format!("shape {k} has all its points at one place")))?);
+        x.push(normalized(s).ok_or_else(|| {
+            Error::Population(format!("shape {k} has all its points at one place"))
+        })?);
     }
     let reference = x[0].clone();
     let mut mean = reference.clone();
@@ -138,12 +158,22 @@ pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Resul
                 }
             }
         }
-        let mut m = normalized(&m).ok_or_else(|| Error::Numerical("the Procrustes mean collapsed to a point".into()))?;
+        let mut m = normalized(&m)
+            .ok_or_else(|| Error::Numerical("the Procrustes mean collapsed to a point".into()))?;
         // Keep the mean's orientation fixed to the reference (rotation only).
         let t = fit_similarity(&m, &reference, None);
-        let rot = Similarity { s: 1.0, r: t.r, t: [0.0; D] };
+        let rot = Similarity {
+            s: 1.0,
+            r: t.r,
+            t: [0.0; D],
+        };
         m = m.iter().map(|p| rot.apply(p)).collect();
-        let change: f64 = m.iter().zip(&mean).map(|(a, b)| crate::geometry::dist2(*a, *b)).sum::<f64>().sqrt();
+        let change: f64 = m
+            .iter()
+            .zip(&mean)
+            .map(|(a, b)| crate::geometry::dist2(*a, *b))
+            .sum::<f64>()
+            .sqrt();
         mean = m;
         if change < 1e-12 {
             break;
@@ -159,7 +189,11 @@ pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Resul
             a.iter().map(|p| scale(*p, 1.0 / proj)).collect()
         })
         .collect();
-    Ok(Gpa { mean, aligned, iterations })
+    Ok(Gpa {
+        mean,
+        aligned,
+        iterations,
+    })
 }
 
 #[cfg(test)]
@@ -178,7 +212,14 @@ mod tests {
 
     #[test]
     fn procrustes_recovers_a_known_similarity_2d() {
-        let src: Vec<Point<2>> = (0..40).map(|i| [(i as f64 * 0.3).cos() * (1.0 + 0.1 * i as f64), (i as f64 * 0.7).sin()]).collect();
+        let src: Vec<Point<2>> = (0..40)
+            .map(|i| {
+                [
+                    (i as f64 * 0.3).cos() * (1.0 + 0.1 * i as f64),
+                    (i as f64 * 0.7).sin(),
+                ]
+            })
+            .collect();
         let mut truth = Similarity::<2>::planar_rotation(2.4);
         truth.s = 3.7;
         truth.t = [-4.0, 12.5];
@@ -199,7 +240,11 @@ mod tests {
         // Rotation about a skew axis (Rodrigues).
         let axis = crate::geometry::normalize([1.0, -2.0, 0.5]);
         let (sn, c) = 1.1f64.sin_cos();
-        let k = [[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]];
+        let k = [
+            [0.0, -axis[2], axis[1]],
+            [axis[2], 0.0, -axis[0]],
+            [-axis[1], axis[0], 0.0],
+        ];
         let mut r = [[0.0; 3]; 3];
         for i in 0..3 {
             for j in 0..3 {
@@ -207,7 +252,11 @@ mod tests {
                 r[i][j] = if i == j { 1.0 } else { 0.0 } + sn * k[i][j] + (1.0 - c) * k2;
             }
         }
-        let truth = Similarity { s: 0.25, r, t: [3.0, 2.0, -1.0] };
+        let truth = Similarity {
+            s: 0.25,
+            r,
+            t: [3.0, 2.0, -1.0],
+        };
         let dst: Vec<Point<3>> = src.iter().map(|p| truth.apply(p)).collect();
         let t = fit_similarity(&src, &dst, None);
         for (p, q) in src.iter().zip(&dst) {
@@ -218,7 +267,9 @@ mod tests {
 
     #[test]
     fn gpa_of_similar_copies_gives_zero_residual() {
-        let base: Vec<Point<2>> = (0..25).map(|i| [(i as f64).cos() + 0.1 * i as f64, (i as f64 * 1.3).sin()]).collect();
+        let base: Vec<Point<2>> = (0..25)
+            .map(|i| [(i as f64).cos() + 0.1 * i as f64, (i as f64 * 1.3).sin()])
+            .collect();
         let shapes: Vec<Vec<Point<2>>> = (0..5)
             .map(|k| {
                 let mut t = Similarity::<2>::planar_rotation(k as f64);

@@ -84,7 +84,11 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 impl Summary {
@@ -95,8 +99,12 @@ impl Summary {
             succeeded: subjects.iter().filter(|s| s.success).count(),
             meshes_valid: subjects.iter().filter(|s| s.inverted_elements == 0).count(),
             median_fit_seconds: median(subjects.iter().map(|s| s.fit_seconds).collect()),
-            median_rms_distance_relative: median(subjects.iter().map(|s| s.rms_distance_relative).collect()),
-            median_normal_correlation: median(subjects.iter().map(|s| s.normal_correlation).collect()),
+            median_rms_distance_relative: median(
+                subjects.iter().map(|s| s.rms_distance_relative).collect(),
+            ),
+            median_normal_correlation: median(
+                subjects.iter().map(|s| s.normal_correlation).collect(),
+            ),
         }
     }
 }
@@ -104,7 +112,8 @@ impl Summary {
 impl Report {
     /// Writes the report as pretty JSON (atomically). NaN becomes null.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let s = serde_json::to_string_pretty(self).map_err(|e| Error::Numerical(format!("report: {e}")))?;
+        let s = serde_json::to_string_pretty(self)
+            .map_err(|e| Error::Numerical(format!("report: {e}")))?;
         crate::io::write_atomic(path, s.as_bytes())
     }
 }
@@ -146,18 +155,43 @@ pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) ->
     let n = cumulative.len().max(1);
     let lo = cumulative.first().copied().unwrap_or(0.0).min(0.9) - 0.02;
     let mut b = ChartBuilder::on(&root);
-    b.margin(12).x_label_area_size(if text { 36 } else { 5 }).y_label_area_size(if text { 52 } else { 5 });
+    b.margin(12)
+        .x_label_area_size(if text { 36 } else { 5 })
+        .y_label_area_size(if text { 52 } else { 5 });
     if text {
         b.caption("Cumulative variance", ("sans-serif", 20));
     }
-    let mut chart = b.build_cartesian_2d(0.5f64..n as f64 + 0.5, lo..1.005f64).map_err(perr(path))?;
+    let mut chart = b
+        .build_cartesian_2d(0.5f64..n as f64 + 0.5, lo..1.005f64)
+        .map_err(perr(path))?;
     if text {
-        chart.configure_mesh().x_desc("number of modes").y_desc("share of variance").draw().map_err(perr(path))?;
+        chart
+            .configure_mesh()
+            .x_desc("number of modes")
+            .y_desc("share of variance")
+            .draw()
+            .map_err(perr(path))?;
     }
-    let pts: Vec<(f64, f64)> = cumulative.iter().enumerate().map(|(i, v)| ((i + 1) as f64, *v)).collect();
-    chart.draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2))).map_err(perr(path))?;
+    let pts: Vec<(f64, f64)> = cumulative
+        .iter()
+        .enumerate()
+        .map(|(i, v)| ((i + 1) as f64, *v))
+        .collect();
     chart
-        .draw_series(pts.iter().enumerate().map(|(i, p)| Circle::new(*p, 4, if i < kept { RED.filled() } else { BLUE.filled() })))
+        .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2)))
+        .map_err(perr(path))?;
+    chart
+        .draw_series(pts.iter().enumerate().map(|(i, p)| {
+            Circle::new(
+                *p,
+                4,
+                if i < kept {
+                    RED.filled()
+                } else {
+                    BLUE.filled()
+                },
+            )
+        }))
         .map_err(perr(path))?;
     root.present().map_err(perr(path))?;
     Ok(())
@@ -168,23 +202,51 @@ pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
     let text = font_available();
     let root = BitMapBackend::new(path, (720, 460)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
-    let maxit = histories.iter().map(|h| h.1.len()).max().unwrap_or(1).max(2);
-    let vals: Vec<f64> = histories.iter().flat_map(|h| h.1.iter().copied()).filter(|v| *v > 0.0 && v.is_finite()).collect();
-    let lo = vals.iter().copied().fold(f64::INFINITY, f64::min).max(1e-300);
+    let maxit = histories
+        .iter()
+        .map(|h| h.1.len())
+        .max()
+        .unwrap_or(1)
+        .max(2);
+    let vals: Vec<f64> = histories
+        .iter()
+        .flat_map(|h| h.1.iter().copied())
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .collect();
+    let lo = vals
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min)
+        .max(1e-300);
     let hi = vals.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
     let mut b = ChartBuilder::on(&root);
-    b.margin(12).x_label_area_size(if text { 36 } else { 5 }).y_label_area_size(if text { 64 } else { 5 });
+    b.margin(12)
+        .x_label_area_size(if text { 36 } else { 5 })
+        .y_label_area_size(if text { 64 } else { 5 });
     if text {
         b.caption("E_d per iteration", ("sans-serif", 20));
     }
-    let mut chart = b.build_cartesian_2d(0f64..maxit as f64, (lo..hi).log_scale()).map_err(perr(path))?;
+    let mut chart = b
+        .build_cartesian_2d(0f64..maxit as f64, (lo..hi).log_scale())
+        .map_err(perr(path))?;
     if text {
-        chart.configure_mesh().x_desc("iteration").y_desc("E_d").draw().map_err(perr(path))?;
+        chart
+            .configure_mesh()
+            .x_desc("iteration")
+            .y_desc("E_d")
+            .draw()
+            .map_err(perr(path))?;
     }
     for (k, (_, h)) in histories.iter().enumerate() {
         let color = Palette99::pick(k).to_rgba();
         chart
-            .draw_series(LineSeries::new(h.iter().enumerate().filter(|(_, v)| **v > 0.0).map(|(i, v)| (i as f64, *v)), color.stroke_width(1)))
+            .draw_series(LineSeries::new(
+                h.iter()
+                    .enumerate()
+                    .filter(|(_, v)| **v > 0.0)
+                    .map(|(i, v)| (i as f64, *v)),
+                color.stroke_width(1),
+            ))
             .map_err(perr(path))?;
     }
     root.present().map_err(perr(path))?;
@@ -197,14 +259,26 @@ fn jacobian_color(s: f64) -> RGBColor {
         return RGBColor(200, 0, 0);
     }
     let t = s.clamp(0.0, 1.0);
-    let (r, g) = if t < 0.5 { (255.0, 510.0 * t) } else { (510.0 * (1.0 - t), 255.0) };
+    let (r, g) = if t < 0.5 {
+        (255.0, 510.0 * t)
+    } else {
+        (510.0 * (1.0 - t), 255.0)
+    };
     RGBColor(r as u8, g as u8, 60)
 }
 
 /// Per-subject figure (fig. 9): left, the mean (red), the subject (blue) and the locus of the
 /// instance (green), all in the subject frame; right, the morphed mesh coloured by scaled
 /// Jacobian. Outlines are lists of polylines.
-pub fn plot_subject(path: &Path, title: &str, mean: &[Point<2>], subject: &[Point<2>], locus: &[Vec<Point<2>>], mesh: &FeMesh<2>, closed: bool) -> Result<()> {
+pub fn plot_subject(
+    path: &Path,
+    title: &str,
+    mean: &[Point<2>],
+    subject: &[Point<2>],
+    locus: &[Vec<Point<2>>],
+    mesh: &FeMesh<2>,
+    closed: bool,
+) -> Result<()> {
     let text = font_available();
     let root = BitMapBackend::new(path, (1100, 540)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
@@ -234,33 +308,53 @@ pub fn plot_subject(path: &Path, title: &str, mean: &[Point<2>], subject: &[Poin
         if text {
             b.caption(format!("{title}: fit"), ("sans-serif", 18));
         }
-        let mut ch = b.build_cartesian_2d(xr.clone(), yr.clone()).map_err(perr(path))?;
+        let mut ch = b
+            .build_cartesian_2d(xr.clone(), yr.clone())
+            .map_err(perr(path))?;
         for l in locus {
-            ch.draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1))).map_err(perr(path))?;
+            ch.draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1)))
+                .map_err(perr(path))?;
         }
-        ch.draw_series(LineSeries::new(line(mean), RED.stroke_width(2))).map_err(perr(path))?;
-        ch.draw_series(LineSeries::new(line(subject), BLUE.stroke_width(2))).map_err(perr(path))?;
+        ch.draw_series(LineSeries::new(line(mean), RED.stroke_width(2)))
+            .map_err(perr(path))?;
+        ch.draw_series(LineSeries::new(line(subject), BLUE.stroke_width(2)))
+            .map_err(perr(path))?;
     }
     {
         let mut b = ChartBuilder::on(&right);
         b.margin(10);
         if text {
-            b.caption(format!("{title}: mesh (scaled Jacobian)"), ("sans-serif", 18));
+            b.caption(
+                format!("{title}: mesh (scaled Jacobian)"),
+                ("sans-serif", 18),
+            );
         }
         let mut ch = b.build_cartesian_2d(xr, yr).map_err(perr(path))?;
         let q = mesh_quality(mesh);
         ch.draw_series((0..mesh.num_elements()).map(|e| {
-            let pts: Vec<(f64, f64)> = mesh.element(e).iter().map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1])).collect();
+            let pts: Vec<(f64, f64)> = mesh
+                .element(e)
+                .iter()
+                .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
+                .collect();
             Polygon::new(pts, jacobian_color(q[e].scaled_jacobian_min).filled())
         }))
         .map_err(perr(path))?;
         ch.draw_series((0..mesh.num_elements()).map(|e| {
-            let mut pts: Vec<(f64, f64)> = mesh.element(e).iter().map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1])).collect();
+            let mut pts: Vec<(f64, f64)> = mesh
+                .element(e)
+                .iter()
+                .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
+                .collect();
             pts.push(pts[0]);
             PathElement::new(pts, BLACK.mix(0.6).stroke_width(1))
         }))
         .map_err(perr(path))?;
-        ch.draw_series(LineSeries::new(line(subject), BLUE.mix(0.7).stroke_width(1))).map_err(perr(path))?;
+        ch.draw_series(LineSeries::new(
+            line(subject),
+            BLUE.mix(0.7).stroke_width(1),
+        ))
+        .map_err(perr(path))?;
     }
     root.present().map_err(perr(path))?;
     Ok(())

@@ -18,7 +18,11 @@ struct Spline<'a> {
 
 impl Spline<'_> {
     fn spans(&self) -> usize {
-        if self.closed { self.p.len() } else { self.p.len() - 1 }
+        if self.closed {
+            self.p.len()
+        } else {
+            self.p.len() - 1
+        }
     }
 
     fn ctrl(&self, i: isize) -> Point<2> {
@@ -29,7 +33,10 @@ impl Spline<'_> {
             // Reflect the second point about the first, so the end tangent is the chord.
             sub(scale(self.p[0], 2.0), self.p[1])
         } else if i >= n {
-            sub(scale(self.p[(n - 1) as usize], 2.0), self.p[(n - 2) as usize])
+            sub(
+                scale(self.p[(n - 1) as usize], 2.0),
+                self.p[(n - 2) as usize],
+            )
         } else {
             self.p[i as usize]
         }
@@ -38,7 +45,12 @@ impl Spline<'_> {
     /// Point at local parameter `u ∈ [0, 1]` of span `k` (from point k to point k+1).
     fn eval(&self, k: usize, u: f64) -> Point<2> {
         let k = k as isize;
-        let (p0, p1, p2, p3) = (self.ctrl(k - 1), self.ctrl(k), self.ctrl(k + 1), self.ctrl(k + 2));
+        let (p0, p1, p2, p3) = (
+            self.ctrl(k - 1),
+            self.ctrl(k),
+            self.ctrl(k + 1),
+            self.ctrl(k + 2),
+        );
         // Centripetal knots (alpha = 1/2); guard coincident points.
         let knot = |a: Point<2>, b: Point<2>| dist2(a, b).sqrt().sqrt().max(1e-12);
         let t0 = 0.0;
@@ -47,7 +59,10 @@ impl Spline<'_> {
         let t3 = t2 + knot(p2, p3);
         let t = t1 + u * (t2 - t1);
         let lerp = |a: Point<2>, b: Point<2>, ta: f64, tb: f64| {
-            add(scale(a, (tb - t) / (tb - ta)), scale(b, (t - ta) / (tb - ta)))
+            add(
+                scale(a, (tb - t) / (tb - ta)),
+                scale(b, (t - ta) / (tb - ta)),
+            )
         };
         let a1 = lerp(p0, p1, t0, t1);
         let a2 = lerp(p1, p2, t1, t2);
@@ -83,7 +98,10 @@ impl Spline<'_> {
 fn check_outline(shape: &Shape<2>) -> Result<()> {
     shape.validate()?;
     if shape.points.len() < 3 {
-        return Err(Error::shape(&shape.name, "an outline needs at least 3 points"));
+        return Err(Error::shape(
+            &shape.name,
+            "an outline needs at least 3 points",
+        ));
     }
     if let Some(i) = (1..shape.points.len()).find(|&i| shape.points[i] == shape.points[i - 1]) {
         return Err(Error::shape(
@@ -102,7 +120,11 @@ fn check_outline(shape: &Shape<2>) -> Result<()> {
 ///
 /// Returns the resampled shapes (landmarks set to the new indices of the input points) and
 /// `index_map`.
-pub fn resample_corresponding(shapes: &[Shape<2>], n: usize, closed: bool) -> Result<(Vec<Shape<2>>, Vec<usize>)> {
+pub fn resample_corresponding(
+    shapes: &[Shape<2>],
+    n: usize,
+    closed: bool,
+) -> Result<(Vec<Shape<2>>, Vec<usize>)> {
     let Some(first) = shapes.first() else {
         return Err(Error::Population("no shapes".into()));
     };
@@ -129,7 +151,10 @@ pub fn resample_corresponding(shapes: &[Shape<2>], n: usize, closed: bool) -> Re
     let tables: Vec<Vec<Vec<f64>>> = shapes
         .iter()
         .map(|s| {
-            let sp = Spline { p: &s.points, closed };
+            let sp = Spline {
+                p: &s.points,
+                closed,
+            };
             (0..spans).map(|k| sp.arc_table(k)).collect()
         })
         .collect();
@@ -150,7 +175,10 @@ pub fn resample_corresponding(shapes: &[Shape<2>], n: usize, closed: bool) -> Re
         .iter()
         .zip(&tables)
         .map(|(s, tab)| {
-            let sp = Spline { p: &s.points, closed };
+            let sp = Spline {
+                p: &s.points,
+                closed,
+            };
             let mut pts = Vec::with_capacity(n);
             for k in 0..spans {
                 let len = tab[k][ARC_SAMPLES];
@@ -176,9 +204,14 @@ pub fn resample_corresponding(shapes: &[Shape<2>], n: usize, closed: bool) -> Re
 pub fn resample_uniform(shape: &Shape<2>, n: usize, closed: bool) -> Result<Shape<2>> {
     check_outline(shape)?;
     if n < 3 {
-        return Err(Error::Parameter(format!("--resample {n}: at least 3 points are needed")));
+        return Err(Error::Parameter(format!(
+            "--resample {n}: at least 3 points are needed"
+        )));
     }
-    let sp = Spline { p: &shape.points, closed };
+    let sp = Spline {
+        p: &shape.points,
+        closed,
+    };
     let tables: Vec<Vec<f64>> = (0..sp.spans()).map(|k| sp.arc_table(k)).collect();
     let mut cum = vec![0.0];
     for t in &tables {
@@ -202,7 +235,16 @@ fn apportion(weights: &[f64], total: usize) -> Vec<usize> {
     let m = weights.len();
     let extra = total - m;
     let sum: f64 = weights.iter().sum();
-    let ideal: Vec<f64> = weights.iter().map(|w| if sum > 0.0 { w / sum * extra as f64 } else { extra as f64 / m as f64 }).collect();
+    let ideal: Vec<f64> = weights
+        .iter()
+        .map(|w| {
+            if sum > 0.0 {
+                w / sum * extra as f64
+            } else {
+                extra as f64 / m as f64
+            }
+        })
+        .collect();
     let mut counts: Vec<usize> = ideal.iter().map(|x| x.floor() as usize + 1).collect();
     let assigned: usize = counts.iter().sum();
     let mut order: Vec<usize> = (0..m).collect();
@@ -219,8 +261,16 @@ mod tests {
 
     #[test]
     fn corresponding_resampling_keeps_landmarks_at_their_indices() {
-        let a = Shape::polyline("a", vec![[0.0, 0.0], [1.0, 0.0], [1.0, 2.0], [0.0, 3.0]], false);
-        let b = Shape::polyline("b", vec![[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.5]], false);
+        let a = Shape::polyline(
+            "a",
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 2.0], [0.0, 3.0]],
+            false,
+        );
+        let b = Shape::polyline(
+            "b",
+            vec![[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.5]],
+            false,
+        );
         let (r, map) = resample_corresponding(&[a.clone(), b.clone()], 101, false).unwrap();
         assert_eq!(r[0].points.len(), 101);
         assert_eq!(map[0], 0);
@@ -242,8 +292,12 @@ mod tests {
             .collect();
         let s = Shape::polyline("c", pts, true);
         let r = resample_uniform(&s, 200, true).unwrap();
-        let d: Vec<f64> = (0..200).map(|i| norm(sub(r.points[(i + 1) % 200], r.points[i]))).collect();
-        let (lo, hi) = d.iter().fold((f64::MAX, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        let d: Vec<f64> = (0..200)
+            .map(|i| norm(sub(r.points[(i + 1) % 200], r.points[i])))
+            .collect();
+        let (lo, hi) = d
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
         assert!(hi / lo < 1.02, "spacing {lo}..{hi}");
         // The spline stays close to the circle.
         for p in &r.points {

@@ -6,7 +6,11 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn atlasmesh(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_atlasmesh")).args(args).arg("--quiet").output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .unwrap()
 }
 
 fn assert_clean_error(out: &Output, file: &str, words: &str) {
@@ -28,16 +32,31 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
 fn demo_writes_meshes_report_and_plots() {
     let d = common::temp_dir("demo");
     let out = d.join("demo");
-    let o = Command::new(env!("CARGO_BIN_EXE_atlasmesh")).args(["demo", "--out"]).arg(&out).output().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args(["demo", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["summary"]["subjects"], 6);
     assert_eq!(r["summary"]["meshes_valid"], 6);
     assert_eq!(r["summary"]["succeeded"], 6);
     assert_eq!(r["dimension"], 2);
-    for f in ["cumulative_variance.png", "e_d.png", "atlas.safetensors", "atlas_mean_mesh.vtu", "demo-24_mesh.vtu", "demo-24.png"] {
+    for f in [
+        "cumulative_variance.png",
+        "e_d.png",
+        "atlas.safetensors",
+        "atlas_mean_mesh.vtu",
+        "demo-24_mesh.vtu",
+        "demo-24.png",
+    ] {
         let p = out.join(f);
-        assert!(p.is_file() && std::fs::metadata(&p).unwrap().len() > 100, "{f}");
+        assert!(
+            p.is_file() && std::fs::metadata(&p).unwrap().len() > 100,
+            "{f}"
+        );
     }
     let png = std::fs::read(out.join("demo-24.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
@@ -55,12 +74,28 @@ fn build_then_fit_through_the_cli() {
         for i in 0..60 {
             let t = i as f64 / 60.0 * std::f64::consts::TAU;
             let r = 1.0 + 0.3 * t.cos() + 0.05 * (k as f64) * (2.0 * t).sin();
-            csv.push_str(&format!("s{k},{i},{},{}\n", r * t.cos() * (1.0 + 0.02 * k as f64), r * t.sin()));
+            csv.push_str(&format!(
+                "s{k},{i},{},{}\n",
+                r * t.cos() * (1.0 + 0.02 * k as f64),
+                r * t.sin()
+            ));
         }
     }
     let pop = write(&d, "pop.csv", &csv);
     let atlas = d.join("a.safetensors").display().to_string();
-    let o = atlasmesh(&["build", "--shapes", &pop, "--resample", "200", "--modes", "3", "--element-size", "0.04", "--out", &atlas]);
+    let o = atlasmesh(&[
+        "build",
+        "--shapes",
+        &pop,
+        "--resample",
+        "200",
+        "--modes",
+        "3",
+        "--element-size",
+        "0.04",
+        "--out",
+        &atlas,
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let subj: String = (0..90)
         .map(|i| {
@@ -71,9 +106,19 @@ fn build_then_fit_through_the_cli() {
         .collect();
     let s = write(&d, "subject.txt", &subj);
     let out = d.join("fit").display().to_string();
-    let o = atlasmesh(&["fit", "--atlas", &atlas, "--subject", &s, "--out", &out, "--no-plots"]);
+    let o = atlasmesh(&[
+        "fit",
+        "--atlas",
+        &atlas,
+        "--subject",
+        &s,
+        "--out",
+        &out,
+        "--no-plots",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("fit/report.json")).unwrap()).unwrap();
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("fit/report.json")).unwrap()).unwrap();
     assert_eq!(r["subjects"][0]["inverted_elements"], 0);
     assert!(r["subjects"][0]["rms_distance_relative"].as_f64().unwrap() < 0.01);
     std::fs::remove_dir_all(&d).ok();
@@ -82,8 +127,18 @@ fn build_then_fit_through_the_cli() {
 #[test]
 fn malformed_csv_is_a_clear_error() {
     let d = common::temp_dir("badcsv");
-    let f = write(&d, "bad.csv", "shape,point,x,y\n0,0,1.0,2.0\n0,1,abc,2.0\n0,2,1,1\n");
-    let o = atlasmesh(&["loo", "--shapes", &f, "--out", &d.join("o").display().to_string()]);
+    let f = write(
+        &d,
+        "bad.csv",
+        "shape,point,x,y\n0,0,1.0,2.0\n0,1,abc,2.0\n0,2,1,1\n",
+    );
+    let o = atlasmesh(&[
+        "loo",
+        "--shapes",
+        &f,
+        "--out",
+        &d.join("o").display().to_string(),
+    ]);
     assert_clean_error(&o, "bad.csv:3", "not a number");
     assert!(!d.join("o/report.json").exists(), "no output on error");
 }
@@ -92,7 +147,13 @@ fn malformed_csv_is_a_clear_error() {
 fn nan_coordinate_is_a_clear_error() {
     let d = common::temp_dir("nan");
     let f = write(&d, "nan.txt", "0 0\n1 0\nNaN 1\n0 1\n");
-    let o = atlasmesh(&["loo", "--shapes", &f, "--out", &d.join("o").display().to_string()]);
+    let o = atlasmesh(&[
+        "loo",
+        "--shapes",
+        &f,
+        "--out",
+        &d.join("o").display().to_string(),
+    ]);
     assert_clean_error(&o, "nan.txt:3", "NaN");
 }
 
@@ -100,7 +161,13 @@ fn nan_coordinate_is_a_clear_error() {
 fn too_few_points_is_a_clear_error() {
     let d = common::temp_dir("few");
     let f = write(&d, "two.txt", "0 0\n1 0\n");
-    let o = atlasmesh(&["loo", "--shapes", &f, "--out", &d.join("o").display().to_string()]);
+    let o = atlasmesh(&[
+        "loo",
+        "--shapes",
+        &f,
+        "--out",
+        &d.join("o").display().to_string(),
+    ]);
     assert_clean_error(&o, "two.txt", "at least 3");
 }
 
@@ -109,21 +176,44 @@ fn different_point_counts_without_resample_is_a_clear_error() {
     let d = common::temp_dir("counts");
     let a = write(&d, "a.txt", "0 0\n1 0\n1 1\n0 1\n");
     let b = write(&d, "b.txt", "0 0\n1 0\n1 1\n0.5 1.5\n0 1\n");
-    let o = atlasmesh(&["loo", "--shapes", &a, &b, "--out", &d.join("o").display().to_string()]);
+    let o = atlasmesh(&[
+        "loo",
+        "--shapes",
+        &a,
+        &b,
+        "--out",
+        &d.join("o").display().to_string(),
+    ]);
     assert_clean_error(&o, "b.txt", "--resample");
 }
 
 #[test]
 fn a_3d_vtk_given_as_outline_is_a_clear_error() {
     let d = common::temp_dir("dim");
-    let f = write(&d, "tri.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 1 0 1 2\nLINES 1 4\n3 0 1 2\n");
-    let o = atlasmesh(&["loo", "--shapes", &f, "--out", &d.join("o").display().to_string()]);
+    let f = write(
+        &d,
+        "tri.vtk",
+        "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 1 0 1 2\nLINES 1 4\n3 0 1 2\n",
+    );
+    let o = atlasmesh(&[
+        "loo",
+        "--shapes",
+        &f,
+        "--out",
+        &d.join("o").display().to_string(),
+    ]);
     assert_clean_error(&o, "tri.vtk", "3D");
 }
 
 #[test]
 fn missing_file_is_an_io_error() {
-    let o = atlasmesh(&["loo", "--shapes", "/nonexistent/hands.csv", "--out", "/tmp/x"]);
+    let o = atlasmesh(&[
+        "loo",
+        "--shapes",
+        "/nonexistent/hands.csv",
+        "--out",
+        "/tmp/x",
+    ]);
     assert_eq!(o.status.code(), Some(3));
     assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/hands.csv"));
 }

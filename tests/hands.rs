@@ -12,7 +12,9 @@ use atlasmesh::procrustes::generalized_procrustes;
 /// 0.663 of the variance (the IMM note's "66 %"; value verified in the data's README).
 #[test]
 fn first_mode_of_the_40_hands_explains_66_percent() {
-    let Some(data) = common::data_dir("first_mode_of_the_40_hands_explains_66_percent") else { return };
+    let Some(data) = common::data_dir("first_mode_of_the_40_hands_explains_66_percent") else {
+        return;
+    };
     let shapes = read_outlines(&data.join("imm-hands-2d/hands_long.csv"), false).unwrap();
     assert_eq!(shapes.len(), 40);
     assert!(shapes.iter().all(|s| s.points.len() == 56));
@@ -23,15 +25,28 @@ fn first_mode_of_the_40_hands_explains_66_percent() {
     assert!((share - 0.663).abs() < 0.01, "first mode share {share}");
     // The next two modes, from the same README: 0.176 and 0.079.
     let c = p.cumulative_variance();
-    assert!((c[1] - c[0] - 0.176).abs() < 0.01 && (c[2] - c[1] - 0.079).abs() < 0.01, "{:?}", &c[..3]);
+    assert!(
+        (c[1] - c[0] - 0.176).abs() < 0.01 && (c[2] - c[1] - 0.079).abs() < 0.01,
+        "{:?}",
+        &c[..3]
+    );
 }
 
 /// Resampling to 2001 points keeps the 56 landmarks at the same indices on every hand.
 #[test]
 fn resampled_hands_keep_their_landmarks() {
-    let Some(data) = common::data_dir("resampled_hands_keep_their_landmarks") else { return };
+    let Some(data) = common::data_dir("resampled_hands_keep_their_landmarks") else {
+        return;
+    };
     let raw = read_outlines(&data.join("imm-hands-2d/hands_long.csv"), false).unwrap();
-    let shapes: Vec<Shape<2>> = load_population(&[data.join("imm-hands-2d/hands_long.csv")], &PopulationOptions { closed: false, resample: Some(2001) }).unwrap();
+    let shapes: Vec<Shape<2>> = load_population(
+        &[data.join("imm-hands-2d/hands_long.csv")],
+        &PopulationOptions {
+            closed: false,
+            resample: Some(2001),
+        },
+    )
+    .unwrap();
     assert_eq!(shapes.len(), 40);
     for (s, r) in shapes.iter().zip(&raw) {
         assert_eq!(s.points.len(), 2001);
@@ -49,28 +64,73 @@ fn resampled_hands_keep_their_landmarks() {
 /// reported 39 by eye; a one-way transcription of Algorithm 1 reaches 33-34 by this measure).
 #[test]
 fn hands_leave_one_out() {
-    let Some(data) = common::data_dir("hands_leave_one_out") else { return };
-    let shapes = load_population(&[data.join("imm-hands-2d/hands_long.csv")], &PopulationOptions { closed: false, resample: Some(2001) }).unwrap();
+    let Some(data) = common::data_dir("hands_leave_one_out") else {
+        return;
+    };
+    let shapes = load_population(
+        &[data.join("imm-hands-2d/hands_long.csv")],
+        &PopulationOptions {
+            closed: false,
+            resample: Some(2001),
+        },
+    )
+    .unwrap();
     let mut params = RunParams::default();
     params.atlas.modes = atlasmesh::model::ModeSelection::Count(11);
     params.plots = false;
     let out = common::temp_dir("hands-loo");
     let r = leave_one_out(&shapes, "imm-hands-2d", &params, &out, 0, true).unwrap();
     assert_eq!(r.summary.subjects, 40);
-    assert_eq!(r.summary.meshes_valid, 40, "every morphed mesh has positive corner Jacobians");
-    assert!(r.summary.succeeded >= 36, "succeeded {}", r.summary.succeeded);
+    assert_eq!(
+        r.summary.meshes_valid, 40,
+        "every morphed mesh has positive corner Jacobians"
+    );
+    assert!(
+        r.summary.succeeded >= 36,
+        "succeeded {}",
+        r.summary.succeeded
+    );
     assert!(r.summary.median_rms_distance_relative < 0.005);
     assert!(r.summary.median_normal_correlation > 0.95);
     assert_eq!(r.modes, 11);
-    assert!(r.variance_explained[10] > 0.98, "11 modes explain {}", r.variance_explained[10]);
+    assert!(
+        r.variance_explained[10] > 0.98,
+        "11 modes explain {}",
+        r.variance_explained[10]
+    );
     let mm = r.mean_mesh.as_ref().unwrap();
-    assert!(mm.scaled_jacobian_min >= 0.3, "mean mesh min scaled Jacobian {}", mm.scaled_jacobian_min);
+    assert!(
+        mm.scaled_jacobian_min >= 0.3,
+        "mean mesh min scaled Jacobian {}",
+        mm.scaled_jacobian_min
+    );
     // The report's fixed field names are there for scripts.
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
-    for k in ["dataset", "dimension", "modes", "variance_explained", "parameters", "subjects", "summary"] {
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    for k in [
+        "dataset",
+        "dimension",
+        "modes",
+        "variance_explained",
+        "parameters",
+        "subjects",
+        "summary",
+    ] {
         assert!(json.get(k).is_some(), "report.json lacks {k}");
     }
-    for k in ["name", "iterations", "fit_seconds", "e_d", "rms_distance", "rms_distance_relative", "normal_correlation", "jacobian_min", "scaled_jacobian_min", "inverted_elements", "success"] {
+    for k in [
+        "name",
+        "iterations",
+        "fit_seconds",
+        "e_d",
+        "rms_distance",
+        "rms_distance_relative",
+        "normal_correlation",
+        "jacobian_min",
+        "scaled_jacobian_min",
+        "inverted_elements",
+        "success",
+    ] {
         assert!(json["subjects"][0].get(k).is_some(), "subject lacks {k}");
     }
     assert!(out.join("0_mesh.vtu").is_file());
@@ -80,14 +140,35 @@ fn hands_leave_one_out() {
 /// The dense Basel hands: binary big-endian legacy VTK outlines are read in loop order.
 #[test]
 fn basel_binary_vtk_hands_are_read() {
-    let Some(data) = common::data_dir("basel_binary_vtk_hands_are_read") else { return };
+    let Some(data) = common::data_dir("basel_binary_vtk_hands_are_read") else {
+        return;
+    };
     for k in 0..12 {
-        let s = read_outlines(&data.join(format!("unibas-hands-2d-dense/registered/mesh/hand-{k}.vtk")), true).unwrap();
+        let s = read_outlines(
+            &data.join(format!(
+                "unibas-hands-2d-dense/registered/mesh/hand-{k}.vtk"
+            )),
+            true,
+        )
+        .unwrap();
         assert_eq!(s[0].points.len(), 2125);
         assert!(s[0].is_closed());
-        // Chain order: consecutive points are close (no jumps across the hand).
+        // Chain order: consecutive points are close; the one long segment is the wrist, which
+        // closes the loop in these files.
         let med = s[0].median_edge_length();
-        let max = s[0].facets.iter().map(|f| atlasmesh::geometry::norm(atlasmesh::geometry::sub(s[0].points[f[1]], s[0].points[f[0]]))).fold(0.0, f64::max);
-        assert!(max < 20.0 * med, "hand-{k}: a segment of {max} against median {med}");
+        let long = s[0]
+            .facets
+            .iter()
+            .filter(|f| {
+                atlasmesh::geometry::norm(atlasmesh::geometry::sub(
+                    s[0].points[f[1]],
+                    s[0].points[f[0]],
+                )) > 20.0 * med
+            })
+            .count();
+        assert!(
+            long <= 1,
+            "hand-{k}: {long} segments longer than 20 median lengths"
+        );
     }
 }

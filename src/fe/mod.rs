@@ -104,7 +104,15 @@ impl<const D: usize> FeMesh<D> {
     /// The same connectivity with new node positions.
     #[track_caller]
     pub fn with_nodes(&self, nodes: Vec<Point<D>>) -> Self {
-        assert_eq!(nodes.len(), self.nodes.len(), "with_nodes: one position per node");
-        FeMesh { nodes, kind: self.kind, connectivity: self.connectivity.clone() }
+        assert_eq!(
+            nodes.len(),
+            self.nodes.len(),
+            "with_nodes: one position per node"
+        );
+        FeMesh {
+            nodes,
+            kind: self.kind,
+            connectivity: self.connectivity.clone(),
+        }
     }
 }

@@ -13,7 +13,9 @@ use super::quality::{ElementQuality, element_quality_at};
 use super::{ElementKind, FeMesh};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape, add, norm, scale, sub};
-use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
+use spade::{
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+};
 use std::collections::{HashMap, HashSet};
 
 /// Parameters of the quad mesher.
@@ -44,10 +46,12 @@ fn boundary_polygon(outline: &Shape<2>, h: f64) -> Vec<Point<2>> {
             add(pts[k], scale(sub(pts[k + 1], pts[k]), t))
         })
         .collect();
-    let area: f64 = (0..n).map(|i| {
-        let (a, b) = (out[i], out[(i + 1) % n]);
-        a[0] * b[1] - a[1] * b[0]
-    }).sum();
+    let area: f64 = (0..n)
+        .map(|i| {
+            let (a, b) = (out[i], out[(i + 1) % n]);
+            a[0] * b[1] - a[1] * b[0]
+        })
+        .sum();
     if area < 0.0 {
         out.reverse();
     }
@@ -64,14 +68,19 @@ pub fn quad_mesh(outline: &Shape<2>, params: &QuadMeshParams) -> Result<FeMesh<2
     outline.validate()?;
     let q = params.element_size;
     if !(q.is_finite() && q > 0.0) {
-        return Err(Error::Parameter(format!("element size {q} must be positive")));
+        return Err(Error::Parameter(format!(
+            "element size {q} must be positive"
+        )));
     }
     let h = 2.0 * q; // triangle edge; the split halves it
     let poly = boundary_polygon(outline, h);
-    let area = 0.5 * (0..poly.len()).map(|i| {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        a[0] * b[1] - a[1] * b[0]
-    }).sum::<f64>();
+    let area = 0.5
+        * (0..poly.len())
+            .map(|i| {
+                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+                a[0] * b[1] - a[1] * b[0]
+            })
+            .sum::<f64>();
     let expected = area / (h * h * 0.433);
     if expected > 700_000.0 {
         return Err(Error::Parameter(format!(
@@ -82,7 +91,10 @@ pub fn quad_mesh(outline: &Shape<2>, params: &QuadMeshParams) -> Result<FeMesh<2
     let verts: Vec<Point2<f64>> = poly.iter().map(|p| Point2::new(p[0], p[1])).collect();
     let edges: Vec<[usize; 2]> = (0..poly.len()).map(|i| [i, (i + 1) % poly.len()]).collect();
     let mut conflicts = 0usize;
-    let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::try_bulk_load_cdt(verts, edges, |_| conflicts += 1)
+    let mut cdt =
+        ConstrainedDelaunayTriangulation::<Point2<f64>>::try_bulk_load_cdt(verts, edges, |_| {
+            conflicts += 1
+        })
         .map_err(|e| Error::Mesh(format!("{}: triangulation failed: {e:?}", outline.name)))?;
     if conflicts > 0 || cdt.num_vertices() != poly.len() {
         return Err(Error::Mesh(format!(
@@ -98,14 +110,20 @@ pub fn quad_mesh(outline: &Shape<2>, params: &QuadMeshParams) -> Result<FeMesh<2
             .exclude_outer_faces(true),
     );
     let excluded: HashSet<usize> = result.excluded_faces.iter().map(|f| f.index()).collect();
-    let nodes_tri: Vec<Point<2>> = cdt.vertices().map(|v| [v.position().x, v.position().y]).collect();
+    let nodes_tri: Vec<Point<2>> = cdt
+        .vertices()
+        .map(|v| [v.position().x, v.position().y])
+        .collect();
     let tris: Vec<[usize; 3]> = cdt
         .inner_faces()
         .filter(|f| !excluded.contains(&f.fix().index()))
         .map(|f| f.vertices().map(|v| v.fix().index()))
         .collect();
     if tris.is_empty() {
-        return Err(Error::Mesh(format!("{}: the outline encloses no area", outline.name)));
+        return Err(Error::Mesh(format!(
+            "{}: the outline encloses no area",
+            outline.name
+        )));
     }
     // Split every triangle into three quads (midpoints shared between neighbours).
     let mut nodes = nodes_tri;
@@ -128,13 +146,24 @@ pub fn quad_mesh(outline: &Shape<2>, params: &QuadMeshParams) -> Result<FeMesh<2
         let gi = nodes.len() - 1;
         conn.extend_from_slice(&[a, mab, gi, mca, b, mbc, gi, mab, c, mca, gi, mbc]);
     }
-    let mut mesh = FeMesh { nodes, kind: ElementKind::Quad4, connectivity: conn };
+    let mut mesh = FeMesh {
+        nodes,
+        kind: ElementKind::Quad4,
+        connectivity: conn,
+    };
     // Drop unused nodes (vertices of excluded faces only).
     compact(&mut mesh);
     smooth(&mut mesh, params.smoothing_passes);
-    let bad = (0..mesh.num_elements()).filter(|&e| element_quality_at(mesh.kind, mesh.element(e), &mesh.nodes).jacobian_min <= 0.0).count();
+    let bad = (0..mesh.num_elements())
+        .filter(|&e| {
+            element_quality_at(mesh.kind, mesh.element(e), &mesh.nodes).jacobian_min <= 0.0
+        })
+        .count();
     if bad > 0 {
-        return Err(Error::Mesh(format!("{}: {bad} inverted elements after meshing", outline.name)));
+        return Err(Error::Mesh(format!(
+            "{}: {bad} inverted elements after meshing",
+            outline.name
+        )));
     }
     Ok(mesh)
 }
@@ -227,18 +256,31 @@ mod tests {
             })
             .collect();
         let s = Shape::polyline("disc", pts, true);
-        let m = quad_mesh(&s, &QuadMeshParams { element_size: 0.1, smoothing_passes: 5 }).unwrap();
+        let m = quad_mesh(
+            &s,
+            &QuadMeshParams {
+                element_size: 0.1,
+                smoothing_passes: 5,
+            },
+        )
+        .unwrap();
         let q = summarize(&mesh_quality(&m));
         assert_eq!(q.inverted_elements, 0);
-        assert!(q.scaled_jacobian_min >= 0.3, "min scaled Jacobian {}", q.scaled_jacobian_min);
+        assert!(
+            q.scaled_jacobian_min >= 0.3,
+            "min scaled Jacobian {}",
+            q.scaled_jacobian_min
+        );
         // Total area close to pi (the polygon is inscribed).
         let area: f64 = (0..m.num_elements())
             .map(|e| {
                 let el = m.element(e);
-                0.5 * (0..4).map(|k| {
-                    let (a, b) = (m.nodes[el[k]], m.nodes[el[(k + 1) % 4]]);
-                    a[0] * b[1] - a[1] * b[0]
-                }).sum::<f64>()
+                0.5 * (0..4)
+                    .map(|k| {
+                        let (a, b) = (m.nodes[el[k]], m.nodes[el[(k + 1) % 4]]);
+                        a[0] * b[1] - a[1] * b[0]
+                    })
+                    .sum::<f64>()
             })
             .sum();
         assert!((area - std::f64::consts::PI).abs() < 0.03, "area {area}");
@@ -246,8 +288,19 @@ mod tests {
 
     #[test]
     fn self_intersecting_outline_is_an_error() {
-        let s = Shape::polyline("bowtie", vec![[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]], true);
-        let e = quad_mesh(&s, &QuadMeshParams { element_size: 0.05, smoothing_passes: 2 }).unwrap_err();
+        let s = Shape::polyline(
+            "bowtie",
+            vec![[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]],
+            true,
+        );
+        let e = quad_mesh(
+            &s,
+            &QuadMeshParams {
+                element_size: 0.05,
+                smoothing_passes: 2,
+            },
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("intersects itself"), "{e}");
     }
 }

@@ -19,7 +19,8 @@ fn det<const D: usize>(v: &[Point<D>; D]) -> f64 {
     match D {
         2 => v[0][0] * v[1][1] - v[0][1] * v[1][0],
         3 => {
-            v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1]) - v[0][1] * (v[1][0] * v[2][2] - v[1][2] * v[2][0])
+            v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1])
+                - v[0][1] * (v[1][0] * v[2][2] - v[1][2] * v[2][0])
                 + v[0][2] * (v[1][0] * v[2][1] - v[1][1] * v[2][0])
         }
         _ => unreachable!(),
@@ -32,7 +33,11 @@ pub fn element_quality<const D: usize>(mesh: &FeMesh<D>, e: usize) -> ElementQua
 }
 
 /// Corner Jacobians of an element given by its node indices into `nodes`.
-pub fn element_quality_at<const D: usize>(kind: super::ElementKind, el: &[usize], nodes: &[Point<D>]) -> ElementQuality {
+pub fn element_quality_at<const D: usize>(
+    kind: super::ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+) -> ElementQuality {
     let mut jmin = f64::INFINITY;
     let mut smin = f64::INFINITY;
     for (c, frame) in kind.corner_frames().iter().enumerate() {
@@ -43,12 +48,17 @@ pub fn element_quality_at<const D: usize>(kind: super::ElementKind, el: &[usize]
         jmin = jmin.min(j);
         smin = smin.min(if l > 0.0 { j / l } else { -1.0 });
     }
-    ElementQuality { jacobian_min: jmin, scaled_jacobian_min: smin }
+    ElementQuality {
+        jacobian_min: jmin,
+        scaled_jacobian_min: smin,
+    }
 }
 
 /// Per-element corner measures of a whole mesh.
 pub fn mesh_quality<const D: usize>(mesh: &FeMesh<D>) -> Vec<ElementQuality> {
-    (0..mesh.num_elements()).map(|e| element_quality(mesh, e)).collect()
+    (0..mesh.num_elements())
+        .map(|e| element_quality(mesh, e))
+        .collect()
 }
 
 /// Summary of a mesh's quality.
@@ -63,8 +73,14 @@ pub struct QualitySummary {
 /// corner Jacobian.
 pub fn summarize(q: &[ElementQuality]) -> QualitySummary {
     QualitySummary {
-        jacobian_min: q.iter().map(|e| e.jacobian_min).fold(f64::INFINITY, f64::min),
-        scaled_jacobian_min: q.iter().map(|e| e.scaled_jacobian_min).fold(f64::INFINITY, f64::min),
+        jacobian_min: q
+            .iter()
+            .map(|e| e.jacobian_min)
+            .fold(f64::INFINITY, f64::min),
+        scaled_jacobian_min: q
+            .iter()
+            .map(|e| e.scaled_jacobian_min)
+            .fold(f64::INFINITY, f64::min),
         inverted_elements: q.iter().filter(|e| e.jacobian_min <= 0.0).count(),
     }
 }
@@ -76,7 +92,11 @@ mod tests {
 
     #[test]
     fn unit_square_has_scaled_jacobian_one() {
-        let m = FeMesh::<2> { nodes: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], kind: ElementKind::Quad4, connectivity: vec![0, 1, 2, 3] };
+        let m = FeMesh::<2> {
+            nodes: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            kind: ElementKind::Quad4,
+            connectivity: vec![0, 1, 2, 3],
+        };
         let q = element_quality(&m, 0);
         assert!((q.scaled_jacobian_min - 1.0).abs() < 1e-15);
         assert!((q.jacobian_min - 1.0).abs() < 1e-15);
@@ -94,15 +114,26 @@ mod tests {
             [1.0, 1.0, 1.0],
             [0.0, 1.0, 1.0],
         ];
-        let m = FeMesh::<3> { nodes, kind: ElementKind::Hex8, connectivity: (0..8).collect() };
+        let m = FeMesh::<3> {
+            nodes,
+            kind: ElementKind::Hex8,
+            connectivity: (0..8).collect(),
+        };
         assert!((element_quality(&m, 0).scaled_jacobian_min - 1.0).abs() < 1e-15);
-        let flipped = FeMesh { connectivity: vec![4, 5, 6, 7, 0, 1, 2, 3], ..m };
+        let flipped = FeMesh {
+            connectivity: vec![4, 5, 6, 7, 0, 1, 2, 3],
+            ..m
+        };
         assert!(element_quality(&flipped, 0).jacobian_min < 0.0);
     }
 
     #[test]
     fn a_clockwise_quad_is_inverted() {
-        let m = FeMesh::<2> { nodes: vec![[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]], kind: ElementKind::Quad4, connectivity: vec![0, 1, 2, 3] };
+        let m = FeMesh::<2> {
+            nodes: vec![[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]],
+            kind: ElementKind::Quad4,
+            connectivity: vec![0, 1, 2, 3],
+        };
         let s = summarize(&mesh_quality(&m));
         assert_eq!(s.inverted_elements, 1);
     }

@@ -70,9 +70,11 @@ fn bench(c: &mut Criterion) {
                 .expect("fit")
         })
     });
-    let mut run = RunParams::default();
-    run.atlas = params;
-    run.plots = false;
+    let run = RunParams {
+        atlas: params,
+        plots: false,
+        ..RunParams::default()
+    };
     let out = std::env::temp_dir().join("atlasmesh-bench-loo");
     g.sample_size(10);
     g.measurement_time(std::time::Duration::from_secs(60));

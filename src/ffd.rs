@@ -224,12 +224,11 @@ impl<const D: usize> Banded<D> {
         for i in 0..n {
             for o in 0..self.width {
                 let v = self.rows[i * self.width + o];
-                if v != 0.0 {
-                    if let Some(j) = self.column(i, o) {
-                        if j <= i {
-                            trip.push(Triplet::new(i, j, v));
-                        }
-                    }
+                if v != 0.0
+                    && let Some(j) = self.column(i, o)
+                    && j <= i
+                {
+                    trip.push(Triplet::new(i, j, v));
                 }
             }
         }
@@ -368,8 +367,8 @@ impl<const D: usize> Ffd<D> {
 pub struct FfdParams {
     /// Control points per axis (paper: 20 × 20).
     pub grid: usize,
-    /// Smoothing weight `alpha` (paper, morph: 50). Dimensionless: lengths are measured in
-    /// units of the lattice's largest extent, as for the paper's hands in the unit box.
+    /// Smoothing weight `alpha` (paper, morph: 50). Dimensionless: lengths (of the data term
+    /// and of `E_smooth`) are measured in units of the control point spacing.
     pub alpha: f64,
     /// Margin of the lattice around the source points, as a fraction of their extent.
     pub margin: f64,

@@ -424,9 +424,6 @@ impl<'a, const D: usize> Fitter<'a, D> {
                     }
                 }
             }
-            if single {
-                // Forward pairs: their Σ A^T A is Ψ^T Ψ = I, added once below.
-            }
         }
         let forward: f64 = src
             .iter()

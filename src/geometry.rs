@@ -402,21 +402,22 @@ impl<const D: usize> ClosestPointIndex<D> {
                 ),
                 _ => unreachable!(),
             };
-            if let Some((t, w)) = hit {
-                if t.abs() <= max_t && best.as_ref().is_none_or(|(bt, _)| t.abs() < bt.abs()) {
-                    let mut weights = [0.0; D];
-                    weights.copy_from_slice(&w[..D]);
-                    let q = add(*p, scale(*n, t));
-                    best = Some((
-                        t,
-                        SurfacePoint {
-                            point: q,
-                            facet: fi,
-                            weights,
-                            dist2: t * t * dot(*n, *n),
-                        },
-                    ));
-                }
+            if let Some((t, w)) = hit
+                && t.abs() <= max_t
+                && best.as_ref().is_none_or(|(bt, _)| t.abs() < bt.abs())
+            {
+                let mut weights = [0.0; D];
+                weights.copy_from_slice(&w[..D]);
+                let q = add(*p, scale(*n, t));
+                best = Some((
+                    t,
+                    SurfacePoint {
+                        point: q,
+                        facet: fi,
+                        weights,
+                        dist2: t * t * dot(*n, *n),
+                    },
+                ));
             }
         }
         best.map(|(_, s)| s)

@@ -11,6 +11,9 @@
 //! mesh to the subject, [`eval`] measures the result, [`export`] and [`report`] write it,
 //! and [`pipeline`] strings the stages together for the command-line tool.
 
+// Index loops over small fixed dimensions read like the equations they implement.
+#![allow(clippy::needless_range_loop)]
+
 pub mod error;
 pub mod eval;
 pub mod export;

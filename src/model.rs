@@ -388,13 +388,13 @@ impl<const D: usize> Atlas<D> {
                     t.dtype()
                 )));
             }
-            if let Some(c) = cols {
-                if t.shape().len() != 2 || t.shape()[1] != c {
-                    return Err(bad(format!(
-                        "tensor {name} has shape {:?}, [_, {c}] expected",
-                        t.shape()
-                    )));
-                }
+            if let Some(c) = cols
+                && (t.shape().len() != 2 || t.shape()[1] != c)
+            {
+                return Err(bad(format!(
+                    "tensor {name} has shape {:?}, [_, {c}] expected",
+                    t.shape()
+                )));
             }
             Ok((t.shape().to_vec(), t.data().to_vec()))
         };

@@ -88,7 +88,6 @@ pub fn load_population(paths: &[PathBuf], opts: &PopulationOptions) -> Result<Ve
                 .iter()
                 .enumerate()
                 .find(|(_, s)| s.points.len() != n0)
-                .map(|(k, s)| (k, s))
                 .ok_or_else(|| Error::Population("counts differ".into()))?;
             Err(Error::Population(format!(
                 "{}: shape {} has {} points but {}: shape {} has {n0}; shapes without correspondence need --resample N",

@@ -295,10 +295,8 @@ pub fn plot_subject(
     let yr = c[1] + ext..c[1] - ext;
     let line = |pts: &[Point<2>]| -> Vec<(f64, f64)> {
         let mut v: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
-        if closed {
-            if let Some(f) = v.first().copied() {
-                v.push(f);
-            }
+        if closed && let Some(f) = v.first().copied() {
+            v.push(f);
         }
         v
     };

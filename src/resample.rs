@@ -145,7 +145,7 @@ pub fn resample_corresponding(
     if total < spans {
         return Err(Error::Parameter(format!(
             "--resample {n} is fewer than the {np} input points; choose at least {}",
-            if closed { np } else { np }
+            np
         )));
     }
     let tables: Vec<Vec<Vec<f64>>> = shapes

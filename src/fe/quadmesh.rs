@@ -1,7 +1,7 @@
 //! Automatic all-quadrilateral mesh of the region bounded by a 2D outline (section 2.4).
 //!
 //! Method: the outline (an open outline closed by the straight segment between its ends) is
-//! resampled at twice the element size, triangulated by a constrained Delaunay triangulation
+//! resampled at the element size, triangulated by a constrained Delaunay triangulation
 //! refined to a minimum angle of 30° (Ruppert-style refinement, `spade`), and every triangle
 //! is split into three quadrilaterals through its edge midpoints and centroid. With all
 //! triangle angles in [30°, 120°] every quad corner angle lies in [30°, 150°], so the scaled
@@ -73,7 +73,9 @@ pub fn quad_mesh(outline: &Shape<2>, params: &QuadMeshParams) -> Result<FeMesh<2
         )));
     }
     let h = 2.0 * q; // triangle edge; the split halves it
-    let poly = boundary_polygon(outline, h);
+    // The boundary is sampled at the quad size: chords of twice that would cut off tips of
+    // narrow features (fingertips).
+    let poly = boundary_polygon(outline, q);
     let area = 0.5
         * (0..poly.len())
             .map(|i| {

@@ -324,9 +324,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
         one[0] = 1.0;
         for (j, p) in xs.iter().enumerate() {
             let c = index.closest(p);
-            let mut ids = [j; D];
-            ids[0] = j;
-            src.push((ids, one));
+            src.push(([j; D], one));
             dst.push(c.point);
             wts.push(1.0);
         }

@@ -141,6 +141,23 @@ fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
     p.atlas.element_size = pop.element_size;
 }
 
+/// Reads the population of `pop` and the run parameters of both argument groups.
+fn population_and_params(
+    pop: &PopArgs,
+    run: &RunArgs,
+) -> anyhow::Result<(Vec<atlasmesh::geometry::Shape<2>>, RunParams)> {
+    let mut params = run.params();
+    apply_pop(&mut params, pop);
+    let shapes = pipeline::load_population(
+        &pop.shapes,
+        &PopulationOptions {
+            closed: !pop.open,
+            resample: pop.resample,
+        },
+    )?;
+    Ok((shapes, params))
+}
+
 fn print_summary(r: &atlasmesh::report::Report, out: &std::path::Path) {
     let s = &r.summary;
     println!(
@@ -164,15 +181,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out,
             jobs,
         } => {
-            let mut params = run.params();
-            apply_pop(&mut params, &pop);
-            let shapes = pipeline::load_population(
-                &pop.shapes,
-                &PopulationOptions {
-                    closed: !pop.open,
-                    resample: pop.resample,
-                },
-            )?;
+            let (shapes, params) = population_and_params(&pop, &run)?;
             let r = pipeline::leave_one_out(
                 &shapes,
                 &dataset_name(&pop.shapes),
@@ -184,15 +193,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             print_summary(&r, &out);
         }
         Command::Build { pop, run, out } => {
-            let mut params = run.params();
-            apply_pop(&mut params, &pop);
-            let shapes = pipeline::load_population(
-                &pop.shapes,
-                &PopulationOptions {
-                    closed: !pop.open,
-                    resample: pop.resample,
-                },
-            )?;
+            let (shapes, params) = population_and_params(&pop, &run)?;
             let a = pipeline::build(&shapes, &params, &out)?;
             println!(
                 "atlas: {} ({} shapes, {} points, {} modes explaining {:.4} of the variance, mean mesh {} elements)",

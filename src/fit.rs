@@ -6,10 +6,10 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::{
-    ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, centroid, dist2, norm, sub,
+    ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, add, centroid, dist2, dot,
+    facet_normal, norm, scale, sub, vertex_normals,
 };
 use crate::model::Atlas;
-use crate::procrustes::fit_similarity;
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
@@ -22,19 +22,40 @@ pub struct FitParams {
     pub gamma_factor: f64,
     /// The schedule stops after the first `gamma` below this (paper: 0.008).
     pub gamma_stop: f64,
-    /// Inner loop ends when `||Δw|| < tolerance` (paper: 1e-6).
+    /// Inner loop ends when the change of `w` (and of the pose) is below this (paper: 1e-6).
     pub tolerance: f64,
     /// Cap on correspondence updates per `gamma`.
     pub max_iterations: usize,
-    /// Alternations of similarity and weights per correspondence (Cootes' protocol 1).
-    pub protocol_iterations: usize,
-    /// Add the subject-to-instance closest points to `E_d` (see [`fit`]).
+    /// Add the subject-to-instance closest points to `E_d` (see [`Fitter::fit`]).
     pub symmetric: bool,
     /// Starting rotations tried by the pre-alignment (2D; evenly spaced). 1 = identity only.
     pub starts: usize,
-    /// Full fits run from the best distinct pre-alignments; the least two-way distance wins.
+    /// Coarse fits run from the best distinct pre-alignments; the least two-way distance wins.
     pub full_starts: usize,
+    /// Points per direction (model and subject) used by the pre-alignment and the coarse
+    /// stage; the last `gamma` runs on all points. 0 = all points throughout.
+    pub coarse_points: usize,
 }
+
+/// Pose-only updates per start rotation in the pre-alignment.
+const PRE_ALIGNMENT_ITERATIONS: usize = 6;
+
+/// Cap on the updates per `gamma` of the coarse stage (the final stage has
+/// [`FitParams::max_iterations`]).
+const COARSE_MAX_ITERATIONS: usize = 20;
+
+/// The coarse stage stops each `gamma` at this multiple of the tolerance; the last `gamma`,
+/// on all points, meets the tolerance itself.
+const COARSE_TOLERANCE_FACTOR: f64 = 100.0;
+
+/// Pairs whose normals (instance and subject) make an angle above 60° are left out of the
+/// update: they join facing sides (a finger's side and its neighbour's), the pull that traps a
+/// fit in a local minimum.
+const COMPATIBLE_NORMALS_COS: f64 = 0.5;
+
+/// After each `gamma`, starts whose two-way mean squared distance exceeds the best one's
+/// by this factor are dropped.
+const PRUNE_FACTOR: f64 = 4.0;
 
 /// Number of points of the paper's hands (2001), for which its `gamma` values were chosen.
 pub const REFERENCE_POINTS: f64 = 2001.0;
@@ -46,11 +67,11 @@ impl Default for FitParams {
             gamma_factor: 0.25,
             gamma_stop: 0.008,
             tolerance: 1e-6,
-            max_iterations: 100,
-            protocol_iterations: 3,
+            max_iterations: 50,
             symmetric: true,
             starts: 8,
             full_starts: 2,
+            coarse_points: 200,
         }
     }
 }
@@ -66,6 +87,25 @@ impl FitParams {
         }
         out
     }
+
+    fn validate(&self) -> Result<()> {
+        let ok = self.gamma_start.is_finite()
+            && self.gamma_start >= 0.0
+            && self.gamma_factor > 0.0
+            && self.gamma_factor < 1.0
+            && self.gamma_stop.is_finite()
+            && self.tolerance.is_finite()
+            && self.tolerance > 0.0;
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::Parameter(format!(
+                "fit parameters out of range: gamma {} × {} down to {}, tolerance {} \
+                 (need gamma >= 0, 0 < factor < 1, tolerance > 0)",
+                self.gamma_start, self.gamma_factor, self.gamma_stop, self.tolerance
+            )))
+        }
+    }
 }
 
 /// Result of a fit.
@@ -79,14 +119,173 @@ pub struct FitResult<const D: usize> {
     pub instance: Vec<Point<D>>,
     /// `S_tilde^P`: the instance projected onto the subject along its normals, subject frame.
     pub projected: Vec<SurfacePoint<D>>,
-    /// `E_d` (eq. 6, subject units squared) at every correspondence update.
+    /// `E_d` (eq. 6, subject units squared) at every correspondence update of the winning
+    /// start. In the coarse stage, the sum over the sampled model points scaled by
+    /// `N / samples`.
     pub e_d_history: Vec<f64>,
     /// The instance at the start and after every `gamma` (the locus of fig. 9), subject frame.
     pub locus: Vec<Vec<Point<D>>>,
-    /// Correspondence updates done.
+    /// Correspondence updates of the winning start (coarse stage and final stage).
     pub iterations: usize,
     /// Whether the inner loop met the tolerance at the last `gamma`.
     pub converged: bool,
+}
+
+/// Number of rotation parameters in `D` dimensions.
+const fn rotation_params(d: usize) -> usize {
+    d * (d - 1) / 2
+}
+
+/// `G_k x`: the `k`-th infinitesimal rotation applied to `x` (2D: `(-x_1, x_0)`; 3D:
+/// `e_k × x`).
+#[inline]
+fn generator<const D: usize>(k: usize, x: &Point<D>) -> Point<D> {
+    let mut out = [0.0; D];
+    match D {
+        2 => {
+            out[0] = -x[1];
+            out[1] = x[0];
+        }
+        3 => {
+            let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+            out[a] = -x[b];
+            out[b] = x[a];
+        }
+        _ => unreachable!("atlasmesh supports D = 2 and D = 3"),
+    }
+    out
+}
+
+/// `exp(Σ_k ω_k G_k)`: the rotation by the angle `ω` (2D) or the rotation vector `ω` (3D,
+/// Rodrigues).
+fn rotation_exp<const D: usize>(w: &[f64]) -> [[f64; D]; D] {
+    let mut r = Similarity::<D>::identity().r;
+    match D {
+        2 => {
+            let (s, c) = w[0].sin_cos();
+            r[0][0] = c;
+            r[0][1] = -s;
+            r[1][0] = s;
+            r[1][1] = c;
+        }
+        3 => {
+            let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+            if th > 0.0 {
+                let k = [w[0] / th, w[1] / th, w[2] / th];
+                let (s, c) = th.sin_cos();
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let kk = (1.0 - c) * k[i] * k[j];
+                        let cross = match (i, j) {
+                            (0, 1) => -k[2],
+                            (1, 0) => k[2],
+                            (0, 2) => k[1],
+                            (2, 0) => -k[1],
+                            (1, 2) => -k[0],
+                            (2, 1) => k[0],
+                            _ => 0.0,
+                        };
+                        r[i][j] = if i == j { c } else { 0.0 } + kk + s * cross;
+                    }
+                }
+            }
+        }
+        _ => unreachable!("atlasmesh supports D = 2 and D = 3"),
+    }
+    r
+}
+
+/// Sign of the orientation of a shape: the signed area enclosed by an outline (closed by
+/// the chord between its ends when open), or the signed volume under a surface (closed by
+/// the cone from the centroid when open).
+fn orientation<const D: usize>(points: &[Point<D>], facets: &[[usize; D]]) -> f64 {
+    let c = centroid(points);
+    let mut total = 0.0;
+    for f in facets {
+        let a = sub(points[f[0]], c);
+        let b = sub(points[f[1]], c);
+        total += match D {
+            2 => a[0] * b[1] - a[1] * b[0],
+            3 => {
+                let e = sub(points[f[2]], c);
+                a[0] * (b[1] * e[2] - b[2] * e[1]) - a[1] * (b[0] * e[2] - b[2] * e[0])
+                    + a[2] * (b[0] * e[1] - b[1] * e[0])
+            }
+            _ => 0.0,
+        };
+    }
+    total.signum()
+}
+
+/// Indices of `k` points spread evenly over `0..n` (all of them when `k` is 0 or `>= n`).
+fn spread(n: usize, k: usize) -> Vec<usize> {
+    if k == 0 || k >= n {
+        return (0..n).collect();
+    }
+    if k == 1 {
+        return vec![0];
+    }
+    let mut v: Vec<usize> = (0..k)
+        .map(|i| ((i as f64) * (n - 1) as f64 / (k - 1) as f64).round() as usize)
+        .collect();
+    v.dedup();
+    v
+}
+
+/// Which model points (forward pairs) and subject vertices (backward pairs) take part.
+struct Sampling {
+    forward: Vec<usize>,
+    backward: Vec<usize>,
+}
+
+/// A subject prepared for fitting.
+struct Subject<'s, const D: usize> {
+    shape: &'s Shape<D>,
+    index: &'s ClosestPointIndex<D>,
+    normals: Vec<Point<D>>,
+}
+
+/// Interpolated unit normal at a surface point (vertex normals blended by the barycentric
+/// weights; the facet normal where they cancel); `None` on a degenerate facet.
+fn normal_at<const D: usize>(
+    points: &[Point<D>],
+    facet: &[usize; D],
+    weights: &[f64; D],
+    vertex_normals: &[Point<D>],
+) -> Option<Point<D>> {
+    let mut n = [0.0; D];
+    for k in 0..D {
+        n = add(n, scale(vertex_normals[facet[k]], weights[k]));
+    }
+    let l = norm(n);
+    if l > 1e-12 {
+        return Some(scale(n, 1.0 / l));
+    }
+    let f = facet_normal(points, facet);
+    let l = norm(f);
+    (l > 0.0).then(|| scale(f, 1.0 / l))
+}
+
+/// State of Algorithm 1: pose and weights.
+#[derive(Clone)]
+struct State<const D: usize> {
+    sim: Similarity<D>,
+    w: Vec<f64>,
+    /// Closest facets of the last update, per model point and per subject vertex: the
+    /// starting guesses of the next search.
+    forward_hint: Vec<usize>,
+    backward_hint: Vec<usize>,
+}
+
+/// What one correspondence update measured and did.
+struct Step {
+    /// Forward `Σ ||y_j - c_j||²` over the sampled model points (subject units squared).
+    forward: f64,
+    /// Mean squared distances forward and backward (subject units squared).
+    two_way_ms: f64,
+    /// Largest change of a pose parameter and `||Δw||`.
+    pose_change: f64,
+    weight_change: f64,
 }
 
 /// The atlas prepared for fitting: modes row-major, `Lambda^{-1}`. Build once, fit many.
@@ -95,6 +294,8 @@ pub struct Fitter<'a, const D: usize> {
     psi: Vec<f64>,
     m: usize,
     lambda_inv: Vec<f64>,
+    /// Index of the mean shape's facets, refitted to every instance.
+    mean_index: ClosestPointIndex<D>,
 }
 
 impl<'a, const D: usize> Fitter<'a, D> {
@@ -112,6 +313,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             psi,
             m,
             lambda_inv: atlas.eigenvalues.iter().map(|l| 1.0 / l).collect(),
+            mean_index: ClosestPointIndex::new(&atlas.mean, &atlas.facets),
         }
     }
 
@@ -125,338 +327,548 @@ impl<'a, const D: usize> Fitter<'a, D> {
         }));
     }
 
-    /// Fits the atlas to `subject` (Algorithm 1) and projects the result onto it.
+    /// Fits the atlas to `subject` (Algorithm 1, eq. 5-8) and projects the result onto it.
     ///
-    /// Each correspondence update (i) takes the closest point on the subject's facets of every
-    /// instance point; step (ii) alternates the similarity (Umeyama) and the weights
-    /// (eq. 8) `params.protocol_iterations` times; (iii) instantiates. The inner loop ends when
-    /// `||Δw|| < tolerance`; then `gamma` decreases.
+    /// Lengths: the subject in its own units and frame; the model in the reference frame
+    /// (mean in the unit box); `t_{R,T,s}` maps the latter to the former.
+    ///
+    /// Each correspondence update (i) takes, for every model point, the closest point on the
+    /// subject's segments/facets (through the spatial index), (ii) minimizes eq. 5 for that
+    /// correspondence over `R, T, s, w` together, (iii) instantiates. The inner loop ends when
+    /// `||Δw||` (and the pose change) is below `params.tolerance`; then `gamma` decreases.
     ///
     /// # Deviations from the paper
-    /// - Eq. 8 reads `w = (I + gamma/s² Λ^{-1})^{-1} Ψ^T (t^{-1}(Ŝ^c) - S_bar)`; we drop the
-    ///   `1/s²`, i.e. measure `E_d` in the reference frame (mean in the unit box), so that
+    /// - Step (ii): the paper alternates the similarity and eq. 8 (Cootes' protocol 1) on
+    ///   the squared distances to the closest points. We take one Gauss-Newton step of eq. 5
+    ///   in all parameters at once, with each residual measured along the subject's normal at
+    ///   the closest point (point-to-plane, Chen & Medioni 1992). At a closest point the
+    ///   residual is normal to the subject, so both variants have the same fixed points, the
+    ///   stationary points of eq. 5 with the true distance to the subject; point-to-point
+    ///   creeps along the outline over hundreds of updates (the paper: 168-581), this takes
+    ///   tens.
+    /// - `E_d` is measured in the reference frame (eq. 8 without the `1/s²`), so that
     ///   `gamma` means the same whatever the subject's units (the paper's hands were in the
     ///   unit box, `s ≈ 1`). Test `fit_is_invariant_to_the_subject_units`.
-    /// - With `symmetric`, `E_d` also sums, over the subject's vertices, the squared distance
-    ///   to their closest point on the instance (weighted so both directions count equally).
-    ///   The one-way term lets an instance settle on part of the subject (a finger on its
-    ///   neighbour) at a local minimum; the two-way term does not. Test
-    ///   `symmetric_fit_recovers_a_far_instance` and the hands leave-one-out.
     /// - `E_d` sums over the `N` model points and the eigenvalues grow with `N`, so the
     ///   regularization's strength depends on `N`; the paper chose `gamma` for `N = 2001`.
-    ///   We use `gamma · N / 2001`, which keeps its effect for any sampling.
+    ///   We use `gamma · n / 2001` with `n` the points in use.
+    /// - Pairs whose two normals (the instance's and the subject's, at the pair's two ends)
+    ///   differ by more than 60° are left out of step (ii). Such a pair joins two facing
+    ///   sides, a finger's edge to its neighbour's; those pairs are what holds a fit in the
+    ///   local minimum that caught the paper's S38 (our subject `37`). The subject's normals
+    ///   are turned round first if it is listed in the other orientation than the atlas.
+    /// - With `symmetric`, `E_d` also sums, over the subject's vertices, the squared distance
+    ///   to their closest point on the instance (weighted so both directions count equally):
+    ///   a one-way distance is blind to a part of the subject that the instance leaves
+    ///   uncovered. Test `symmetric_fit_recovers_a_far_instance`.
     /// - Algorithm 1 starts from `R = I, T = 0, s = 1`. We start from the centroid and
-    ///   RMS-radius match, try `params.starts` rotations with a similarity-only ICP (w = 0),
-    ///   run Algorithm 1 from the `full_starts` best distinct ones, and keep the result of
-    ///   least two-way distance (test `symmetric_fit_recovers_a_far_instance`).
+    ///   RMS-radius match, try `params.starts` rotations with a pose-only fit (`w = 0`) on
+    ///   `coarse_points / 4` points, and run Algorithm 1 from the `params.full_starts` best
+    ///   distinct ones (more than 20° apart) together on `params.coarse_points` evenly spread
+    ///   points, dropping after each `gamma` the starts whose two-way distance is 4 times the
+    ///   best; the best start then runs the last `gamma` again on all points, to the
+    ///   tolerance. The coarse stage is a quadrature of the same `E_d` with fewer points (its
+    ///   `gamma` scaled as above), stopped at 100 times the tolerance.
     pub fn fit(
         &self,
         subject: &Shape<D>,
         subject_index: &ClosestPointIndex<D>,
         params: &FitParams,
     ) -> Result<FitResult<D>> {
+        let (subj, coarse, full) = self.prepare(subject, subject_index, params)?;
+        let n = self.atlas.mean.len();
+        // The pre-alignment needs only the rough layout.
+        let rough = Sampling {
+            forward: spread(n, params.coarse_points / 4),
+            backward: spread(subject.points.len(), params.coarse_points / 4),
+        };
+        let mut x = Scratch::new(self);
+
+        // Pre-alignment: centroids, RMS radii, and a pose-only fit from each start rotation.
+        let pts = &subject.points;
+        let cs = centroid(pts);
+        let cm = centroid(&self.atlas.mean);
+        let rms = |p: &[Point<D>], c: Point<D>| {
+            (p.iter().map(|q| dist2(*q, c)).sum::<f64>() / p.len() as f64).sqrt()
+        };
+        let s0 = rms(pts, cs) / rms(&self.atlas.mean, cm).max(f64::MIN_POSITIVE);
+        let starts = if D == 2 { params.starts.max(1) } else { 1 };
+        let mut pre: Vec<(f64, f64, State<D>)> = Vec::with_capacity(starts);
+        for k in 0..starts {
+            let angle = std::f64::consts::TAU * k as f64 / starts as f64;
+            let mut sim = Similarity::<D>::planar_rotation(angle);
+            sim.s = s0;
+            sim.t = sub(cs, sim.apply(&cm));
+            let mut st = State {
+                sim,
+                w: vec![0.0; self.m],
+                forward_hint: vec![usize::MAX; n],
+                backward_hint: vec![usize::MAX; subject.points.len()],
+            };
+            let mut score = f64::INFINITY;
+            for _ in 0..PRE_ALIGNMENT_ITERATIONS {
+                let step = self.update(&subj, &mut st, &rough, None, &mut x)?;
+                score = step.two_way_ms;
+                if step.pose_change < 1e-3 {
+                    break;
+                }
+            }
+            let a = st.sim.r[1][0].atan2(st.sim.r[0][0]);
+            pre.push((score, a, st));
+        }
+        pre.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut chosen: Vec<State<D>> = Vec::new();
+        let mut angles: Vec<f64> = Vec::new();
+        for (_, a, st) in pre {
+            let distinct = angles.iter().all(|b| {
+                let d = (a - b).rem_euclid(std::f64::consts::TAU);
+                d.min(std::f64::consts::TAU - d) > 20f64.to_radians()
+            });
+            if distinct {
+                chosen.push(st);
+                angles.push(a);
+            }
+            if chosen.len() >= params.full_starts.max(1) {
+                break;
+            }
+        }
+
+        self.run_starts(&subj, chosen, &coarse, &full, params, &mut x)
+    }
+
+    /// Algorithm 1 (with the final projection) from a given pose `t_{R,T,s}` and weights,
+    /// without the pre-alignment: e.g. to refine a fit, or to fit a time series from the
+    /// previous frame's result. See [`Fitter::fit`].
+    pub fn fit_from(
+        &self,
+        subject: &Shape<D>,
+        subject_index: &ClosestPointIndex<D>,
+        params: &FitParams,
+        similarity: Similarity<D>,
+        weights: &[f64],
+    ) -> Result<FitResult<D>> {
+        let (subj, coarse, full) = self.prepare(subject, subject_index, params)?;
+        if weights.len() != self.m || weights.iter().any(|w| !w.is_finite()) {
+            return Err(Error::Parameter(format!(
+                "{} finite starting weights needed, got {}",
+                self.m,
+                weights.len()
+            )));
+        }
+        let mut x = Scratch::new(self);
+        let st = State {
+            sim: similarity,
+            w: weights.to_vec(),
+            forward_hint: vec![usize::MAX; self.atlas.mean.len()],
+            backward_hint: vec![usize::MAX; subject.points.len()],
+        };
+        self.run_starts(&subj, vec![st], &coarse, &full, params, &mut x)
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn prepare<'s>(
+        &self,
+        subject: &'s Shape<D>,
+        subject_index: &'s ClosestPointIndex<D>,
+        params: &FitParams,
+    ) -> Result<(Subject<'s, D>, Sampling, Sampling)> {
         subject.validate()?;
+        params.validate()?;
         if subject.facets.is_empty() {
             return Err(Error::shape(
                 &subject.name,
                 "has no segments/facets to fit to",
             ));
         }
-        let n = self.atlas.mean.len();
-        let subj = &subject.points;
-        let w_back = n as f64 / subj.len() as f64;
-
-        // Pre-alignment.
-        let cs = centroid(subj);
-        let cm = centroid(&self.atlas.mean);
-        let rms = |pts: &[Point<D>], c: Point<D>| {
-            (pts.iter().map(|p| dist2(*p, c)).sum::<f64>() / pts.len() as f64).sqrt()
+        let subj = Subject {
+            shape: subject,
+            index: subject_index,
+            normals: {
+                let mut nv = vertex_normals(&subject.points, &subject.facets);
+                // A subject listed in the other order than the atlas (clockwise against
+                // counter-clockwise, or inward facets) gets its normals turned round, so that
+                // corresponding normals agree.
+                if orientation(&subject.points, &subject.facets)
+                    * orientation(&self.atlas.mean, &self.atlas.facets)
+                    < 0.0
+                {
+                    nv.iter_mut().for_each(|v| *v = scale(*v, -1.0));
+                }
+                nv
+            },
         };
-        let s0 = rms(subj, cs) / rms(&self.atlas.mean, cm).max(f64::MIN_POSITIVE);
-        let starts = if D == 2 { params.starts.max(1) } else { 1 };
-        let zero = vec![0.0; self.m];
-        let mut x = Vec::new();
-        self.instance(&zero, &mut x);
-        let mut pre: Vec<(f64, f64, Similarity<D>)> = Vec::new();
-        for k in 0..starts {
-            let angle = std::f64::consts::TAU * k as f64 / starts as f64;
-            let mut sim = Similarity::<D>::planar_rotation(angle);
-            sim.s = s0;
-            let rc = sim.apply(&cm);
-            sim.t = sub(cs, rc);
-            for _ in 0..15 {
-                let (src, dst, wts) =
-                    self.correspondences(&x, &sim, subject, subject_index, w_back, true);
-                sim = fit_similarity(&src, &dst, Some(&wts));
-            }
-            let d = self.two_way_ms(&x, &sim, subject, subject_index);
-            pre.push((d, sim.r[1][0].atan2(sim.r[0][0]), sim));
-        }
-        pre.sort_by(|a, b| a.0.total_cmp(&b.0));
-        // Full fits from the best pre-alignments with distinct rotations; keep the least
-        // two-way distance.
-        let mut chosen: Vec<Similarity<D>> = Vec::new();
-        let mut angles: Vec<f64> = Vec::new();
-        for (_, a, sim) in &pre {
-            let distinct = angles.iter().all(|b| {
-                let d = (a - b).rem_euclid(std::f64::consts::TAU);
-                d.min(std::f64::consts::TAU - d) > 20f64.to_radians()
-            });
-            if distinct {
-                chosen.push(*sim);
-                angles.push(*a);
-            }
-            if chosen.len() >= params.full_starts.max(1) {
-                break;
-            }
-        }
-        let mut best: Option<(f64, FitResult<D>)> = None;
-        for sim in chosen {
-            let r = self.fit_from(sim, subject, subject_index, params, w_back)?;
-            let x_ref: Vec<Point<D>> = r
-                .instance
-                .iter()
-                .map(|p| r.similarity.apply_inverse(p))
-                .collect();
-            let d = self.two_way_ms(&x_ref, &r.similarity, subject, subject_index);
-            if best.as_ref().is_none_or(|(b, _)| d < *b) {
-                best = Some((d, r));
-            }
-        }
-        best.map(|b| b.1)
-            .ok_or_else(|| Error::Numerical("no start was tried".into()))
+        let n = self.atlas.mean.len();
+        let coarse = Sampling {
+            forward: spread(n, params.coarse_points),
+            backward: if params.symmetric {
+                spread(subject.points.len(), params.coarse_points)
+            } else {
+                Vec::new()
+            },
+        };
+        let full = Sampling {
+            forward: (0..n).collect(),
+            backward: if params.symmetric {
+                (0..subject.points.len()).collect()
+            } else {
+                Vec::new()
+            },
+        };
+        Ok((subj, coarse, full))
     }
 
-    /// Algorithm 1 from the pose `sim` with `w = 0`.
-    fn fit_from(
+    /// Algorithm 1 on the coarse sampling from every start; the least two-way distance
+    /// wins, and its last `gamma` runs on all points; then the projection.
+    fn run_starts(
         &self,
-        mut sim: Similarity<D>,
-        subject: &Shape<D>,
-        subject_index: &ClosestPointIndex<D>,
+        subj: &Subject<D>,
+        chosen: Vec<State<D>>,
+        coarse: &Sampling,
+        full: &Sampling,
         params: &FitParams,
-        w_back: f64,
+        x: &mut Scratch<D>,
     ) -> Result<FitResult<D>> {
         let n = self.atlas.mean.len();
-        let mut w = vec![0.0; self.m];
-        let mut x = Vec::new();
-        self.instance(&w, &mut x);
-        let mut e_d_history = Vec::new();
-        let mut locus = vec![x.iter().map(|p| sim.apply(p)).collect()];
-        let mut iterations = 0;
-        let mut converged = false;
-        let gamma_scale = n as f64 / REFERENCE_POINTS;
-        for gamma in params.gammas() {
-            let gamma = gamma * gamma_scale;
-            converged = false;
-            for _ in 0..params.max_iterations {
-                iterations += 1;
-                // (i) correspondence.
-                let (src_idx, dst, wts) = self.correspondence_sets(
-                    &x,
-                    &sim,
-                    subject,
-                    subject_index,
-                    w_back,
-                    params.symmetric,
-                );
-                e_d_history.push(
-                    src_idx
-                        .iter()
-                        .zip(&dst)
-                        .take(n)
-                        .map(|(c, y)| dist2(sim.apply(&x[c.0[0]]), *y))
-                        .sum(),
-                );
-                // (ii) similarity and weights for this correspondence.
-                let w_old = w.clone();
-                for _ in 0..params.protocol_iterations.max(1) {
-                    let src: Vec<Point<D>> = src_idx.iter().map(|c| combo(&x, c)).collect();
-                    sim = fit_similarity(&src, &dst, Some(&wts));
-                    w = self.solve_weights(&src_idx, &dst, &wts, &sim, gamma)?;
-                    // (iii) instantiate.
-                    self.instance(&w, &mut x);
-                }
-                let dw = w
-                    .iter()
-                    .zip(&w_old)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum::<f64>()
-                    .sqrt();
-                if dw < params.tolerance {
-                    converged = true;
-                    break;
-                }
+        // Algorithm 1 on the coarse sampling from every chosen start; the least two-way
+        // distance wins.
+        // All starts go through each `gamma` together; after each, those whose two-way
+        // distance is far above the best one's stop.
+        let gammas = params.gammas();
+        let tol = COARSE_TOLERANCE_FACTOR * params.tolerance;
+        let mut runs: Vec<(f64, Run<D>)> = chosen
+            .into_iter()
+            .map(|st| (f64::INFINITY, Run::new(st, self, x)))
+            .collect();
+        for &gamma in &gammas {
+            for (score, run) in runs.iter_mut() {
+                *score = self.schedule(
+                    subj,
+                    run,
+                    coarse,
+                    &[gamma],
+                    (COARSE_MAX_ITERATIONS.min(params.max_iterations), tol),
+                    x,
+                )?;
             }
-            locus.push(x.iter().map(|p| sim.apply(p)).collect());
+            let best = runs.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+            runs.retain(|r| r.0 <= PRUNE_FACTOR * best);
         }
-        let instance: Vec<Point<D>> = x.iter().map(|p| sim.apply(p)).collect();
-        let projected = project_along_normals(&instance, &self.atlas.facets, subject_index);
+        let (_, mut run) = runs
+            .into_iter()
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .ok_or_else(|| Error::Numerical("no start was tried".into()))?;
+        // The last gamma on all points.
+        if coarse.forward.len() < n || coarse.backward.len() < full.backward.len() {
+            let last = gammas[gammas.len() - 1..].to_vec();
+            run.locus.pop();
+            self.schedule(
+                subj,
+                &mut run,
+                full,
+                &last,
+                (params.max_iterations, params.tolerance),
+                x,
+            )?;
+        }
+        x.set_weights(self, &run.state.w, false);
+        let sim = run.state.sim;
+        let instance: Vec<Point<D>> = x.x.iter().map(|p| sim.apply(p)).collect();
+        let projected = project_along_normals(&instance, &self.atlas.facets, subj.index);
         Ok(FitResult {
-            weights: w,
+            weights: run.state.w,
             similarity: sim,
             instance,
             projected,
-            e_d_history,
-            locus,
-            iterations,
-            converged,
+            e_d_history: run.e_d_history,
+            locus: run.locus,
+            iterations: run.iterations,
+            converged: run.converged,
         })
     }
 
-    /// Correspondences as (model point combination, subject-frame target, weight): first the
-    /// `N` forward pairs (instance point → closest subject point), then, if `symmetric`, the
-    /// backward pairs (subject vertex → closest point on the instance's facets).
-    #[allow(clippy::type_complexity)]
-    fn correspondence_sets(
+    /// Runs the inner loop of Algorithm 1 for every `gamma` of `gammas`; returns the two-way
+    /// mean squared distance at the last update.
+    fn schedule(
         &self,
-        x: &[Point<D>],
-        sim: &Similarity<D>,
-        subject: &Shape<D>,
-        index: &ClosestPointIndex<D>,
-        w_back: f64,
-        symmetric: bool,
-    ) -> (Vec<([usize; D], [f64; D])>, Vec<Point<D>>, Vec<f64>) {
-        let xs: Vec<Point<D>> = x.iter().map(|p| sim.apply(p)).collect();
-        let mut src = Vec::with_capacity(xs.len() * 2);
-        let mut dst = Vec::with_capacity(xs.len() * 2);
-        let mut wts = Vec::with_capacity(xs.len() * 2);
-        let mut one = [0.0; D];
-        one[0] = 1.0;
-        for (j, p) in xs.iter().enumerate() {
-            let c = index.closest(p);
-            src.push(([j; D], one));
-            dst.push(c.point);
-            wts.push(1.0);
-        }
-        if symmetric {
-            let inst = ClosestPointIndex::new(&xs, &self.atlas.facets);
-            for q in &subject.points {
-                let c = inst.closest(q);
-                src.push((self.atlas.facets[c.facet], c.weights));
-                dst.push(*q);
-                wts.push(w_back);
-            }
-        }
-        (src, dst, wts)
-    }
-
-    #[allow(clippy::type_complexity)]
-    fn correspondences(
-        &self,
-        x: &[Point<D>],
-        sim: &Similarity<D>,
-        subject: &Shape<D>,
-        index: &ClosestPointIndex<D>,
-        w_back: f64,
-        symmetric: bool,
-    ) -> (Vec<Point<D>>, Vec<Point<D>>, Vec<f64>) {
-        let (s, d, w) = self.correspondence_sets(x, sim, subject, index, w_back, symmetric);
-        (s.iter().map(|c| combo(x, c)).collect(), d, w)
-    }
-
-    /// Mean of the two one-way mean squared distances between the instance `t ∘ x` and the
-    /// subject (subject units squared).
-    fn two_way_ms(
-        &self,
-        x: &[Point<D>],
-        sim: &Similarity<D>,
-        subject: &Shape<D>,
-        index: &ClosestPointIndex<D>,
-    ) -> f64 {
-        let xs: Vec<Point<D>> = x.iter().map(|p| sim.apply(p)).collect();
-        let f = xs.iter().map(|p| index.closest(p).dist2).sum::<f64>() / xs.len() as f64;
-        let inst = ClosestPointIndex::new(&xs, &self.atlas.facets);
-        let b = subject
-            .points
-            .iter()
-            .map(|q| inst.closest(q).dist2)
-            .sum::<f64>()
-            / subject.points.len() as f64;
-        0.5 * (f + b)
-    }
-
-    /// Minimizes `Σ_c ω_c ||t^{-1}(y_c) - A_c (S_bar + Ψ w)||² + gamma w^T Λ^{-1} w` over `w`
-    /// for fixed `t` (eq. 8 generalized to weighted combinations of model points; with only
-    /// the forward pairs `Σ A^T A = Ψ^T Ψ = I` and this is eq. 8 exactly).
-    fn solve_weights(
-        &self,
-        src: &[([usize; D], [f64; D])],
-        dst: &[Point<D>],
-        wts: &[f64],
-        sim: &Similarity<D>,
-        gamma: f64,
-    ) -> Result<Vec<f64>> {
-        let m = self.m;
-        let mut a = Mat::<f64>::zeros(m, m);
-        let mut rhs = Mat::<f64>::zeros(m, 1);
-        for k in 0..m {
-            a[(k, k)] = gamma * self.lambda_inv[k];
-        }
-        let mut row = vec![0.0; m];
-        for ((ids, bw), (y, &om)) in src.iter().zip(dst.iter().zip(wts)) {
-            let z = sim.apply_inverse(y);
-            let single = bw[0] == 1.0 && bw[1..].iter().all(|&b| b == 0.0);
-            for d in 0..D {
-                row.iter_mut().for_each(|r| *r = 0.0);
-                let mut mean = 0.0;
-                for (k, &i) in ids.iter().enumerate() {
-                    if bw[k] == 0.0 {
-                        continue;
-                    }
-                    let pr = &self.psi[(i * D + d) * m..(i * D + d + 1) * m];
-                    for (r, p) in row.iter_mut().zip(pr) {
-                        *r += bw[k] * p;
-                    }
-                    mean += bw[k] * self.atlas.mean[i][d];
-                    if single {
-                        break;
-                    }
+        subj: &Subject<D>,
+        run: &mut Run<D>,
+        sampling: &Sampling,
+        gammas: &[f64],
+        (max_iterations, tolerance): (usize, f64),
+        x: &mut Scratch<D>,
+    ) -> Result<f64> {
+        let n = self.atlas.mean.len() as f64;
+        let scale_e_d = n / sampling.forward.len() as f64;
+        let mut score = f64::INFINITY;
+        for &gamma in gammas {
+            let gamma = gamma * sampling.forward.len() as f64 / REFERENCE_POINTS;
+            run.converged = false;
+            for _ in 0..max_iterations.max(1) {
+                let step = self.update(subj, &mut run.state, sampling, Some(gamma), x)?;
+                run.iterations += 1;
+                run.e_d_history.push(step.forward * scale_e_d);
+                score = step.two_way_ms;
+                if step.weight_change < tolerance && step.pose_change < tolerance {
+                    run.converged = true;
+                    break;
                 }
-                let r = z[d] - mean;
-                for p in 0..m {
-                    rhs[(p, 0)] += om * row[p] * r;
-                    if !single {
-                        for q in 0..m {
-                            a[(p, q)] += om * row[p] * row[q];
+            }
+            x.set_weights(self, &run.state.w, false);
+            run.locus
+                .push(x.x.iter().map(|p| run.state.sim.apply(p)).collect());
+        }
+        Ok(score)
+    }
+
+    /// One correspondence update: (i) closest points at the current state, (ii) one
+    /// Gauss-Newton step of eq. 5 (all pose parameters, and `w` unless `gamma` is `None`),
+    /// (iii) the new state.
+    ///
+    /// Linearization, in the reference frame: with `x = S_bar + Ψ w`, the update
+    /// `t' = t ∘ (x ↦ (1 + δs)(I + Σ δω_k G_k) x + δt)`, `w' = w + δw`, the residual of a
+    /// pair along its unit normal `ñ` (reference frame) is
+    /// `ñ · (x - t^{-1}(c) + δs x + Σ δω_k G_k x + δt + Ψ δw)`.
+    fn update(
+        &self,
+        subj: &Subject<D>,
+        st: &mut State<D>,
+        sampling: &Sampling,
+        gamma: Option<f64>,
+        scratch: &mut Scratch<D>,
+    ) -> Result<Step> {
+        let m = self.m;
+        let r = rotation_params(D);
+        let pose = 1 + r + D;
+        let p = if gamma.is_some() { pose + m } else { pose };
+        let cols = p + 1;
+        let sim = st.sim;
+        scratch.set_weights(self, &st.w, true);
+        let cos_min = COMPATIBLE_NORMALS_COS;
+        let x = &scratch.x;
+        let buf = &mut scratch.rows;
+        buf.clear();
+        // Appends the row of the model point combination `(ids, bw)` with unit normal `nr`
+        // and target `z` (both in the reference frame), scaled by `sw` (root of its weight).
+        let push =
+            |buf: &mut Vec<f64>, ids: &[usize], bw: &[f64], nr: Point<D>, z: Point<D>, sw: f64| {
+                let at = buf.len();
+                buf.resize(at + cols, 0.0);
+                let row = &mut buf[at..];
+                let mut xc = [0.0; D];
+                for (&i, &b) in ids.iter().zip(bw) {
+                    xc = add(xc, scale(x[i], b));
+                }
+                row[0] = sw * dot(nr, xc);
+                for k in 0..r {
+                    row[1 + k] = sw * dot(nr, generator(k, &xc));
+                }
+                for d in 0..D {
+                    row[1 + r + d] = sw * nr[d];
+                }
+                if p > pose {
+                    let rw = &mut row[pose..pose + m];
+                    for (&i, &b) in ids.iter().zip(bw) {
+                        if b == 0.0 {
+                            continue;
+                        }
+                        for d in 0..D {
+                            let f = sw * b * nr[d];
+                            let pr = &self.psi[(i * D + d) * m..(i * D + d + 1) * m];
+                            for (o, v) in rw.iter_mut().zip(pr) {
+                                *o += f * v;
+                            }
                         }
                     }
                 }
+                row[p] = sw * dot(nr, sub(xc, z));
+            };
+        // Forward pairs: model point -> closest point on the subject (subject frame).
+        let mut forward = 0.0;
+        for &j in &sampling.forward {
+            let c = subj
+                .index
+                .closest_from(&sim.apply(&x[j]), st.forward_hint[j]);
+            st.forward_hint[j] = c.facet;
+            forward += c.dist2;
+            let f = &subj.shape.facets[c.facet];
+            let Some(n) = normal_at(&subj.shape.points, f, &c.weights, &subj.normals) else {
+                continue;
+            };
+            let nr = sim.rotate_inverse(&n);
+            if dot(nr, scratch.normals[j]) < cos_min {
+                continue;
+            }
+            push(buf, &[j], &[1.0], nr, sim.apply_inverse(&c.point), 1.0);
+        }
+        // Backward pairs: subject vertex -> closest point on the instance, searched in the
+        // reference frame (a similarity keeps closest points), so the instance's index
+        // changes only with `w`.
+        let mut backward = 0.0;
+        if !sampling.backward.is_empty() {
+            let sw = (sampling.forward.len() as f64 / sampling.backward.len() as f64).sqrt();
+            for &i in &sampling.backward {
+                let z = sim.apply_inverse(&subj.shape.points[i]);
+                let c = scratch.index.closest_from(&z, st.backward_hint[i]);
+                st.backward_hint[i] = c.facet;
+                backward += c.dist2 * sim.s * sim.s;
+                let f = &self.atlas.facets[c.facet];
+                let Some(n) = normal_at(x, f, &c.weights, &scratch.normals) else {
+                    continue;
+                };
+                if dot(n, sim.rotate_inverse(&subj.normals[i])) < cos_min {
+                    continue;
+                }
+                push(buf, f, &c.weights, n, z, sw);
             }
         }
-        let forward: f64 = src
-            .iter()
-            .zip(wts)
-            .filter(|(c, _)| c.1[0] == 1.0 && c.1[1..].iter().all(|&b| b == 0.0))
-            .map(|(_, w)| *w)
-            .sum::<f64>();
-        // Forward pairs cover all N model points with weight 1: their Gram matrix is Ψ^T Ψ = I.
-        let nf = forward / self.atlas.mean.len() as f64;
-        for k in 0..m {
-            a[(k, k)] += nf;
+        let two_way_ms = if sampling.backward.is_empty() {
+            forward / sampling.forward.len() as f64
+        } else {
+            0.5 * (forward / sampling.forward.len() as f64
+                + backward / sampling.backward.len() as f64)
+        };
+        let nrows = buf.len() / cols;
+        let a = faer::MatRef::from_row_major_slice(buf, nrows, cols);
+        let ata = a.transpose() * a;
+        let mut h = Mat::<f64>::zeros(p, p);
+        let mut g = Mat::<f64>::zeros(p, 1);
+        for i in 0..p {
+            for j in 0..p {
+                h[(i, j)] = ata[(i, j)];
+            }
+            g[(i, 0)] = -ata[(i, p)];
         }
-        let llt = a
+        if let Some(gamma) = gamma {
+            for k in 0..m {
+                h[(pose + k, pose + k)] += gamma * self.lambda_inv[k];
+                g[(pose + k, 0)] -= gamma * self.lambda_inv[k] * st.w[k];
+            }
+        }
+        // A tiny ridge, relative to each diagonal entry (they span many orders of magnitude
+        // when a mode's eigenvalue is near zero), keeps the system solvable on degenerate
+        // input (a straight outline, or no pair left).
+        let floor = 1e-12 * (0..pose).map(|i| h[(i, i)]).fold(0.0, f64::max) + 1e-300;
+        for i in 0..p {
+            h[(i, i)] += 1e-12 * h[(i, i)] + floor;
+        }
+        let llt = h
             .llt(faer::Side::Lower)
-            .map_err(|_| Error::Numerical("the weight system of eq. 8 is singular".into()))?;
-        let sol = llt.solve(&rhs);
-        let w: Vec<f64> = (0..m).map(|k| sol[(k, 0)]).collect();
-        if w.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Numerical("the mode weights became NaN".into()));
+            .map_err(|_| Error::Numerical("the system of eq. 5 is singular".into()))?;
+        let z = llt.solve(&g);
+        let mut dz: Vec<f64> = (0..p).map(|i| z[(i, 0)]).collect();
+        if dz.iter().any(|v| !v.is_finite()) {
+            return Err(Error::Numerical(format!(
+                "the fit of {} diverged (NaN in the pose or the mode weights)",
+                subj.shape.name
+            )));
         }
-        Ok(w)
+        // A trust region for the first updates, far from the subject: at most 0.2 in scale
+        // and rotation, 0.1 of the unit box in translation, 1 sigma per mode.
+        let mut shrink: f64 = 1.0;
+        let big = |v: f64, lim: f64| if v > lim { lim / v } else { 1.0 };
+        shrink = shrink.min(big(
+            dz[..1 + r].iter().fold(0.0, |a, v| a.max(v.abs())),
+            0.2,
+        ));
+        shrink = shrink.min(big(
+            dz[1 + r..pose].iter().map(|v| v * v).sum::<f64>().sqrt(),
+            0.1,
+        ));
+        if p > pose {
+            let maha = dz[pose..]
+                .iter()
+                .zip(&self.lambda_inv)
+                .map(|(v, li)| v * v * li)
+                .sum::<f64>()
+                .sqrt();
+            shrink = shrink.min(big(maha, 1.0));
+        }
+        dz.iter_mut().for_each(|v| *v *= shrink);
+        // (iii) the new state.
+        let dt: Point<D> = std::array::from_fn(|d| dz[1 + r + d]);
+        let mut new = st.sim;
+        new.t = add(sim.t, scale(sim.rotate(&dt), sim.s));
+        new.s = sim.s * dz[0].exp();
+        let rot = rotation_exp::<D>(&dz[1..1 + r]);
+        new.r = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..D).map(|k| sim.r[i][k] * rot[k][j]).sum::<f64>())
+        });
+        st.sim = new;
+        let mut weight_change = 0.0;
+        if p > pose {
+            for k in 0..m {
+                st.w[k] += dz[pose + k];
+                weight_change += dz[pose + k] * dz[pose + k];
+            }
+        }
+        Ok(Step {
+            forward,
+            two_way_ms,
+            pose_change: dz[..pose].iter().fold(0.0, |a, v| a.max(v.abs())),
+            weight_change: weight_change.sqrt(),
+        })
     }
 }
 
-#[inline]
-fn combo<const D: usize>(x: &[Point<D>], c: &([usize; D], [f64; D])) -> Point<D> {
-    let mut p = [0.0; D];
-    for k in 0..D {
-        if c.1[k] != 0.0 {
-            for d in 0..D {
-                p[d] += c.1[k] * x[c.0[k]][d];
-            }
+/// Buffers reused by every update of a fit: the instance (reference frame), the index of
+/// its facets and its vertex normals, for the weights `w`; the rows of the linear system.
+struct Scratch<const D: usize> {
+    x: Vec<Point<D>>,
+    w: Option<Vec<f64>>,
+    indexed: bool,
+    index: ClosestPointIndex<D>,
+    normals: Vec<Point<D>>,
+    rows: Vec<f64>,
+}
+
+impl<const D: usize> Scratch<D> {
+    fn new(fitter: &Fitter<D>) -> Self {
+        Scratch {
+            x: Vec::new(),
+            w: None,
+            indexed: false,
+            index: fitter.mean_index.clone(),
+            normals: Vec::new(),
+            rows: Vec::new(),
         }
     }
-    p
+
+    /// Makes `x` the instance of `w` (and, with `index`, its index and normals current).
+    fn set_weights(&mut self, fitter: &Fitter<D>, w: &[f64], index: bool) {
+        if self.w.as_deref() != Some(w) {
+            fitter.instance(w, &mut self.x);
+            self.w = Some(w.to_vec());
+            self.indexed = false;
+        }
+        if index && !self.indexed {
+            self.index.refit(&self.x);
+            self.normals = vertex_normals(&self.x, &fitter.atlas.facets);
+            self.indexed = true;
+        }
+    }
+}
+
+/// One start's way through Algorithm 1.
+struct Run<const D: usize> {
+    state: State<D>,
+    e_d_history: Vec<f64>,
+    locus: Vec<Vec<Point<D>>>,
+    iterations: usize,
+    converged: bool,
+}
+
+impl<const D: usize> Run<D> {
+    fn new(state: State<D>, fitter: &Fitter<D>, x: &mut Scratch<D>) -> Self {
+        x.set_weights(fitter, &state.w, false);
+        let locus = vec![x.x.iter().map(|p| state.sim.apply(p)).collect()];
+        Run {
+            state,
+            e_d_history: Vec::new(),
+            locus,
+            iterations: 0,
+            converged: false,
+        }
+    }
 }
 
 /// Projects every point of `points` (with the connectivity `facets`, for its vertex normals)

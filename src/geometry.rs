@@ -6,8 +6,6 @@
 //! frame; nothing here changes them.
 
 use crate::error::{Error, Result};
-use kiddo::SquaredEuclidean;
-use kiddo::immutable::float::kdtree::ImmutableKdTree;
 
 /// A point (or vector) in `D` dimensions.
 pub type Point<const D: usize> = [f64; D];
@@ -113,16 +111,7 @@ impl<const D: usize> Shape<D> {
     /// 2.1; in 2D the length-weighted average of the segment normals), normalized. For a
     /// counter-clockwise outline or an outward-oriented surface they point outwards.
     pub fn vertex_normals(&self) -> Vec<Point<D>> {
-        let mut n = vec![[0.0; D]; self.points.len()];
-        for f in &self.facets {
-            let fn_ = facet_normal(&self.points, f);
-            for &i in f {
-                for d in 0..D {
-                    n[i][d] += fn_[d];
-                }
-            }
-        }
-        n.iter().map(|v| normalize(*v)).collect()
+        vertex_normals(&self.points, &self.facets)
     }
 
     /// Median facet size (segment length, or square root of twice the triangle area).
@@ -138,6 +127,20 @@ impl<const D: usize> Shape<D> {
         l.sort_by(f64::total_cmp);
         l[l.len() / 2]
     }
+}
+
+/// Vertex normals of `points` with connectivity `facets`: see [`Shape::vertex_normals`].
+pub fn vertex_normals<const D: usize>(points: &[Point<D>], facets: &[[usize; D]]) -> Vec<Point<D>> {
+    let mut n = vec![[0.0; D]; points.len()];
+    for f in facets {
+        let fn_ = facet_normal(points, f);
+        for &i in f {
+            for d in 0..D {
+                n[i][d] += fn_[d];
+            }
+        }
+    }
+    n.iter().map(|v| normalize(*v)).collect()
 }
 
 /// Unnormalized facet normal: for a segment `(a, b)` the vector `(b - a)` turned clockwise
@@ -291,14 +294,56 @@ pub struct SurfacePoint<const D: usize> {
     pub dist2: f64,
 }
 
-/// Closest-point and ray queries on the facets of a shape, through a k-d tree of the facet
-/// centroids (exact: candidates are all facets whose centroid lies within the current best
-/// distance plus the largest centroid-to-vertex radius).
+/// Closest-point and ray queries on the facets of a shape, through a bounding-volume
+/// hierarchy of the facets' axis-aligned boxes (median splits, leaves of up to
+/// [`LEAF_FACETS`] facets). Queries are exact: a subtree is skipped only when its box is
+/// farther than the best facet found.
+///
+/// Written here rather than taken from a crate (parry, kiddo) for one reason: an iterative
+/// fit asks for the closest point of the same query point again and again after small
+/// moves, and [`ClosestPointIndex::closest_from`] starts from the facet found last time,
+/// which prunes nearly the whole tree at once; and it is generic over `D = 2, 3`.
+#[derive(Clone)]
 pub struct ClosestPointIndex<const D: usize> {
     points: Vec<Point<D>>,
     facets: Vec<[usize; D]>,
-    tree: ImmutableKdTree<f64, u64, D, 32>,
-    radius: f64,
+    nodes: Vec<BvhNode<D>>,
+    /// Facet indices, ordered so that every node covers a contiguous range.
+    order: Vec<u32>,
+    /// Parent of every node (the root's is itself).
+    parent: Vec<u32>,
+    /// Leaf of every facet.
+    leaf_of: Vec<u32>,
+}
+
+/// Facets per leaf of the [`ClosestPointIndex`] hierarchy.
+pub const LEAF_FACETS: usize = 4;
+
+#[derive(Clone, Copy, Debug)]
+struct BvhNode<const D: usize> {
+    lo: Point<D>,
+    hi: Point<D>,
+    /// Index of the first child (the second is `child + 1`); 0 for a leaf.
+    child: u32,
+    start: u32,
+    count: u32,
+}
+
+/// Squared distance from `p` to the box `[lo, hi]` (0 inside).
+#[inline]
+fn box_dist2<const D: usize>(p: &Point<D>, lo: &Point<D>, hi: &Point<D>) -> f64 {
+    let mut d2 = 0.0;
+    for d in 0..D {
+        let v = if p[d] < lo[d] {
+            lo[d] - p[d]
+        } else if p[d] > hi[d] {
+            p[d] - hi[d]
+        } else {
+            0.0
+        };
+        d2 += v * v;
+    }
+    d2
 }
 
 impl<const D: usize> ClosestPointIndex<D> {
@@ -316,23 +361,131 @@ impl<const D: usize> ClosestPointIndex<D> {
                 scale(c, 1.0 / D as f64)
             })
             .collect();
-        let radius = facets
-            .iter()
-            .zip(&centroids)
-            .map(|(f, c)| f.iter().map(|&i| dist2(points[i], *c)).fold(0.0, f64::max))
-            .fold(0.0, f64::max)
-            .sqrt();
+        let mut order: Vec<u32> = (0..facets.len() as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * facets.len() / LEAF_FACETS + 2);
+        nodes.push(BvhNode {
+            lo: [0.0; D],
+            hi: [0.0; D],
+            child: 0,
+            start: 0,
+            count: facets.len() as u32,
+        });
+        let mut stack = vec![0usize];
+        while let Some(ni) = stack.pop() {
+            let (start, count) = (nodes[ni].start as usize, nodes[ni].count as usize);
+            let range = &mut order[start..start + count];
+            let mut lo = [f64::INFINITY; D];
+            let mut hi = [f64::NEG_INFINITY; D];
+            let mut clo = [f64::INFINITY; D];
+            let mut chi = [f64::NEG_INFINITY; D];
+            for &fi in range.iter() {
+                for &v in &facets[fi as usize] {
+                    for d in 0..D {
+                        lo[d] = lo[d].min(points[v][d]);
+                        hi[d] = hi[d].max(points[v][d]);
+                    }
+                }
+                let c = centroids[fi as usize];
+                for d in 0..D {
+                    clo[d] = clo[d].min(c[d]);
+                    chi[d] = chi[d].max(c[d]);
+                }
+            }
+            // A hair of padding keeps the box tests conservative under rounding.
+            let pad = 1e-9 * (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max) + 1e-300;
+            nodes[ni].lo = lo.map(|v| v - pad);
+            nodes[ni].hi = hi.map(|v| v + pad);
+            if count <= LEAF_FACETS {
+                continue;
+            }
+            let axis = (0..D)
+                .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
+                .unwrap_or(0);
+            let half = count / 2;
+            range.select_nth_unstable_by(half, |&a, &b| {
+                centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+            });
+            let child = nodes.len();
+            nodes[ni].child = child as u32;
+            for (s, c) in [(start, half), (start + half, count - half)] {
+                nodes.push(BvhNode {
+                    lo: [0.0; D],
+                    hi: [0.0; D],
+                    child: 0,
+                    start: s as u32,
+                    count: c as u32,
+                });
+            }
+            stack.push(child);
+            stack.push(child + 1);
+        }
+        let mut parent = vec![0u32; nodes.len()];
+        let mut leaf_of = vec![0u32; facets.len()];
+        for (ni, node) in nodes.iter().enumerate() {
+            if node.child == 0 {
+                let s = node.start as usize;
+                for &fi in &order[s..s + node.count as usize] {
+                    leaf_of[fi as usize] = ni as u32;
+                }
+            } else {
+                parent[node.child as usize] = ni as u32;
+                parent[node.child as usize + 1] = ni as u32;
+            }
+        }
         ClosestPointIndex {
             points: points.to_vec(),
             facets: facets.to_vec(),
-            tree: ImmutableKdTree::new_from_slice(&centroids),
-            radius,
+            nodes,
+            order,
+            parent,
+            leaf_of,
         }
     }
 
     /// From a shape.
     pub fn from_shape(shape: &Shape<D>) -> Self {
         Self::new(&shape.points, &shape.facets)
+    }
+
+    /// The same facets on moved points: keeps the hierarchy, recomputes its boxes (linear
+    /// time; a fraction of a rebuild). Queries stay exact; they slow down only if the points
+    /// moved far from where the index was built.
+    #[track_caller]
+    pub fn refit(&mut self, points: &[Point<D>]) {
+        assert_eq!(
+            points.len(),
+            self.points.len(),
+            "ClosestPointIndex::refit: one point per indexed point"
+        );
+        self.points.copy_from_slice(points);
+        // Children always come after their parent: a reverse sweep sees children first.
+        for ni in (0..self.nodes.len()).rev() {
+            let node = self.nodes[ni];
+            let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
+            if node.child == 0 {
+                let s = node.start as usize;
+                for &fi in &self.order[s..s + node.count as usize] {
+                    for &v in &self.facets[fi as usize] {
+                        for d in 0..D {
+                            lo[d] = lo[d].min(self.points[v][d]);
+                            hi[d] = hi[d].max(self.points[v][d]);
+                        }
+                    }
+                }
+                let pad = 1e-9 * (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max) + 1e-300;
+                lo = lo.map(|v| v - pad);
+                hi = hi.map(|v| v + pad);
+            } else {
+                for c in [node.child as usize, node.child as usize + 1] {
+                    for d in 0..D {
+                        lo[d] = lo[d].min(self.nodes[c].lo[d]);
+                        hi[d] = hi[d].max(self.nodes[c].hi[d]);
+                    }
+                }
+            }
+            self.nodes[ni].lo = lo;
+            self.nodes[ni].hi = hi;
+        }
     }
 
     fn closest_on_facet(&self, p: Point<D>, fi: usize) -> SurfacePoint<D> {
@@ -365,19 +518,73 @@ impl<const D: usize> ClosestPointIndex<D> {
 
     /// The closest point to `p` on the shape's facets (not only its vertices).
     pub fn closest(&self, p: &Point<D>) -> SurfacePoint<D> {
-        let nn = self.tree.nearest_one::<SquaredEuclidean>(p);
-        let mut best = self.closest_on_facet(*p, nn.item as usize);
-        let r = best.dist2.sqrt() + self.radius;
-        if r * r > nn.distance {
-            for c in self.tree.within_unsorted::<SquaredEuclidean>(p, r * r) {
-                let fi = c.item as usize;
-                if fi == best.facet {
-                    continue;
+        self.search(p, None)
+    }
+
+    /// [`closest`](Self::closest), starting from the facet `hint` (e.g. the answer of the
+    /// previous iteration for a point that moved a little): the same answer, found faster
+    /// when the hint is near.
+    pub fn closest_from(&self, p: &Point<D>, hint: usize) -> SurfacePoint<D> {
+        self.search(p, (hint < self.facets.len()).then_some(hint))
+    }
+
+    fn search(&self, p: &Point<D>, hint: Option<usize>) -> SurfacePoint<D> {
+        let mut best = SurfacePoint {
+            point: *p,
+            facet: usize::MAX,
+            weights: [0.0; D],
+            dist2: f64::INFINITY,
+        };
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        if let Some(h) = hint {
+            best = self.closest_on_facet(*p, h);
+            // Climb from the hint's leaf to the first box that holds the whole ball of
+            // radius `|p - best|` around `p`: every closer facet lies in that subtree.
+            let r = best.dist2.sqrt();
+            let mut ni = self.leaf_of[h] as usize;
+            while ni != 0 {
+                let node = &self.nodes[ni];
+                if (0..D).all(|d| p[d] - r >= node.lo[d] && p[d] + r <= node.hi[d]) {
+                    break;
                 }
-                let cand = self.closest_on_facet(*p, fi);
-                if cand.dist2 < best.dist2 {
-                    best = cand;
+                ni = self.parent[ni] as usize;
+            }
+            stack[0] = ni as u32;
+        }
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if node.child == 0 {
+                let s = node.start as usize;
+                for &fi in &self.order[s..s + node.count as usize] {
+                    let fi = fi as usize;
+                    if Some(fi) == hint {
+                        continue;
+                    }
+                    let c = self.closest_on_facet(*p, fi);
+                    if c.dist2 < best.dist2 {
+                        best = c;
+                    }
                 }
+                continue;
+            }
+            let a = node.child as usize;
+            let da = box_dist2(p, &self.nodes[a].lo, &self.nodes[a].hi);
+            let db = box_dist2(p, &self.nodes[a + 1].lo, &self.nodes[a + 1].hi);
+            // Push the farther child first so that the nearer one is searched first.
+            let (near, dn, far, df) = if da <= db {
+                (a, da, a + 1, db)
+            } else {
+                (a + 1, db, a, da)
+            };
+            if df < best.dist2 && top < stack.len() {
+                stack[top] = far as u32;
+                top += 1;
+            }
+            if dn < best.dist2 && top < stack.len() {
+                stack[top] = near as u32;
+                top += 1;
             }
         }
         best
@@ -386,38 +593,56 @@ impl<const D: usize> ClosestPointIndex<D> {
     /// The nearest intersection of the line `p + t n` with the facets, with `|t| <= max_t`
     /// (both directions, the nearest wins), or `None`.
     pub fn ray(&self, p: &Point<D>, n: &Point<D>, max_t: f64) -> Option<SurfacePoint<D>> {
-        let r = max_t + self.radius;
         let mut best: Option<(f64, SurfacePoint<D>)> = None;
-        for c in self.tree.within_unsorted::<SquaredEuclidean>(p, r * r) {
-            let fi = c.item as usize;
-            let f = self.facets[fi];
-            let hit = match D {
-                2 => ray_segment(*p, *n, self.points[f[0]], self.points[f[1]]),
-                3 => ray_triangle(
-                    *p,
-                    *n,
-                    self.points[f[0]],
-                    self.points[f[1]],
-                    self.points[f[2]],
-                ),
-                _ => unreachable!(),
-            };
-            if let Some((t, w)) = hit
-                && t.abs() <= max_t
-                && best.as_ref().is_none_or(|(bt, _)| t.abs() < bt.abs())
-            {
-                let mut weights = [0.0; D];
-                weights.copy_from_slice(&w[..D]);
-                let q = add(*p, scale(*n, t));
-                best = Some((
-                    t,
-                    SurfacePoint {
-                        point: q,
-                        facet: fi,
-                        weights,
-                        dist2: t * t * dot(*n, *n),
-                    },
-                ));
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            let lim = best.as_ref().map_or(max_t, |(t, _)| t.abs());
+            if !segment_hits_box(p, n, lim, &node.lo, &node.hi) {
+                continue;
+            }
+            if node.child == 0 {
+                let s = node.start as usize;
+                for &fi in &self.order[s..s + node.count as usize] {
+                    let fi = fi as usize;
+                    let f = self.facets[fi];
+                    let hit = match D {
+                        2 => ray_segment(*p, *n, self.points[f[0]], self.points[f[1]]),
+                        3 => ray_triangle(
+                            *p,
+                            *n,
+                            self.points[f[0]],
+                            self.points[f[1]],
+                            self.points[f[2]],
+                        ),
+                        _ => unreachable!(),
+                    };
+                    if let Some((t, w)) = hit
+                        && t.abs() <= max_t
+                        && best.as_ref().is_none_or(|(bt, _)| t.abs() < bt.abs())
+                    {
+                        let mut weights = [0.0; D];
+                        weights.copy_from_slice(&w[..D]);
+                        let q = add(*p, scale(*n, t));
+                        best = Some((
+                            t,
+                            SurfacePoint {
+                                point: q,
+                                facet: fi,
+                                weights,
+                                dist2: t * t * dot(*n, *n),
+                            },
+                        ));
+                    }
+                }
+                continue;
+            }
+            if top + 2 <= stack.len() {
+                stack[top] = node.child;
+                stack[top + 1] = node.child + 1;
+                top += 2;
             }
         }
         best.map(|(_, s)| s)
@@ -431,6 +656,35 @@ impl<const D: usize> ClosestPointIndex<D> {
     pub fn facets(&self) -> &[[usize; D]] {
         &self.facets
     }
+}
+
+/// Whether the segment `p + t n`, `|t| <= max_t`, meets the box `[lo, hi]` (slab test).
+#[inline]
+fn segment_hits_box<const D: usize>(
+    p: &Point<D>,
+    n: &Point<D>,
+    max_t: f64,
+    lo: &Point<D>,
+    hi: &Point<D>,
+) -> bool {
+    let (mut t0, mut t1) = (-max_t, max_t);
+    for d in 0..D {
+        if n[d] == 0.0 {
+            if p[d] < lo[d] || p[d] > hi[d] {
+                return false;
+            }
+            continue;
+        }
+        let a = (lo[d] - p[d]) / n[d];
+        let b = (hi[d] - p[d]) / n[d];
+        let (a, b) = if a <= b { (a, b) } else { (b, a) };
+        t0 = t0.max(a);
+        t1 = t1.min(b);
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
 }
 
 /// Line `p + t n` against segment `ab` (2D); returns `t` and the weights `(1-u, u, 0)`.
@@ -540,6 +794,12 @@ impl<const D: usize> Similarity<D> {
     #[inline]
     pub fn rotate(&self, v: &Point<D>) -> Point<D> {
         std::array::from_fn(|i| (0..D).map(|j| self.r[i][j] * v[j]).sum::<f64>())
+    }
+
+    /// `R^T v` (a direction from the subject frame to the reference frame).
+    #[inline]
+    pub fn rotate_inverse(&self, v: &Point<D>) -> Point<D> {
+        std::array::from_fn(|i| (0..D).map(|j| self.r[j][i] * v[j]).sum::<f64>())
     }
 
     /// The composition `self ∘ other`.

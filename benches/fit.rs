@@ -41,6 +41,7 @@ fn bench(c: &mut Criterion) {
         modes: ModeSelection::Count(11),
         ..AtlasParams::default()
     };
+    // Subject 0, fitted with the atlas of the other 39 (one leave-one-out fold).
     let atlas = Atlas::build(&shapes[1..], &params).expect("atlas");
     let fitter = Fitter::new(&atlas);
     let subject = &shapes[0];
@@ -51,6 +52,26 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             fitter
                 .fit(subject, &index, &FitParams::default())
+                .expect("fit")
+        })
+    });
+    // The paper's S38 (index 37): the outlier its Algorithm 1 failed on.
+    let atlas37 = Atlas::build(
+        &shapes
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != 37)
+            .map(|(_, s)| s.clone())
+            .collect::<Vec<_>>(),
+        &params,
+    )
+    .expect("atlas");
+    let fitter37 = Fitter::new(&atlas37);
+    let index37 = ClosestPointIndex::from_shape(&shapes[37]);
+    g.bench_function(format!("hand_fit_outlier_37_{label}"), |b| {
+        b.iter(|| {
+            fitter37
+                .fit(&shapes[37], &index37, &FitParams::default())
                 .expect("fit")
         })
     });
@@ -84,5 +105,11 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+criterion_group! {
+    name = benches;
+    // Criterion's HTML plots need system fonts that a bare machine lacks; the figures are
+    // in its terminal output and `target/criterion/*/new/estimates.json`.
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);

@@ -238,19 +238,38 @@ impl<const D: usize> Banded<D> {
 }
 
 /// The exact smoothing energy matrix `K` of the lattice (section 2.1): `P^T K P` (summed over
-/// the coordinates of the control points `P`) equals
-/// `E_smooth = ∫_Ω Σ_{a,b} ||∂²f/∂x_a∂x_b||² dx` over the lattice's domain, the thin-plate
-/// bending energy, with lengths measured in units of `unit` (so that `E_smooth` is
-/// dimensionless when `unit` is the lattice's extent).
+/// the coordinates of the control points `P`) equals the thin-plate bending energy
+/// `∫_Ω Σ_{a,b} ||∂²f/∂x_a∂x_b||² dx` over the lattice's domain, integrated exactly.
+///
+/// Units, by `scaling`:
+/// - [`Scaling::Physical`]: positions and derivatives in units of `unit` (with `unit = 1`,
+///   shape units).
+/// - [`Scaling::Lattice`] (the fits' normalization, after Rueckert et al. 1999):
+///   positions in units of `unit`, derivatives with respect to the lattice coordinates (one
+///   unit per control point spacing), and the integral divided by the lattice domain's
+///   volume in those coordinates: the mean bending energy per lattice cell. A given `alpha`
+///   then means the same for any lattice size and shape units.
 ///
 /// # Deviations from the paper
 /// The paper writes `||(Σ_i ∂/∂x_i)² f||²`; read literally (`(∂_x + ∂_y)² f`) it vanishes on
 /// every function of `x - y` and does not regularize. We take the usual expansion of the
 /// squared gradient operator into all second derivatives (Rueckert et al. 1999), which
-/// vanishes exactly on affine maps (test `smoothing_energy_vanishes_on_affine_maps`).
-fn smoothing_matrix<const D: usize>(lattice: &Lattice<D>, unit: f64) -> Banded<D> {
+/// vanishes exactly on affine maps (test `smoothing_energy_vanishes_on_affine_maps`). The
+/// paper does not say how it scales `E_smooth`; with the lattice normalization its morph
+/// weight `alpha = 50` fits the hands' boundaries to a fraction of a percent of their size.
+fn smoothing_matrix<const D: usize>(
+    lattice: &Lattice<D>,
+    unit: f64,
+    scaling: Scaling,
+) -> Banded<D> {
     let grams: Vec<[Vec<[f64; 7]>; 3]> = (0..D).map(|d| lattice.gram_1d(d)).collect();
-    let h: Vec<f64> = (0..D).map(|d| lattice.spacing[d] / unit).collect();
+    let (h, volume): (Vec<f64>, f64) = match scaling {
+        Scaling::Physical => ((0..D).map(|d| lattice.spacing[d] / unit).collect(), 1.0),
+        Scaling::Lattice => (
+            vec![1.0; D],
+            (0..D).map(|d| (lattice.size[d] - 3) as f64).product(),
+        ),
+    };
     let mut k = Banded::new(*lattice);
     for i in 0..lattice.len() {
         let a = lattice.multi_index(i);
@@ -269,10 +288,17 @@ fn smoothing_matrix<const D: usize>(lattice: &Lattice<D>, unit: f64) -> Banded<D
                     v += prod;
                 }
             }
-            k.rows[i * k.width + o] = v;
+            k.rows[i * k.width + o] = v / volume;
         }
     }
     k
+}
+
+/// Units of `E_smooth`: see [`smoothing_matrix`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scaling {
+    Physical,
+    Lattice,
 }
 
 /// `E_smooth` of a control point set (see [`smoothing_matrix`]); lengths in units of `unit`.
@@ -281,7 +307,7 @@ pub fn smoothing_energy<const D: usize>(
     control: &[Point<D>],
     unit: f64,
 ) -> f64 {
-    let k = smoothing_matrix(lattice, unit);
+    let k = smoothing_matrix(lattice, unit, Scaling::Physical);
     let mut e = 0.0;
     for i in 0..lattice.len() {
         for o in 0..k.width {
@@ -367,8 +393,9 @@ impl<const D: usize> Ffd<D> {
 pub struct FfdParams {
     /// Control points per axis (paper: 20 × 20).
     pub grid: usize,
-    /// Smoothing weight `alpha` (paper, morph: 50). Dimensionless: lengths (of the data term
-    /// and of `E_smooth`) are measured in units of the control point spacing.
+    /// Smoothing weight `alpha` (paper, morph: 50). Dimensionless: positions in units of
+    /// the lattice's extent, `E_smooth` per lattice cell in lattice coordinates (see
+    /// `smoothing_matrix`), so the same value serves any shape units and lattice size.
     pub alpha: f64,
     /// Margin of the lattice around the source points, as a fraction of their extent.
     pub margin: f64,
@@ -413,7 +440,7 @@ impl<const D: usize> FfdFit<D> {
         let unit = (0..D)
             .map(|d| lattice.spacing[d] * (lattice.size[d] - 3) as f64)
             .fold(0.0, f64::max);
-        let mut a = smoothing_matrix(&lattice, unit);
+        let mut a = smoothing_matrix(&lattice, unit, Scaling::Lattice);
         for v in a.rows.iter_mut() {
             *v *= params.alpha;
         }

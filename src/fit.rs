@@ -573,7 +573,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
         x.set_weights(self, &run.state.w, false);
         let sim = run.state.sim;
         let instance: Vec<Point<D>> = x.x.iter().map(|p| sim.apply(p)).collect();
-        let projected = project_along_normals(&instance, &self.atlas.facets, subj.index);
+        let projected =
+            project_along_normals(&instance, &self.atlas.facets, subj.index, &subj.normals);
         Ok(FitResult {
             weights: run.state.w,
             similarity: sim,
@@ -874,20 +875,23 @@ impl<const D: usize> Run<D> {
 /// Projects every point of `points` (with the connectivity `facets`, for its vertex normals)
 /// onto the indexed subject along its normal (section 3, last step of Algorithm 1): the
 /// nearest crossing of the normal line within three times the closest-point distance plus
-/// half the local edge length; the closest point where the normal misses.
+/// half the local edge length, among the crossings where the subject faces the same way
+/// (its normal, `subject_normals` interpolated, within 60° of the point's); the closest
+/// point where there is none. Without that condition a normal line near a concave corner
+/// (between two fingers) crosses the neighbouring side first and the correspondence jumps.
 pub fn project_along_normals<const D: usize>(
     points: &[Point<D>],
     facets: &[[usize; D]],
     subject: &ClosestPointIndex<D>,
+    subject_normals: &[Point<D>],
 ) -> Vec<SurfacePoint<D>> {
-    let shape = Shape {
-        name: String::new(),
-        points: points.to_vec(),
-        facets: facets.to_vec(),
-        landmarks: Vec::new(),
-    };
-    let normals = shape.vertex_normals();
-    let h = 0.5 * shape.median_edge_length();
+    let normals = vertex_normals(points, facets);
+    let mut lengths: Vec<f64> = facets
+        .iter()
+        .map(|f| norm(sub(points[f[1]], points[f[0]])))
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    let h = 0.5 * lengths.get(lengths.len() / 2).copied().unwrap_or(0.0);
     points
         .iter()
         .zip(&normals)
@@ -897,7 +901,13 @@ pub fn project_along_normals<const D: usize>(
                 return c;
             }
             let max_t = 3.0 * c.dist2.sqrt() + h;
-            subject.ray(p, nrm, max_t).unwrap_or(c)
+            subject
+                .ray_where(p, nrm, max_t, |hit| {
+                    let f = &subject.facets()[hit.facet];
+                    normal_at(subject.points(), f, &hit.weights, subject_normals)
+                        .is_some_and(|ns| dot(ns, *nrm) >= COMPATIBLE_NORMALS_COS)
+                })
+                .unwrap_or(c)
         })
         .collect()
 }

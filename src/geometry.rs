@@ -593,6 +593,18 @@ impl<const D: usize> ClosestPointIndex<D> {
     /// The nearest intersection of the line `p + t n` with the facets, with `|t| <= max_t`
     /// (both directions, the nearest wins), or `None`.
     pub fn ray(&self, p: &Point<D>, n: &Point<D>, max_t: f64) -> Option<SurfacePoint<D>> {
+        self.ray_where(p, n, max_t, |_| true)
+    }
+
+    /// [`ray`](Self::ray) among the hits that `accept` takes (e.g. those where the surface
+    /// faces the same way as the ray's origin).
+    pub fn ray_where(
+        &self,
+        p: &Point<D>,
+        n: &Point<D>,
+        max_t: f64,
+        accept: impl Fn(&SurfacePoint<D>) -> bool,
+    ) -> Option<SurfacePoint<D>> {
         let mut best: Option<(f64, SurfacePoint<D>)> = None;
         let mut stack = [0u32; 64];
         let mut top = 1;
@@ -626,15 +638,15 @@ impl<const D: usize> ClosestPointIndex<D> {
                         let mut weights = [0.0; D];
                         weights.copy_from_slice(&w[..D]);
                         let q = add(*p, scale(*n, t));
-                        best = Some((
-                            t,
-                            SurfacePoint {
-                                point: q,
-                                facet: fi,
-                                weights,
-                                dist2: t * t * dot(*n, *n),
-                            },
-                        ));
+                        let sp = SurfacePoint {
+                            point: q,
+                            facet: fi,
+                            weights,
+                            dist2: t * t * dot(*n, *n),
+                        };
+                        if accept(&sp) {
+                            best = Some((t, sp));
+                        }
                     }
                 }
                 continue;

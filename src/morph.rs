@@ -1,16 +1,36 @@
 //! Meshing a subject by morphing the mean FE mesh (section 4, eq. 9).
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::fe::FeMesh;
+use crate::fe::quality::{mesh_quality, summarize};
 use crate::ffd::{FfdFit, FfdParams};
 use crate::fit::FitResult;
+use crate::geometry::Point;
 use crate::model::Atlas;
+
+/// Each retry of a morph that inverted an element multiplies `alpha` by this.
+pub const STIFFEN_FACTOR: f64 = 4.0;
+
+/// Retries after the first morph (`alpha` up to `4^6 ≈ 4000` times the first).
+pub const MAX_STIFFENINGS: usize = 6;
 
 /// The mean mesh with the factorized FFD fit on the mean shape's points: reusable for every
 /// subject of an atlas.
 pub struct Morpher<const D: usize> {
     fit: FfdFit<D>,
+    params: FfdParams,
+    sources: Vec<Point<D>>,
     mesh: FeMesh<D>,
+}
+
+/// A morphed mesh and the smoothing weight that produced it.
+#[derive(Clone, Debug)]
+pub struct Morph<const D: usize> {
+    /// The subject's mesh, subject frame.
+    pub mesh: FeMesh<D>,
+    /// The `alpha` of eq. 9 used: the requested one, or a stiffer one where that inverted an
+    /// element.
+    pub alpha: f64,
 }
 
 impl<const D: usize> Morpher<D> {
@@ -18,6 +38,8 @@ impl<const D: usize> Morpher<D> {
     pub fn new(atlas: &Atlas<D>, params: &FfdParams) -> Result<Self> {
         Ok(Morpher {
             fit: FfdFit::new(&atlas.mean, params)?,
+            params: *params,
+            sources: atlas.mean.clone(),
             mesh: atlas.mesh.clone(),
         })
     }
@@ -26,20 +48,45 @@ impl<const D: usize> Morpher<D> {
     /// `Σ_j ||f(p_bar_j) - p_hat_j||² + alpha E_smooth` (eq. 9), with `p_hat_j` the projected
     /// points `S_tilde^P` brought to the reference frame by `t^{-1}`, applied to every node of
     /// the mean mesh, then `t` back to the subject frame. The result is in the subject frame.
-    pub fn morph(&self, fit: &FitResult<D>) -> FeMesh<D> {
+    ///
+    /// # Deviation from the paper
+    /// The paper has no remedy when the morph inverts an element. Irregular correspondences
+    /// (where a poor fit meets a concave corner) can fold a weakly smoothed FFD; then we
+    /// solve again with `alpha` multiplied by [`STIFFEN_FACTOR`], up to
+    /// [`MAX_STIFFENINGS`] times: the least smoothing of that ladder that keeps every element
+    /// valid. [`Morph::alpha`] says which was used.
+    pub fn morph(&self, fit: &FitResult<D>) -> Result<Morph<D>> {
         let t = &fit.similarity;
-        let targets: Vec<_> = fit
+        let targets: Vec<Point<D>> = fit
             .projected
             .iter()
             .map(|p| t.apply_inverse(&p.point))
             .collect();
-        let f = self.fit.solve(&targets);
-        self.mesh.with_nodes(
-            self.mesh
-                .nodes
-                .iter()
-                .map(|p| t.apply(&f.apply(p)))
-                .collect(),
-        )
+        let mut alpha = self.params.alpha;
+        let mut stiffer: Option<FfdFit<D>> = None;
+        for attempt in 0..=MAX_STIFFENINGS {
+            let solver = stiffer.as_ref().unwrap_or(&self.fit);
+            let f = solver.solve(&targets);
+            let mesh = self.mesh.with_nodes(
+                self.mesh
+                    .nodes
+                    .iter()
+                    .map(|p| t.apply(&f.apply(p)))
+                    .collect(),
+            );
+            let valid = summarize(&mesh_quality(&mesh)).inverted_elements == 0;
+            if valid || attempt == MAX_STIFFENINGS || self.params.alpha == 0.0 {
+                return Ok(Morph { mesh, alpha });
+            }
+            alpha *= STIFFEN_FACTOR;
+            stiffer = Some(FfdFit::new(
+                &self.sources,
+                &FfdParams {
+                    alpha,
+                    ..self.params
+                },
+            )?);
+        }
+        Err(Error::Numerical("the morph did not run".into()))
     }
 }

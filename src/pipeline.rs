@@ -127,7 +127,8 @@ pub fn process_subject(
     let t0 = Instant::now();
     let fit = fitter.fit(subject, &index, &params.fit)?;
     let fit_seconds = t0.elapsed().as_secs_f64();
-    let mesh = morpher.morph(&fit);
+    let morph = morpher.morph(&fit)?;
+    let mesh = morph.mesh;
     let q = summarize(&mesh_quality(&mesh));
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
@@ -181,6 +182,7 @@ pub fn process_subject(
         jacobian_min: q.jacobian_min,
         scaled_jacobian_min: q.scaled_jacobian_min,
         inverted_elements: q.inverted_elements,
+        morph_alpha: morph.alpha,
         success: rel < 0.01 && q.inverted_elements == 0,
         converged: fit.converged,
         e_d_history: fit.e_d_history,

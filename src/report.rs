@@ -30,6 +30,9 @@ pub struct SubjectReport {
     pub jacobian_min: f64,
     pub scaled_jacobian_min: f64,
     pub inverted_elements: usize,
+    /// The `alpha` of eq. 9 the morph used (the requested one unless that inverted an
+    /// element; see `Morpher::morph`).
+    pub morph_alpha: f64,
     /// `rms_distance_relative < 0.01` and no inverted element.
     pub success: bool,
     /// Whether the last inner loop of Algorithm 1 met its tolerance.

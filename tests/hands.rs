@@ -2,8 +2,13 @@
 
 mod common;
 
-use atlasmesh::geometry::{Point, Shape};
+use atlasmesh::fe::quadmesh::boundary_nodes;
+use atlasmesh::ffd::FfdParams;
+use atlasmesh::fit::{FitParams, Fitter};
+use atlasmesh::geometry::{ClosestPointIndex, Point, Shape};
 use atlasmesh::io::read_outlines;
+use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
+use atlasmesh::morph::Morpher;
 use atlasmesh::pca::pca;
 use atlasmesh::pipeline::{PopulationOptions, RunParams, leave_one_out, load_population};
 use atlasmesh::procrustes::generalized_procrustes;
@@ -85,10 +90,9 @@ fn hands_leave_one_out() {
         r.summary.meshes_valid, 40,
         "every morphed mesh has positive corner Jacobians"
     );
-    assert!(
-        r.summary.succeeded >= 36,
-        "succeeded {}",
-        r.summary.succeeded
+    assert_eq!(
+        r.summary.succeeded, 40,
+        "every hand fitted within 1 % of its diagonal (two-way RMS)"
     );
     assert!(r.summary.median_rms_distance_relative < 0.005);
     assert!(r.summary.median_normal_correlation > 0.95);
@@ -170,5 +174,64 @@ fn basel_binary_vtk_hands_are_read() {
             long <= 1,
             "hand-{k}: {long} segments longer than 20 median lengths"
         );
+    }
+}
+
+/// The morphed mesh follows the subject: its boundary nodes lie on the subject's outline
+/// (the wrist chord, which closes the open outline, aside). Subjects 0 (typical) and 37
+/// (the paper's S38, the outlier that Algorithm 1 failed on).
+#[test]
+fn morphed_mesh_boundary_lies_on_the_subject() {
+    let Some(data) = common::data_dir("morphed_mesh_boundary_lies_on_the_subject") else {
+        return;
+    };
+    let shapes = load_population(
+        &[data.join("imm-hands-2d/hands_long.csv")],
+        &PopulationOptions {
+            closed: false,
+            resample: Some(2001),
+        },
+    )
+    .unwrap();
+    for k in [0usize, 37] {
+        let train: Vec<_> = shapes
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != k)
+            .map(|(_, s)| s.clone())
+            .collect();
+        let atlas = Atlas::build(
+            &train,
+            &AtlasParams {
+                modes: ModeSelection::Count(11),
+                ..AtlasParams::default()
+            },
+        )
+        .unwrap();
+        let subject = &shapes[k];
+        let index = ClosestPointIndex::from_shape(subject);
+        let fit = Fitter::new(&atlas)
+            .fit(subject, &index, &FitParams::default())
+            .unwrap();
+        let morph = Morpher::new(&atlas, &FfdParams::default())
+            .unwrap()
+            .morph(&fit)
+            .unwrap();
+        let on_boundary = boundary_nodes(&morph.mesh);
+        let mut d: Vec<f64> = morph
+            .mesh
+            .nodes
+            .iter()
+            .zip(&on_boundary)
+            .filter(|(_, b)| **b)
+            .map(|(p, _)| index.closest(p).dist2.sqrt() / subject.bbox_diagonal())
+            .collect();
+        d.sort_by(f64::total_cmp);
+        let (median, p90) = (d[d.len() / 2], d[d.len() * 9 / 10]);
+        eprintln!(
+            "subject {k}: boundary to subject median {median:.5}, p90 {p90:.5} (of the diagonal)"
+        );
+        assert!(median < 0.002, "subject {k}: median {median}");
+        assert!(p90 < 0.01, "subject {k}: 90th percentile {p90}");
     }
 }

@@ -8,13 +8,15 @@
 //!   Scalismo; the points are ordered by walking the line segments, and an outline is closed
 //!   when the segments form a loop. A constant `z` is dropped; varying `z` is an error.
 
+pub mod surface;
+
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
 use std::collections::HashMap;
 use std::path::Path;
 
 /// Upper bound on counts read from file headers (guards against absurd allocations).
-const MAX_COUNT: usize = 50_000_000;
+pub(crate) const MAX_COUNT: usize = 50_000_000;
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so that
 /// an interrupted run never leaves a half-written file.

@@ -1,6 +1,7 @@
 //! Finite element meshes: types, automatic meshing of the mean shape (section 2.4), and
 //! element quality by corner Jacobians (section 5.3).
 
+pub mod hexmesh;
 pub mod quadmesh;
 pub mod quality;
 

@@ -113,9 +113,8 @@ pub fn prepare_surface(mut s: Shape<3>) -> Result<Shape<3>> {
     // Consistent orientation, component by component (breadth-first over shared edges).
     let nf = s.facets.len();
     let mut flip: Vec<Option<bool>> = vec![None; nf];
-    let directed = |f: &[usize; 3], a: usize, b: usize| {
-        (0..3).any(|e| f[e] == a && f[(e + 1) % 3] == b)
-    };
+    let directed =
+        |f: &[usize; 3], a: usize, b: usize| (0..3).any(|e| f[e] == a && f[(e + 1) % 3] == b);
     for seed in 0..nf {
         if flip[seed].is_some() {
             continue;
@@ -271,7 +270,12 @@ struct Element {
 /// `vertex_index`); other elements and properties are skipped.
 fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
     let err = |line: usize, m: String| Error::parse(path, line, m);
-    let end = find_header_end(bytes).ok_or_else(|| err(1, "no 'end_header' line: not a PLY file or truncated header".into()))?;
+    let end = find_header_end(bytes).ok_or_else(|| {
+        err(
+            1,
+            "no 'end_header' line: not a PLY file or truncated header".into(),
+        )
+    })?;
     let header = std::str::from_utf8(&bytes[..end.0])
         .map_err(|_| err(1, "the PLY header is not text".into()))?;
     let mut lines = header.lines().enumerate();
@@ -298,7 +302,10 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                     .and_then(|c| c.parse().ok())
                     .ok_or_else(|| err(i + 1, format!("bad element line '{l}'")))?;
                 if count > MAX_COUNT {
-                    return Err(err(i + 1, format!("element count {count} is implausibly large")));
+                    return Err(err(
+                        i + 1,
+                        format!("element count {count} is implausibly large"),
+                    ));
                 }
                 elements.push(Element {
                     name: t.get(1).unwrap_or(&"").to_string(),
@@ -314,10 +321,12 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                 if t.get(1) == Some(&"list") {
                     let c = t.get(2).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
                     let v = t.get(3).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
-                    el.props.push(Property::List(t.get(4).unwrap_or(&"").to_string(), c, v));
+                    el.props
+                        .push(Property::List(t.get(4).unwrap_or(&"").to_string(), c, v));
                 } else {
                     let v = t.get(1).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
-                    el.props.push(Property::Scalar(t.get(2).unwrap_or(&"").to_string(), v));
+                    el.props
+                        .push(Property::Scalar(t.get(2).unwrap_or(&"").to_string(), v));
                 }
             }
             _ => {}
@@ -328,7 +337,8 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
     let mut points = Vec::new();
     let mut polys = Vec::new();
     if format == 0 {
-        let text = std::str::from_utf8(body).map_err(|_| err(0, "the ASCII body is not text".into()))?;
+        let text =
+            std::str::from_utf8(body).map_err(|_| err(0, "the ASCII body is not text".into()))?;
         let mut tokens = text.split_whitespace();
         for el in &elements {
             for k in 0..el.count {
@@ -337,10 +347,14 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                 for p in &el.props {
                     let mut next = || -> Result<f64> {
                         let tok = tokens.next().ok_or_else(|| {
-                            err(0, format!("truncated: {} {k} of {} is incomplete", el.name, el.count))
+                            err(
+                                0,
+                                format!("truncated: {} {k} of {} is incomplete", el.name, el.count),
+                            )
                         })?;
-                        tok.parse::<f64>()
-                            .map_err(|_| err(0, format!("'{tok}' in {} {k} is not a number", el.name)))
+                        tok.parse::<f64>().map_err(|_| {
+                            err(0, format!("'{tok}' in {} {k} is not a number", el.name))
+                        })
                     };
                     match p {
                         Property::Scalar(name, _) => {
@@ -350,12 +364,17 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                         Property::List(name, _, _) => {
                             let n = next()? as usize;
                             if n > 1000 {
-                                return Err(err(0, format!("{} {k} has a list of {n} items", el.name)));
+                                return Err(err(
+                                    0,
+                                    format!("{} {k} has a list of {n} items", el.name),
+                                ));
                             }
                             for _ in 0..n {
                                 let v = next()?;
                                 if name == "vertex_indices" || name == "vertex_index" {
-                                    poly.push(index(v).ok_or_else(|| err(0, format!("bad vertex index {v} in face {k}")))?);
+                                    poly.push(index(v).ok_or_else(|| {
+                                        err(0, format!("bad vertex index {v} in face {k}"))
+                                    })?);
                                 }
                             }
                         }
@@ -372,7 +391,12 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                 let mut xyz = [f64::NAN; 3];
                 let mut poly = Vec::new();
                 for p in &el.props {
-                    let trunc = || err(0, format!("truncated: {} {k} of {} is cut off", el.name, el.count));
+                    let trunc = || {
+                        err(
+                            0,
+                            format!("truncated: {} {k} of {} is cut off", el.name, el.count),
+                        )
+                    };
                     match p {
                         Property::Scalar(name, s) => {
                             let b = body.get(at..at + s.size()).ok_or_else(trunc)?;
@@ -384,14 +408,19 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                             at += c.size();
                             let n = c.read(b, big);
                             if !(0.0..=1000.0).contains(&n) {
-                                return Err(err(0, format!("{} {k} has a list of {n} items", el.name)));
+                                return Err(err(
+                                    0,
+                                    format!("{} {k} has a list of {n} items", el.name),
+                                ));
                             }
                             for _ in 0..n as usize {
                                 let b = body.get(at..at + v.size()).ok_or_else(trunc)?;
                                 at += v.size();
                                 if name == "vertex_indices" || name == "vertex_index" {
                                     let x = v.read(b, big);
-                                    poly.push(index(x).ok_or_else(|| err(0, format!("bad vertex index {x} in face {k}")))?);
+                                    poly.push(index(x).ok_or_else(|| {
+                                        err(0, format!("bad vertex index {x} in face {k}"))
+                                    })?);
                                 }
                             }
                         }
@@ -401,8 +430,15 @@ fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
             }
         }
     }
-    if points.iter().any(|p: &Point<3>| p.iter().any(|c| c.is_nan())) && !points.is_empty() {
-        return Err(err(0, "a vertex lacks x, y or z, or has a NaN coordinate".into()));
+    if points
+        .iter()
+        .any(|p: &Point<3>| p.iter().any(|c| c.is_nan()))
+        && !points.is_empty()
+    {
+        return Err(err(
+            0,
+            "a vertex lacks x, y or z, or has a NaN coordinate".into(),
+        ));
     }
     Ok((points, polys))
 }
@@ -420,7 +456,13 @@ fn set_xyz(xyz: &mut [f64; 3], name: &str, v: f64) {
     }
 }
 
-fn store(el: &str, xyz: [f64; 3], poly: Vec<usize>, points: &mut Vec<Point<3>>, polys: &mut Vec<Vec<usize>>) {
+fn store(
+    el: &str,
+    xyz: [f64; 3],
+    poly: Vec<usize>,
+    points: &mut Vec<Point<3>>,
+    polys: &mut Vec<Vec<usize>>,
+) {
     match el {
         "vertex" => points.push(xyz),
         "face" => polys.push(poly),
@@ -459,33 +501,45 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                 let mut p = [0.0; 3];
                 for (d, v) in p.iter_mut().enumerate() {
                     let o = base + 12 * c + 4 * d;
-                    *v = f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as f64;
+                    *v = f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]])
+                        as f64;
                 }
                 corners.push(p);
             }
         }
     } else {
         let text = std::str::from_utf8(bytes).map_err(|_| {
-            Error::parse(path, 0, "neither a binary STL (size does not match its triangle count) nor ASCII text")
+            Error::parse(
+                path,
+                0,
+                "neither a binary STL (size does not match its triangle count) nor ASCII text",
+            )
         })?;
         if !text.trim_start().starts_with("solid") {
-            return Err(Error::parse(path, 1, "an ASCII STL starts with 'solid'; a binary one has 84 + 50 n bytes"));
+            return Err(Error::parse(
+                path,
+                1,
+                "an ASCII STL starts with 'solid'; a binary one has 84 + 50 n bytes",
+            ));
         }
         for (i, l) in text.lines().enumerate() {
             let t: Vec<&str> = l.split_whitespace().collect();
             if t.first() == Some(&"vertex") {
                 let mut p = [0.0; 3];
                 for d in 0..3 {
-                    p[d] = t
-                        .get(d + 1)
-                        .and_then(|s| s.parse().ok())
-                        .ok_or_else(|| Error::parse(path, i + 1, format!("bad vertex line '{l}'")))?;
+                    p[d] = t.get(d + 1).and_then(|s| s.parse().ok()).ok_or_else(|| {
+                        Error::parse(path, i + 1, format!("bad vertex line '{l}'"))
+                    })?;
                 }
                 corners.push(p);
             }
         }
         if corners.len() % 3 != 0 {
-            return Err(Error::parse(path, 0, "truncated: the vertex count is not a multiple of 3"));
+            return Err(Error::parse(
+                path,
+                0,
+                "truncated: the vertex count is not a multiple of 3",
+            ));
         }
     }
     let mut ids: HashMap<[u64; 3], usize> = HashMap::new();
@@ -518,10 +572,9 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Parsed> {
             Some("v") => {
                 let mut p = [0.0; 3];
                 for d in 0..3 {
-                    p[d] = t
-                        .get(d + 1)
-                        .and_then(|s| s.parse().ok())
-                        .ok_or_else(|| Error::parse(path, i + 1, format!("bad vertex line '{l}'")))?;
+                    p[d] = t.get(d + 1).and_then(|s| s.parse().ok()).ok_or_else(|| {
+                        Error::parse(path, i + 1, format!("bad vertex line '{l}'"))
+                    })?;
                 }
                 points.push(p);
             }
@@ -532,14 +585,20 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                         .split('/')
                         .next()
                         .and_then(|s| s.parse().ok())
-                        .ok_or_else(|| Error::parse(path, i + 1, format!("bad face item '{tok}'")))?;
+                        .ok_or_else(|| {
+                            Error::parse(path, i + 1, format!("bad face item '{tok}'"))
+                        })?;
                     let id = if v > 0 {
                         v - 1
                     } else {
                         points.len() as i64 + v
                     };
                     if id < 0 {
-                        return Err(Error::parse(path, i + 1, format!("face index {v} is out of range")));
+                        return Err(Error::parse(
+                            path,
+                            i + 1,
+                            format!("face index {v} is out of range"),
+                        ));
                     }
                     poly.push(id as usize);
                 }
@@ -600,7 +659,12 @@ mod tests {
     fn tetra() -> Shape<3> {
         Shape {
             name: "t".into(),
-            points: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            points: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
             // Mixed orientation on purpose.
             facets: vec![[0, 1, 2], [0, 1, 3], [1, 2, 3], [0, 2, 3]],
             landmarks: Vec::new(),

@@ -141,6 +141,26 @@ fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
     p.atlas.element_size = pop.element_size;
 }
 
+/// Whether the inputs are 3D surfaces (all of them) or 2D outlines (none); an error when mixed.
+fn surfaces(paths: &[PathBuf]) -> anyhow::Result<bool> {
+    let n = paths
+        .iter()
+        .filter(|p| pipeline::is_surface_file(p))
+        .count();
+    if n > 0 && n < paths.len() {
+        let odd = paths
+            .iter()
+            .find(|p| !pipeline::is_surface_file(p))
+            .map(|p| p.display().to_string())
+            .unwrap_or_default();
+        return Err(atlasmesh::Error::Population(format!(
+            "2D and 3D shapes mixed: {odd} is an outline, other inputs are surfaces (.ply/.stl/.obj)"
+        ))
+        .into());
+    }
+    Ok(n > 0)
+}
+
 /// Reads the population of `pop` and the run parameters of both argument groups.
 fn population_and_params(
     pop: &PopArgs,
@@ -181,28 +201,60 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out,
             jobs,
         } => {
-            let (shapes, params) = population_and_params(&pop, &run)?;
-            let r = pipeline::leave_one_out(
-                &shapes,
-                &dataset_name(&pop.shapes),
-                &params,
-                &out,
-                jobs,
-                cli.quiet,
-            )?;
+            let r = if surfaces(&pop.shapes)? {
+                let mut params = run.params();
+                apply_pop(&mut params, &pop);
+                let shapes = pipeline::load_surfaces(&pop.shapes)?;
+                pipeline::leave_one_out(
+                    &shapes,
+                    &dataset_name(&pop.shapes),
+                    &params,
+                    &out,
+                    jobs,
+                    cli.quiet,
+                )?
+            } else {
+                let (shapes, params) = population_and_params(&pop, &run)?;
+                pipeline::leave_one_out(
+                    &shapes,
+                    &dataset_name(&pop.shapes),
+                    &params,
+                    &out,
+                    jobs,
+                    cli.quiet,
+                )?
+            };
             print_summary(&r, &out);
         }
         Command::Build { pop, run, out } => {
-            let (shapes, params) = population_and_params(&pop, &run)?;
-            let a = pipeline::build(&shapes, &params, &out)?;
+            let (n, points, modes, share, elements) = if surfaces(&pop.shapes)? {
+                let mut params = run.params();
+                apply_pop(&mut params, &pop);
+                let shapes = pipeline::load_surfaces(&pop.shapes)?;
+                let a = pipeline::build(&shapes, &params, &out)?;
+                let m = a.num_modes();
+                (
+                    shapes.len(),
+                    a.mean.len(),
+                    m,
+                    a.cumulative_variance[m - 1],
+                    a.mesh.num_elements(),
+                )
+            } else {
+                let (shapes, params) = population_and_params(&pop, &run)?;
+                let a = pipeline::build(&shapes, &params, &out)?;
+                let m = a.num_modes();
+                (
+                    shapes.len(),
+                    a.mean.len(),
+                    m,
+                    a.cumulative_variance[m - 1],
+                    a.mesh.num_elements(),
+                )
+            };
             println!(
-                "atlas: {} ({} shapes, {} points, {} modes explaining {:.4} of the variance, mean mesh {} elements)",
+                "atlas: {} ({n} shapes, {points} points, {modes} modes explaining {share:.4} of the variance, mean mesh {elements} elements)",
                 out.display(),
-                shapes.len(),
-                a.mean.len(),
-                a.num_modes(),
-                a.cumulative_variance[a.num_modes() - 1],
-                a.mesh.num_elements()
             );
         }
         Command::Fit {
@@ -212,6 +264,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             run,
             out,
         } => {
+            if surfaces(&subject)? {
+                let a = Atlas::<3>::load(&atlas)?;
+                let mut params = run.params();
+                params.atlas = a.params;
+                let subjects = pipeline::load_surfaces(&subject)?;
+                let r = pipeline::fit_subjects(
+                    &a,
+                    &subjects,
+                    &dataset_name(&subject),
+                    &params,
+                    &out,
+                    cli.quiet,
+                )?;
+                print_summary(&r, &out);
+                return Ok(());
+            }
             let a = Atlas::<2>::load(&atlas)?;
             let mut params = run.params();
             params.atlas = a.params;

@@ -74,11 +74,12 @@ pub struct Atlas<const D: usize> {
 
 /// Converts between `[f64; D]` and `[f64; E]` when `D == E` (a no-op used to call
 /// dimension-specific code from generic code).
-fn same_dim<const D: usize, const E: usize>(p: &Point<D>) -> Point<E> {
+pub(crate) fn same_dim<const D: usize, const E: usize>(p: &Point<D>) -> Point<E> {
     std::array::from_fn(|d| p[d])
 }
 
-/// Meshes the mean shape: quadrilaterals in 2D (hexahedral meshing is not available yet).
+/// Meshes the mean shape: quadrilaterals in 2D ([`quad_mesh`]), hexahedra in 3D
+/// ([`crate::fe::hexmesh::hex_mesh`], closed surfaces only).
 pub fn mesh_mean_shape<const D: usize>(
     mean: &Shape<D>,
     element_size: f64,
@@ -105,9 +106,26 @@ pub fn mesh_mean_shape<const D: usize>(
                 connectivity: m.connectivity,
             })
         }
-        _ => Err(Error::Mesh(
-            "automatic meshing of 3D shapes is not available yet; bring a template mesh".into(),
-        )),
+        _ => {
+            let s3 = Shape::<3> {
+                name: mean.name.clone(),
+                points: mean.points.iter().map(same_dim::<D, 3>).collect(),
+                facets: mean.facets.iter().map(|f| [f[0], f[1], f[2 % D]]).collect(),
+                landmarks: Vec::new(),
+            };
+            let m = crate::fe::hexmesh::hex_mesh(
+                &s3,
+                &crate::fe::hexmesh::HexMeshParams {
+                    element_size,
+                    smoothing_passes,
+                },
+            )?;
+            Ok(FeMesh {
+                nodes: m.mesh.nodes.iter().map(same_dim::<3, D>).collect(),
+                kind: m.mesh.kind,
+                connectivity: m.mesh.connectivity,
+            })
+        }
     }
 }
 

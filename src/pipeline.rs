@@ -5,11 +5,12 @@
 use crate::error::{Error, Result};
 use crate::eval::{e_d, normal_correlation, normals_at, two_way_rms};
 use crate::export::{write_vtp, write_vtu};
+use crate::fe::FeMesh;
 use crate::fe::quality::{mesh_quality, summarize};
 use crate::ffd::FfdParams;
 use crate::fit::{FitParams, Fitter};
 use crate::geometry::{ClosestPointIndex, Point, Shape, Similarity};
-use crate::model::{Atlas, AtlasParams};
+use crate::model::{Atlas, AtlasParams, same_dim};
 use crate::morph::Morpher;
 use crate::report::{
     MeanMeshReport, Report, SubjectReport, Summary, plot_cumulative_variance, plot_e_d,
@@ -48,6 +49,28 @@ impl Default for RunParams {
             plots: true,
         }
     }
+}
+
+/// Reads the triangle surfaces in `paths` (PLY, STL, OBJ), in the order given. Shapes in
+/// correspondence must share their vertex count and facets (checked when the atlas is built).
+pub fn load_surfaces(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
+    if paths.is_empty() {
+        return Err(Error::Population("no input file given".into()));
+    }
+    paths
+        .par_iter()
+        .map(|p| crate::io::surface::read_surface(p))
+        .collect()
+}
+
+/// Whether `path` names a 3D surface file (by its extension).
+pub fn is_surface_file(path: &Path) -> bool {
+    matches!(
+        path.extension()
+            .map(|e| e.to_string_lossy().to_lowercase())
+            .as_deref(),
+        Some("ply" | "stl" | "obj")
+    )
 }
 
 /// Reads the outlines in `paths` and, with `resample`, resamples them: in correspondence when
@@ -115,11 +138,11 @@ fn file_name(name: &str) -> String {
 
 /// Fits `subject` with the atlas, morphs the mean mesh, measures, and writes the subject's
 /// mesh (VTU), its fitted outline (VTP) and its plot into `out`.
-pub fn process_subject(
-    atlas: &Atlas<2>,
-    fitter: &Fitter<2>,
-    morpher: &Morpher<2>,
-    subject: &Shape<2>,
+pub fn process_subject<const D: usize>(
+    atlas: &Atlas<D>,
+    fitter: &Fitter<D>,
+    morpher: &Morpher<D>,
+    subject: &Shape<D>,
     out: &Path,
     params: &RunParams,
 ) -> Result<SubjectReport> {
@@ -156,17 +179,28 @@ pub fn process_subject(
     let outline_file = format!("{base}_fit.vtp");
     write_vtp(&out.join(&outline_file), &fitted)?;
     files.push(outline_file);
-    if params.plots {
+    if params.plots && D == 2 {
         let png = format!("{base}.png");
-        let mean_pts: Vec<Point<2>> = atlas.mean.iter().map(|p| fit.similarity.apply(p)).collect();
-        let closed = subject.is_closed();
+        let to2 = |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
+        let mean_pts: Vec<Point<2>> = atlas
+            .mean
+            .iter()
+            .map(|p| same_dim::<D, 2>(&fit.similarity.apply(p)))
+            .collect();
+        let closed = subject.facets.len() == subject.points.len();
+        let locus: Vec<Vec<Point<2>>> = fit.locus.iter().map(|l| to2(l)).collect();
+        let mesh2 = FeMesh {
+            nodes: to2(&mesh.nodes),
+            kind: mesh.kind,
+            connectivity: mesh.connectivity.clone(),
+        };
         plot_subject(
             &out.join(&png),
             &subject.name,
             &mean_pts,
-            &subject.points,
-            &fit.locus,
-            &mesh,
+            &to2(&subject.points),
+            &locus,
+            &mesh2,
             closed,
         )?;
         files.push(png);
@@ -190,7 +224,7 @@ pub fn process_subject(
     })
 }
 
-fn mean_mesh_report(atlas: &Atlas<2>) -> MeanMeshReport {
+fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshReport {
     let q = summarize(&mesh_quality(&atlas.mesh));
     MeanMeshReport {
         nodes: atlas.mesh.nodes.len(),
@@ -255,10 +289,10 @@ impl Progress {
 }
 
 /// Writes the population-level plots and the report.
-fn finish_report(
+fn finish_report<const D: usize>(
     out: &Path,
     dataset: &str,
-    atlas_for_variance: &Atlas<2>,
+    atlas_for_variance: &Atlas<D>,
     subjects: Vec<SubjectReport>,
     params: &RunParams,
     mean_mesh: Option<MeanMeshReport>,
@@ -278,7 +312,7 @@ fn finish_report(
     }
     let report = Report {
         dataset: dataset.to_string(),
-        dimension: 2,
+        dimension: D,
         modes: m,
         variance_explained: atlas_for_variance.cumulative_variance[..m].to_vec(),
         parameters: serde_json::to_value(params).unwrap_or_default(),
@@ -295,8 +329,8 @@ fn finish_report(
 /// others, a fit of the held-out shape (its known correspondence unused: it is fitted as an
 /// outline), the morphed mesh and the measures. Writes `out/report.json`, each subject's VTU,
 /// VTP and plot, and the population plots. `jobs` threads (0 = all cores).
-pub fn leave_one_out(
-    shapes: &[Shape<2>],
+pub fn leave_one_out<const D: usize>(
+    shapes: &[Shape<D>],
     dataset: &str,
     params: &RunParams,
     out: &Path,
@@ -321,7 +355,7 @@ pub fn leave_one_out(
         (0..shapes.len())
             .into_par_iter()
             .map(|k| {
-                let training: Vec<Shape<2>> = shapes
+                let training: Vec<Shape<D>> = shapes
                     .iter()
                     .enumerate()
                     .filter(|(i, _)| *i != k)
@@ -350,7 +384,11 @@ pub fn leave_one_out(
 
 /// Builds an atlas from a population and writes it, with the mean mesh as VTU and the mean
 /// outline as VTP beside it.
-pub fn build(shapes: &[Shape<2>], params: &RunParams, atlas_path: &Path) -> Result<Atlas<2>> {
+pub fn build<const D: usize>(
+    shapes: &[Shape<D>],
+    params: &RunParams,
+    atlas_path: &Path,
+) -> Result<Atlas<D>> {
     let atlas = Atlas::build(shapes, &params.atlas)?;
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
@@ -370,9 +408,9 @@ pub fn build(shapes: &[Shape<2>], params: &RunParams, atlas_path: &Path) -> Resu
 }
 
 /// Fits subjects with a saved atlas; writes their meshes and `out/report.json`.
-pub fn fit_subjects(
-    atlas: &Atlas<2>,
-    subjects: &[Shape<2>],
+pub fn fit_subjects<const D: usize>(
+    atlas: &Atlas<D>,
+    subjects: &[Shape<D>],
     dataset: &str,
     params: &RunParams,
     out: &Path,

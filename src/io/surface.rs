@@ -534,7 +534,7 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                 corners.push(p);
             }
         }
-        if corners.len() % 3 != 0 {
+        if !corners.len().is_multiple_of(3) {
             return Err(Error::parse(
                 path,
                 0,

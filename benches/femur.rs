@@ -1,0 +1,81 @@
+//! Benchmarks of issue 3 on the distal femurs (`$ATLASMESH_DATA/knee-distal-femur-synthetic-3d`):
+//! one femur fit (7313 vertices, 15 modes) on one core, the hexahedral mesh of the mean femur
+//! at 2 mm, and the morph plus corner Jacobians of that mesh. Without the data the benchmarks
+//! say so and do nothing.
+
+use atlasmesh::fe::hexmesh::{HexMeshParams, hex_mesh};
+use atlasmesh::fe::quality::{mesh_quality, summarize};
+use atlasmesh::ffd::FfdParams;
+use atlasmesh::fit::{FitParams, Fitter};
+use atlasmesh::geometry::ClosestPointIndex;
+use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
+use atlasmesh::morph::Morpher;
+use atlasmesh::pipeline::load_surfaces;
+use criterion::{Criterion, criterion_group, criterion_main};
+
+fn bench(c: &mut Criterion) {
+    faer::set_global_parallelism(faer::Par::Seq);
+    let Some(d) = std::env::var_os("ATLASMESH_DATA") else {
+        eprintln!("femur benchmarks skipped: ATLASMESH_DATA is not set");
+        return;
+    };
+    let dir = std::path::Path::new(&d).join("knee-distal-femur-synthetic-3d/femur");
+    let paths: Vec<_> = (1..=30)
+        .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
+        .collect();
+    let shapes = load_surfaces(&paths).expect("femur data");
+    let params = AtlasParams {
+        modes: ModeSelection::Count(15),
+        element_size: 0.02,
+        ..AtlasParams::default()
+    };
+    // S001, fitted with the atlas of the other 29 (one leave-one-out fold).
+    let atlas = Atlas::build(&shapes[1..], &params).expect("atlas");
+    let fitter = Fitter::new(&atlas);
+    let subject = &shapes[0];
+    let index = ClosestPointIndex::from_shape(subject);
+    let mut g = c.benchmark_group("issue3");
+    g.sample_size(10);
+    g.bench_function("femur_fit_7313pts_15modes", |b| {
+        b.iter(|| {
+            fitter
+                .fit(subject, &index, &FitParams::default())
+                .expect("fit")
+        })
+    });
+    // The mean in the reference frame has largest side 1; 2 mm on this femur:
+    let (lo, hi) = atlasmesh::geometry::bounding_box(&subject.points);
+    let mm = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let size = 2.0 / mm;
+    let mean = atlas.mean_shape();
+    g.bench_function("hex_mesh_mean_femur_2mm", |b| {
+        b.iter(|| {
+            hex_mesh(
+                &mean,
+                &HexMeshParams {
+                    element_size: size,
+                    smoothing_passes: 8,
+                },
+            )
+            .expect("hex mesh")
+        })
+    });
+    let fit = fitter
+        .fit(subject, &index, &FitParams::default())
+        .expect("fit");
+    let morpher = Morpher::new(&atlas, &FfdParams::default()).expect("morpher");
+    g.bench_function("femur_morph_and_jacobians", |b| {
+        b.iter(|| {
+            let m = morpher.morph(&fit).expect("morph");
+            summarize(&mesh_quality(&m.mesh))
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench
+}
+criterion_main!(benches);

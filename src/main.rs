@@ -303,7 +303,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Demo { out } => {
             let r = pipeline::demo(&out, cli.quiet).context("demo")?;
+            println!("2D (outlines, quadrilaterals):");
             print_summary(&r, &out);
+            let out3 = out.join("3d");
+            let r3 = pipeline::demo_3d(&out3, cli.quiet).context("3D demo")?;
+            println!("3D (surfaces, hexahedra):");
+            print_summary(&r3, &out3);
             println!("meshes (VTU) and plots (PNG) in {}", out.display());
         }
     }

@@ -58,6 +58,15 @@ fn demo_writes_meshes_report_and_plots() {
             "{f}"
         );
     }
+    // The 3D demo: closed surfaces, automatic hexahedral mesh of the mean, fits and morphs.
+    let r3: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("3d/report.json")).unwrap()).unwrap();
+    assert_eq!(r3["dimension"], 3);
+    assert_eq!(r3["summary"]["subjects"], 6);
+    assert_eq!(r3["summary"]["meshes_valid"], 6);
+    assert_eq!(r3["summary"]["succeeded"], 6);
+    assert_eq!(r3["mean_mesh"]["element_kind"], "hex8");
+    assert!(out.join("3d/demo3d-24_mesh.vtu").is_file());
     let png = std::fs::read(out.join("demo-24.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     // A fit with the saved atlas, through the CLI, of one demo shape written as text.

@@ -133,6 +133,74 @@ impl<const D: usize> Atlas<D> {
     /// Builds the atlas from shapes in point correspondence (same count, same facets): GPA
     /// with tangent projection, PCA, mode selection, and the FE mesh of the mean.
     pub fn build(shapes: &[Shape<D>], params: &AtlasParams) -> Result<Self> {
+        Self::build_meshed(shapes, params, |mean| {
+            mesh_mean_shape(mean, params.element_size, params.smoothing_passes)
+        })
+    }
+
+    /// Builds the atlas with a template FE mesh instead of the automatic one: `meshes[i]` is
+    /// a volume mesh of `shapes[i]` in that shape's frame, all with one connectivity (as in
+    /// SynthAorta, or one subject meshed by hand and its morphs). Each is brought to the
+    /// reference frame by the similarity that best maps its shape onto the mean (Umeyama),
+    /// and their node positions are averaged: the mean FE mesh. Pass one shape's mesh alone
+    /// with that shape listed first to use it as is.
+    pub fn build_with_meshes(
+        shapes: &[Shape<D>],
+        params: &AtlasParams,
+        meshes: &[FeMesh<D>],
+    ) -> Result<Self> {
+        if meshes.is_empty() || meshes.len() > shapes.len() {
+            return Err(Error::Population(format!(
+                "{} template meshes for {} shapes; give one per shape (or one for the first)",
+                meshes.len(),
+                shapes.len()
+            )));
+        }
+        for (k, m) in meshes.iter().enumerate() {
+            if m.kind != meshes[0].kind
+                || m.connectivity != meshes[0].connectivity
+                || m.nodes.len() != meshes[0].nodes.len()
+            {
+                return Err(Error::Mesh(format!(
+                    "template mesh {k} ({}) does not share the first one's connectivity",
+                    shapes[k].name
+                )));
+            }
+            if m.nodes.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+                return Err(Error::Mesh(format!(
+                    "template mesh {k} ({}) has a NaN or infinite node",
+                    shapes[k].name
+                )));
+            }
+        }
+        Self::build_meshed(shapes, params, |mean| {
+            let mut nodes = vec![[0.0; D]; meshes[0].nodes.len()];
+            for (m, s) in meshes.iter().zip(shapes) {
+                let t = crate::procrustes::fit_similarity(&s.points, &mean.points, None);
+                for (acc, p) in nodes.iter_mut().zip(&m.nodes) {
+                    let q = t.apply(p);
+                    for d in 0..D {
+                        acc[d] += q[d] / meshes.len() as f64;
+                    }
+                }
+            }
+            let mesh = meshes[0].with_nodes(nodes);
+            let q = crate::fe::quality::summarize(&crate::fe::quality::mesh_quality(&mesh));
+            if q.inverted_elements > 0 {
+                return Err(Error::Mesh(format!(
+                    "the mean of the template meshes has {} inverted elements",
+                    q.inverted_elements
+                )));
+            }
+            Ok(mesh)
+        })
+    }
+
+    fn build_meshed(
+        shapes: &[Shape<D>],
+        params: &AtlasParams,
+        mesher: impl FnOnce(&Shape<D>) -> Result<FeMesh<D>>,
+    ) -> Result<Self> {
         if shapes.len() < 3 {
             return Err(Error::Population(format!(
                 "{} shape(s); an atlas needs at least 3 (two give a single mode and no way to check it)",
@@ -189,7 +257,7 @@ impl<const D: usize> Atlas<D> {
             facets: shapes[0].facets.clone(),
             landmarks: Vec::new(),
         };
-        let mesh = mesh_mean_shape(&mean_shape, params.element_size, params.smoothing_passes)?;
+        let mesh = mesher(&mean_shape)?;
         Ok(Atlas {
             mean,
             modes: p.modes.subcols(0, m).to_owned(),

@@ -1,0 +1,164 @@
+//! The paper's aorta experiment (section 6.3) on SynthAorta level `ref2` in
+//! `$ATLASMESH_DATA/synthaorta-3d`: atlases from the wall surfaces of cases 001-004 and
+//! 001-080 with the mean of their hexahedral meshes as template; held-out cases fitted from
+//! their wall surface only, morphed, and every morphed node compared with the case's own.
+
+mod common;
+
+use atlasmesh::fe::quality::{mesh_quality, summarize};
+use atlasmesh::fe::{ElementKind, FeMesh};
+use atlasmesh::ffd::FfdParams;
+use atlasmesh::fit::{FitParams, Fitter};
+use atlasmesh::geometry::{ClosestPointIndex, Point, Shape, dist2};
+use atlasmesh::io::surface::prepare_surface;
+use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
+use atlasmesh::morph::Morpher;
+use std::collections::HashMap;
+use std::path::Path;
+
+fn csv_rows(path: &Path) -> Vec<Vec<usize>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.trim().parse().unwrap()).collect())
+        .collect()
+}
+
+struct Aortas {
+    hexes: Vec<usize>,
+    /// Wall triangles over wall-local vertex numbers, and the hex node of each.
+    wall: Vec<[usize; 3]>,
+    wall_nodes: Vec<usize>,
+    dir: std::path::PathBuf,
+}
+
+impl Aortas {
+    fn load(dir: &Path) -> Self {
+        let hexes: Vec<usize> = csv_rows(&dir.join("hex_connectivity_0based.csv"))
+            .into_iter()
+            .flatten()
+            .collect();
+        let quads = csv_rows(&dir.join("boundary_quads_0based.csv"));
+        let mut local: HashMap<usize, usize> = HashMap::new();
+        let mut wall_nodes = Vec::new();
+        let mut id = |n: usize| {
+            *local.entry(n).or_insert_with(|| {
+                wall_nodes.push(n);
+                wall_nodes.len() - 1
+            })
+        };
+        let mut wall = Vec::new();
+        for q in &quads {
+            let v: Vec<usize> = q.iter().map(|&n| id(n)).collect();
+            wall.push([v[0], v[1], v[2]]);
+            wall.push([v[0], v[2], v[3]]);
+        }
+        Aortas {
+            hexes,
+            wall,
+            wall_nodes,
+            dir: dir.to_path_buf(),
+        }
+    }
+
+    fn nodes(&self, case: usize) -> Vec<Point<3>> {
+        let b = std::fs::read(self.dir.join(format!("nodes/nodes_{case:03}.f32"))).unwrap();
+        b.chunks_exact(12)
+            .map(|c| {
+                std::array::from_fn(|d| {
+                    f32::from_le_bytes([c[4 * d], c[4 * d + 1], c[4 * d + 2], c[4 * d + 3]]) as f64
+                })
+            })
+            .collect()
+    }
+
+    fn mesh(&self, case: usize) -> FeMesh<3> {
+        FeMesh {
+            nodes: self.nodes(case),
+            kind: ElementKind::Hex8,
+            connectivity: self.hexes.clone(),
+        }
+    }
+
+    fn wall(&self, case: usize) -> Shape<3> {
+        let nodes = self.nodes(case);
+        prepare_surface(Shape {
+            name: format!("aorta-{case:03}"),
+            points: self.wall_nodes.iter().map(|&n| nodes[n]).collect(),
+            facets: self.wall.clone(),
+            landmarks: Vec::new(),
+        })
+        .unwrap()
+    }
+}
+
+/// Fits `case` from its wall, morphs the template, returns (mean, max) node error in mm and
+/// whether the mesh is valid.
+fn held_out(atlas: &Atlas<3>, data: &Aortas, case: usize) -> (f64, f64, bool) {
+    let wall = data.wall(case);
+    let index = ClosestPointIndex::from_shape(&wall);
+    let fit = Fitter::new(atlas)
+        .fit(&wall, &index, &FitParams::default())
+        .unwrap();
+    let morph = Morpher::new(atlas, &FfdParams::default())
+        .unwrap()
+        .morph(&fit)
+        .unwrap();
+    let truth = data.nodes(case);
+    let e: Vec<f64> = morph
+        .mesh
+        .nodes
+        .iter()
+        .zip(&truth)
+        .map(|(a, b)| dist2(*a, *b).sqrt())
+        .collect();
+    let valid = summarize(&mesh_quality(&morph.mesh)).inverted_elements == 0;
+    (
+        e.iter().sum::<f64>() / e.len() as f64,
+        e.iter().cloned().fold(0.0, f64::max),
+        valid,
+    )
+}
+
+#[test]
+fn aorta_template_mesh_morphed_to_held_out_cases() {
+    let Some(d) = common::data_dir("aorta_template_mesh_morphed_to_held_out_cases") else {
+        return;
+    };
+    let data = Aortas::load(&d.join("synthaorta-3d/ref2"));
+    // The paper's setting: 4 aortas.
+    let train: Vec<usize> = (1..=4).collect();
+    let shapes: Vec<Shape<3>> = train.iter().map(|&c| data.wall(c)).collect();
+    let meshes: Vec<FeMesh<3>> = train.iter().map(|&c| data.mesh(c)).collect();
+    let params = AtlasParams {
+        modes: ModeSelection::Count(3),
+        ..AtlasParams::default()
+    };
+    let atlas = Atlas::build_with_meshes(&shapes, &params, &meshes).unwrap();
+    let (mean, max, valid) = held_out(&atlas, &data, 5);
+    eprintln!("4-case atlas, case 005: node error mean {mean:.3} mm, max {max:.3} mm");
+    assert!(valid, "case 005: morphed mesh valid");
+    // 80 aortas.
+    let train: Vec<usize> = (1..=80).collect();
+    let shapes: Vec<Shape<3>> = train.iter().map(|&c| data.wall(c)).collect();
+    let meshes: Vec<FeMesh<3>> = train.iter().map(|&c| data.mesh(c)).collect();
+    let params = AtlasParams {
+        modes: ModeSelection::Variance(0.99),
+        ..AtlasParams::default()
+    };
+    let atlas = Atlas::build_with_meshes(&shapes, &params, &meshes).unwrap();
+    let mut means = Vec::new();
+    for case in 81..=100 {
+        let (mean, max, valid) = held_out(&atlas, &data, case);
+        eprintln!(
+            "80-case atlas ({} modes), case {case:03}: node error mean {mean:.3} mm, max {max:.3} mm",
+            atlas.num_modes()
+        );
+        assert!(valid, "case {case}: morphed mesh valid");
+        means.push(mean);
+    }
+    let overall = means.iter().sum::<f64>() / means.len() as f64;
+    eprintln!("80-case atlas: mean node error over cases 081-100 {overall:.3} mm");
+    assert!(overall < 1.0, "mean node error {overall} mm");
+}

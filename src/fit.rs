@@ -35,6 +35,12 @@ pub struct FitParams {
     /// Points per direction (model and subject) used by the pre-alignment and the coarse
     /// stage; the last `gamma` runs on all points. 0 = all points throughout.
     pub coarse_points: usize,
+    /// The subject may miss parts (paper, fig. 21-22): `E_d` takes only the distances from
+    /// the subject's points to the instance (weighted as both directions of a symmetric fit
+    /// together, so that `gamma` acts alike), and model points that have no partner on the
+    /// subject (`FitResult::corresponded`) are left out of the morph's data term.
+    #[serde(default)]
+    pub partial: bool,
 }
 
 /// Pose-only updates per start rotation in the pre-alignment.
@@ -72,6 +78,7 @@ impl Default for FitParams {
             starts: 8,
             full_starts: 2,
             coarse_points: 200,
+            partial: false,
         }
     }
 }
@@ -119,6 +126,9 @@ pub struct FitResult<const D: usize> {
     pub instance: Vec<Point<D>>,
     /// `S_tilde^P`: the instance projected onto the subject along its normals, subject frame.
     pub projected: Vec<SurfacePoint<D>>,
+    /// Whether each model point has a partner on the subject (always, unless the fit was
+    /// `partial` and the subject misses the part where the point lies).
+    pub corresponded: Vec<bool>,
     /// `E_d` (eq. 6, subject units squared) at every correspondence update of the winning
     /// start. In the coarse stage, the sum over the sampled model points scaled by
     /// `N / samples`.
@@ -195,6 +205,41 @@ fn rotation_exp<const D: usize>(w: &[f64]) -> [[f64; D]; D] {
     r
 }
 
+/// For a subject with missing parts: a model point has no partner where its projection lands
+/// on the subject's open border (a segment end, or an edge of a single facet) from farther than
+/// one median edge length.
+fn partnered<const D: usize>(subject: &Shape<D>, projected: &[SurfacePoint<D>]) -> Vec<bool> {
+    use std::collections::HashMap;
+    let mut count: HashMap<Vec<usize>, u32> = HashMap::new();
+    for f in &subject.facets {
+        for skip in 0..D {
+            let mut e: Vec<usize> = (0..D).filter(|&k| k != skip).map(|k| f[k]).collect();
+            e.sort_unstable();
+            *count.entry(e).or_default() += 1;
+        }
+    }
+    let mut border_vertex = vec![false; subject.points.len()];
+    for (e, c) in &count {
+        if *c == 1 {
+            for &v in e {
+                border_vertex[v] = true;
+            }
+        }
+    }
+    let tol = subject.median_edge_length();
+    projected
+        .iter()
+        .map(|p| {
+            let f = &subject.facets[p.facet];
+            let on_border = (0..D)
+                .filter(|&k| p.weights[k] > 0.0)
+                .all(|k| border_vertex[f[k]])
+                && p.weights.iter().any(|&w| w == 0.0);
+            !(on_border && p.dist2.sqrt() > tol)
+        })
+        .collect()
+}
+
 /// Sign of the orientation of a shape: the signed area enclosed by an outline (closed by
 /// the chord between its ends when open), or the signed volume under a surface (closed by
 /// the cone from the centroid when open).
@@ -236,6 +281,18 @@ fn spread(n: usize, k: usize) -> Vec<usize> {
 struct Sampling {
     forward: Vec<usize>,
     backward: Vec<usize>,
+}
+
+impl Sampling {
+    /// The effective number of pairs: the forward ones (the backward ones are weighted to
+    /// count as many), or the backward ones when there are no forward pairs.
+    fn pairs(&self) -> usize {
+        if self.forward.is_empty() {
+            self.backward.len().max(1)
+        } else {
+            self.forward.len()
+        }
+    }
 }
 
 /// A subject prepared for fitting.
@@ -379,7 +436,11 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let n = self.atlas.mean.len();
         // The pre-alignment needs only the rough layout.
         let rough = Sampling {
-            forward: spread(n, params.coarse_points / 4),
+            forward: if params.partial {
+                Vec::new()
+            } else {
+                spread(n, params.coarse_points / 4)
+            },
             backward: spread(subject.points.len(), params.coarse_points / 4),
         };
         let mut x = Scratch::new(self);
@@ -498,17 +559,27 @@ impl<'a, const D: usize> Fitter<'a, D> {
             },
         };
         let n = self.atlas.mean.len();
+        let forward = !params.partial;
+        let backward = params.symmetric || params.partial;
         let coarse = Sampling {
-            forward: spread(n, params.coarse_points),
-            backward: if params.symmetric {
+            forward: if forward {
+                spread(n, params.coarse_points)
+            } else {
+                Vec::new()
+            },
+            backward: if backward {
                 spread(subject.points.len(), params.coarse_points)
             } else {
                 Vec::new()
             },
         };
         let full = Sampling {
-            forward: (0..n).collect(),
-            backward: if params.symmetric {
+            forward: if forward {
+                (0..n).collect()
+            } else {
+                Vec::new()
+            },
+            backward: if backward {
                 (0..subject.points.len()).collect()
             } else {
                 Vec::new()
@@ -575,7 +646,13 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let instance: Vec<Point<D>> = x.x.iter().map(|p| sim.apply(p)).collect();
         let projected =
             project_along_normals(&instance, &self.atlas.facets, subj.index, &subj.normals);
+        let corresponded = if params.partial {
+            partnered(subj.shape, &projected)
+        } else {
+            vec![true; projected.len()]
+        };
         Ok(FitResult {
+            corresponded,
             weights: run.state.w,
             similarity: sim,
             instance,
@@ -599,10 +676,15 @@ impl<'a, const D: usize> Fitter<'a, D> {
         x: &mut Scratch<D>,
     ) -> Result<f64> {
         let n = self.atlas.mean.len() as f64;
-        let scale_e_d = n / sampling.forward.len() as f64;
+        let pairs = sampling.pairs() as f64;
+        let scale_e_d = if sampling.forward.is_empty() {
+            1.0
+        } else {
+            n / pairs
+        };
         let mut score = f64::INFINITY;
         for &gamma in gammas {
-            let gamma = gamma * sampling.forward.len() as f64 / REFERENCE_POINTS;
+            let gamma = gamma * pairs / REFERENCE_POINTS;
             run.converged = false;
             for _ in 0..max_iterations.max(1) {
                 let step = self.update(subj, &mut run.state, sampling, Some(gamma), x)?;
@@ -706,7 +788,14 @@ impl<'a, const D: usize> Fitter<'a, D> {
         // changes only with `w`.
         let mut backward = 0.0;
         if !sampling.backward.is_empty() {
-            let sw = (sampling.forward.len() as f64 / sampling.backward.len() as f64).sqrt();
+            // Backward pairs weigh as much as the forward ones together; alone (a partial
+            // subject), as much as both directions would (so that `gamma` acts alike).
+            let total = if sampling.forward.is_empty() {
+                2.0
+            } else {
+                1.0
+            };
+            let sw = (total * sampling.pairs() as f64 / sampling.backward.len() as f64).sqrt();
             for &i in &sampling.backward {
                 let z = sim.apply_inverse(&subj.shape.points[i]);
                 let c = scratch.index.closest_from(&z, st.backward_hint[i]);
@@ -724,6 +813,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
         }
         let two_way_ms = if sampling.backward.is_empty() {
             forward / sampling.forward.len() as f64
+        } else if sampling.forward.is_empty() {
+            backward / sampling.backward.len() as f64
         } else {
             0.5 * (forward / sampling.forward.len() as f64
                 + backward / sampling.backward.len() as f64)
@@ -803,7 +894,11 @@ impl<'a, const D: usize> Fitter<'a, D> {
             }
         }
         Ok(Step {
-            forward,
+            forward: if sampling.forward.is_empty() {
+                backward
+            } else {
+                forward
+            },
             two_way_ms,
             pose_change: dz[..pose].iter().fold(0.0, |a, v| a.max(v.abs())),
             weight_change: weight_change.sqrt(),

@@ -107,6 +107,10 @@ struct RunArgs {
     /// Starting rotations tried by the pre-alignment.
     #[arg(long, default_value_t = 8)]
     starts: usize,
+    /// Subjects may miss parts (paper, fig. 21-22): fit only the subject's points to the
+    /// model, and morph with the model points that have a partner on the subject.
+    #[arg(long)]
+    partial: bool,
     /// Skip the PNG plots.
     #[arg(long)]
     no_plots: bool,
@@ -119,6 +123,7 @@ impl RunArgs {
         p.morph.alpha = self.alpha;
         p.fit.symmetric = !self.one_way;
         p.fit.starts = self.starts;
+        p.fit.partial = self.partial;
         p.plots = !self.no_plots;
         p
     }

@@ -50,6 +50,9 @@ impl<const D: usize> Morpher<D> {
     /// the mean mesh, then `t` back to the subject frame. The result is in the subject frame.
     ///
     /// # Deviation from the paper
+    /// Model points without a partner on the subject (a `partial` fit) are left out of the
+    /// data term; the smoothing carries the deformation over them.
+    ///
     /// The paper has no remedy when the morph inverts an element. Irregular correspondences
     /// (where a poor fit meets a concave corner) can fold a weakly smoothed FFD; then we
     /// solve again with `alpha` multiplied by [`STIFFEN_FACTOR`], up to
@@ -57,13 +60,34 @@ impl<const D: usize> Morpher<D> {
     /// valid. [`Morph::alpha`] says which was used.
     pub fn morph(&self, fit: &FitResult<D>) -> Result<Morph<D>> {
         let t = &fit.similarity;
+        let all = fit.corresponded.iter().all(|&c| c);
+        let keep = |i: usize| all || fit.corresponded.get(i).copied().unwrap_or(true);
         let targets: Vec<Point<D>> = fit
             .projected
             .iter()
-            .map(|p| t.apply_inverse(&p.point))
+            .enumerate()
+            .filter(|(i, _)| keep(*i))
+            .map(|(_, p)| t.apply_inverse(&p.point))
             .collect();
+        let sources: Vec<Point<D>> = self
+            .sources
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| keep(*i))
+            .map(|(_, p)| *p)
+            .collect();
+        if targets.len() < D + 1 {
+            return Err(Error::Numerical(
+                "the subject has partners for too few model points to morph".into(),
+            ));
+        }
         let mut alpha = self.params.alpha;
-        let mut stiffer: Option<FfdFit<D>> = None;
+        // A subject with missing parts has its own data term: factorize for its points.
+        let mut stiffer: Option<FfdFit<D>> = if all {
+            None
+        } else {
+            Some(FfdFit::new(&sources, &self.params)?)
+        };
         for attempt in 0..=MAX_STIFFENINGS {
             let solver = stiffer.as_ref().unwrap_or(&self.fit);
             let f = solver.solve(&targets);
@@ -80,7 +104,7 @@ impl<const D: usize> Morpher<D> {
             }
             alpha *= STIFFEN_FACTOR;
             stiffer = Some(FfdFit::new(
-                &self.sources,
+                &sources,
                 &FfdParams {
                     alpha,
                     ..self.params

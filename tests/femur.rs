@@ -60,3 +60,127 @@ fn femur_leave_one_out_with_15_and_5_modes() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Incomplete subjects (paper, fig. 21-22): a femur with the 20 % of its vertices farthest
+/// along its longest principal axis cut away, fitted with `partial`, gives mode weights
+/// (in standard deviations) within 0.5 of the complete femur's fit, for every mode.
+#[test]
+fn incomplete_femur_gives_the_weights_of_the_complete_one() {
+    use atlasmesh::fit::{FitParams, Fitter};
+    use atlasmesh::geometry::{ClosestPointIndex, Shape, centroid, sub};
+    use atlasmesh::model::{Atlas, AtlasParams};
+    let Some(data) = common::data_dir("incomplete_femur_gives_the_weights_of_the_complete_one")
+    else {
+        return;
+    };
+    let paths: Vec<_> = (1..=30)
+        .map(|k| {
+            data.join(format!(
+                "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
+            ))
+        })
+        .collect();
+    let shapes = load_surfaces(&paths).unwrap();
+    let atlas = Atlas::build(
+        &shapes[5..],
+        &AtlasParams {
+            modes: ModeSelection::Count(15),
+            element_size: 0.05,
+            ..AtlasParams::default()
+        },
+    )
+    .unwrap();
+    let fitter = Fitter::new(&atlas);
+    let sigma: Vec<f64> = atlas.eigenvalues.iter().map(|l| l.sqrt()).collect();
+    for s in &shapes[..5] {
+        // Longest principal axis: power iteration on the covariance.
+        let c = centroid(&s.points);
+        let mut cov = [[0.0; 3]; 3];
+        for p in &s.points {
+            let d = sub(*p, c);
+            for i in 0..3 {
+                for j in 0..3 {
+                    cov[i][j] += d[i] * d[j];
+                }
+            }
+        }
+        let mut axis = [1.0, 0.3, 0.1];
+        for _ in 0..100 {
+            let v: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| cov[i][j] * axis[j]).sum());
+            let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            axis = v.map(|x| x / n);
+        }
+        let along: Vec<f64> = s
+            .points
+            .iter()
+            .map(|p| (0..3).map(|d| (p[d] - c[d]) * axis[d]).sum())
+            .collect();
+        let mut sorted = along.clone();
+        sorted.sort_by(f64::total_cmp);
+        let cut = sorted[(0.8 * sorted.len() as f64) as usize];
+        let kept: Vec<bool> = along.iter().map(|&a| a < cut).collect();
+        let mut new_id = vec![usize::MAX; s.points.len()];
+        let mut points = Vec::new();
+        for (i, p) in s.points.iter().enumerate() {
+            if kept[i] {
+                new_id[i] = points.len();
+                points.push(*p);
+            }
+        }
+        let facets: Vec<[usize; 3]> = s
+            .facets
+            .iter()
+            .filter(|f| f.iter().all(|&v| kept[v]))
+            .map(|f| f.map(|v| new_id[v]))
+            .collect();
+        let part = Shape {
+            name: format!("{}-cut", s.name),
+            points,
+            facets,
+            landmarks: Vec::new(),
+        };
+        let full = fitter
+            .fit(s, &ClosestPointIndex::from_shape(s), &FitParams::default())
+            .unwrap();
+        let partial = fitter
+            .fit(
+                &part,
+                &ClosestPointIndex::from_shape(&part),
+                &FitParams {
+                    partial: true,
+                    ..FitParams::default()
+                },
+            )
+            .unwrap();
+        let worst = full
+            .weights
+            .iter()
+            .zip(&partial.weights)
+            .zip(&sigma)
+            .map(|((a, b), s)| ((a - b) / s).abs())
+            .fold(0.0, f64::max);
+        let missing = partial.corresponded.iter().filter(|c| !**c).count();
+        eprintln!(
+            "{}: largest weight difference {worst:.3} sigma; {missing} of {} model points without a partner",
+            s.name,
+            partial.corresponded.len()
+        );
+        assert!(worst <= 0.5, "{}: weights differ by {worst} sigma", s.name);
+        assert!(
+            missing > 0,
+            "the cut part has model points without partners"
+        );
+        // The morph uses the partnered points only and still gives a valid mesh.
+        let morph = atlasmesh::morph::Morpher::new(&atlas, &atlasmesh::ffd::FfdParams::default())
+            .unwrap()
+            .morph(&partial)
+            .unwrap();
+        let q =
+            atlasmesh::fe::quality::summarize(&atlasmesh::fe::quality::mesh_quality(&morph.mesh));
+        assert_eq!(
+            q.inverted_elements, 0,
+            "{}: morph of the partial fit",
+            s.name
+        );
+    }
+}

@@ -234,7 +234,7 @@ fn partnered<const D: usize>(subject: &Shape<D>, projected: &[SurfacePoint<D>]) 
             let on_border = (0..D)
                 .filter(|&k| p.weights[k] > 0.0)
                 .all(|k| border_vertex[f[k]])
-                && p.weights.iter().any(|&w| w == 0.0);
+                && p.weights.contains(&0.0);
             !(on_border && p.dist2.sqrt() > tol)
         })
         .collect()

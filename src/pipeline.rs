@@ -13,8 +13,8 @@ use crate::geometry::{ClosestPointIndex, Point, Shape, Similarity};
 use crate::model::{Atlas, AtlasParams, same_dim};
 use crate::morph::Morpher;
 use crate::report::{
-    MeanMeshReport, Report, SubjectReport, Summary, plot_cumulative_variance, plot_e_d,
-    plot_subject,
+    JACOBIAN_BINS, MeanMeshReport, Report, SubjectReport, Summary, jacobian_histogram,
+    plot_cumulative_variance, plot_e_d, plot_jacobian_histogram, plot_subject,
 };
 use crate::resample::{resample_corresponding, resample_uniform};
 use rayon::prelude::*;
@@ -152,7 +152,8 @@ pub fn process_subject<const D: usize>(
     let fit_seconds = t0.elapsed().as_secs_f64();
     let morph = morpher.morph(&fit)?;
     let mesh = morph.mesh;
-    let q = summarize(&mesh_quality(&mesh));
+    let per_element = mesh_quality(&mesh);
+    let q = summarize(&per_element);
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
     let mean_normals = atlas.mean_shape().vertex_normals();
@@ -217,6 +218,9 @@ pub fn process_subject<const D: usize>(
         scaled_jacobian_min: q.scaled_jacobian_min,
         inverted_elements: q.inverted_elements,
         morph_alpha: morph.alpha,
+        scaled_jacobian_histogram: jacobian_histogram(
+            per_element.iter().map(|e| e.scaled_jacobian_min),
+        ),
         success: rel < 0.01 && q.inverted_elements == 0,
         converged: fit.converged,
         e_d_history: fit.e_d_history,
@@ -309,6 +313,13 @@ fn finish_report<const D: usize>(
             .map(|s| (s.name.clone(), s.e_d_history.clone()))
             .collect();
         plot_e_d(&out.join("e_d.png"), &hist)?;
+        let mut counts = vec![0u32; JACOBIAN_BINS];
+        for s in &subjects {
+            for (c, v) in counts.iter_mut().zip(&s.scaled_jacobian_histogram) {
+                *c += v;
+            }
+        }
+        plot_jacobian_histogram(&out.join("scaled_jacobians.png"), &counts)?;
     }
     let report = Report {
         dataset: dataset.to_string(),

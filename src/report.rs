@@ -33,6 +33,10 @@ pub struct SubjectReport {
     /// The `alpha` of eq. 9 the morph used (the requested one unless that inverted an
     /// element; see `Morpher::morph`).
     pub morph_alpha: f64,
+    /// Counts of the elements' smallest corner scaled Jacobians in 40 bins of width 0.05
+    /// from -1 to 1 (bin `k` covers `[-1 + 0.05 k, -1 + 0.05 (k + 1))`, the last includes 1).
+    #[serde(default)]
+    pub scaled_jacobian_histogram: Vec<u32>,
     /// `rms_distance_relative < 0.01` and no inverted element.
     pub success: bool,
     /// Whether the last inner loop of Algorithm 1 met its tolerance.
@@ -252,6 +256,60 @@ pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
             ))
             .map_err(perr(path))?;
     }
+    root.present().map_err(perr(path))?;
+    Ok(())
+}
+
+/// Bins of [`SubjectReport::scaled_jacobian_histogram`].
+pub const JACOBIAN_BINS: usize = 40;
+
+/// Counts of scaled Jacobians in [`JACOBIAN_BINS`] bins over [-1, 1].
+pub fn jacobian_histogram(values: impl IntoIterator<Item = f64>) -> Vec<u32> {
+    let mut h = vec![0u32; JACOBIAN_BINS];
+    for v in values {
+        if v.is_finite() {
+            let k = (((v + 1.0) / 2.0 * JACOBIAN_BINS as f64).floor() as i64)
+                .clamp(0, JACOBIAN_BINS as i64 - 1);
+            h[k as usize] += 1;
+        }
+    }
+    h
+}
+
+/// Histogram of the scaled Jacobians of all subjects' elements (counts summed over subjects).
+pub fn plot_jacobian_histogram(path: &Path, counts: &[u32]) -> Result<()> {
+    let text = font_available();
+    let root = BitMapBackend::new(path, (720, 460)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let mut b = ChartBuilder::on(&root);
+    b.margin(12)
+        .x_label_area_size(if text { 36 } else { 5 })
+        .y_label_area_size(if text { 64 } else { 5 });
+    if text {
+        b.caption("Scaled Jacobians of all morphed meshes", ("sans-serif", 20));
+    }
+    let mut chart = b
+        .build_cartesian_2d(-1f64..1f64, 0f64..top * 1.05)
+        .map_err(perr(path))?;
+    if text {
+        chart
+            .configure_mesh()
+            .x_desc("smallest corner scaled Jacobian of an element")
+            .y_desc("elements")
+            .draw()
+            .map_err(perr(path))?;
+    }
+    let w = 2.0 / counts.len().max(1) as f64;
+    chart
+        .draw_series(counts.iter().enumerate().map(|(k, &c)| {
+            let x0 = -1.0 + w * k as f64;
+            Rectangle::new(
+                [(x0, 0.0), (x0 + w, c as f64)],
+                jacobian_color(x0 + 0.5 * w).filled(),
+            )
+        }))
+        .map_err(perr(path))?;
     root.present().map_err(perr(path))?;
     Ok(())
 }

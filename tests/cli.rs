@@ -47,6 +47,7 @@ fn demo_writes_meshes_report_and_plots() {
     for f in [
         "cumulative_variance.png",
         "e_d.png",
+        "scaled_jacobians.png",
         "atlas.safetensors",
         "atlas_mean_mesh.vtu",
         "demo-24_mesh.vtu",

@@ -227,3 +227,81 @@ fn missing_file_is_an_io_error() {
     assert_eq!(o.status.code(), Some(3));
     assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/hands.csv"));
 }
+
+/// Bad 3D surfaces: each gets exit code 2 and a message naming the file and the problem.
+#[test]
+fn bad_surfaces_are_clear_errors() {
+    let d = common::temp_dir("bad3d");
+    let tetra_ply = |vertices: &str, body: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n{body}"
+        )
+    };
+    let good_body = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n";
+    let nan_body = "0 0 0\n1 0 0\nnan 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n";
+    // A Möbius strip cannot be oriented.
+    let mut mobius = String::new();
+    let n = 12;
+    for i in 0..n {
+        let t = i as f64 / n as f64 * std::f64::consts::TAU;
+        for s in [-0.3, 0.3] {
+            let (x, y, z) = (
+                (1.0 + s * (t / 2.0).cos()) * t.cos(),
+                (1.0 + s * (t / 2.0).cos()) * t.sin(),
+                s * (t / 2.0).sin(),
+            );
+            mobius.push_str(&format!("v {x} {y} {z}\n"));
+        }
+    }
+    for i in 0..n {
+        let (a, b) = (2 * i + 1, 2 * i + 2);
+        let (c, e) = if i + 1 < n {
+            (2 * i + 3, 2 * i + 4)
+        } else {
+            (2, 1) // the half twist: the strip's edges swap
+        };
+        mobius.push_str(&format!("f {a} {b} {e}\nf {a} {e} {c}\n"));
+    }
+    let cases: Vec<(String, &str)> = vec![
+        (write(&d, "empty.ply", ""), "end_header"),
+        (
+            write(&d, "lies.ply", &tetra_ply("40", good_body)),
+            "truncated",
+        ),
+        (write(&d, "nan.ply", &tetra_ply("4", nan_body)), "NaN"),
+        (write(&d, "mobius.obj", &mobius), "cannot be oriented"),
+        (write(&d, "notstl.stl", "hello"), "solid"),
+    ];
+    for (f, words) in &cases {
+        let o = atlasmesh(&[
+            "loo",
+            "--shapes",
+            f,
+            f,
+            f,
+            f,
+            "--out",
+            &d.join("o").display().to_string(),
+        ]);
+        let name = std::path::Path::new(f)
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .to_string();
+        assert_clean_error(&o, &name, words);
+    }
+    // 2D and 3D mixed.
+    let ply = write(&d, "t.ply", &tetra_ply("4", good_body));
+    let txt = write(&d, "o.txt", "0 0\n1 0\n1 1\n0 1\n");
+    let o = atlasmesh(&[
+        "loo",
+        "--shapes",
+        &ply,
+        &txt,
+        "--out",
+        &d.join("o").display().to_string(),
+    ]);
+    assert_clean_error(&o, "o.txt", "2D and 3D shapes mixed");
+    assert!(!d.join("o/report.json").exists(), "no output on error");
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -63,14 +63,18 @@ pub fn load_surfaces(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
         .collect()
 }
 
-/// Whether `path` names a 3D surface file (by its extension).
+/// Whether `path` names a 3D surface file: by its extension (`.ply`, `.stl`, `.obj`), and
+/// for legacy `.vtk` files by their content (POLYGONS make a surface, LINES an outline).
 pub fn is_surface_file(path: &Path) -> bool {
-    matches!(
-        path.extension()
-            .map(|e| e.to_string_lossy().to_lowercase())
-            .as_deref(),
-        Some("ply" | "stl" | "obj")
-    )
+    match path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .as_deref()
+    {
+        Some("ply" | "stl" | "obj") => true,
+        Some("vtk") => crate::io::read_vtk_polydata(path).is_ok_and(|v| !v.polygons.is_empty()),
+        _ => false,
+    }
 }
 
 /// Reads the outlines in `paths` and, with `resample`, resamples them: in correspondence when

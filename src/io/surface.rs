@@ -1,5 +1,5 @@
 //! Triangle surfaces (3D): PLY (ASCII, binary little- and big-endian), STL (ASCII and
-//! binary) and Wavefront OBJ in; PLY (binary little-endian) and STL (binary) out. Polygons
+//! binary), Wavefront OBJ and legacy VTK POLYDATA (POLYGONS; ASCII or binary) in; PLY (binary little-endian) and STL (binary) out. Polygons
 //! are split into triangles as fans. Every surface read is checked by [`prepare_surface`].
 
 use super::{MAX_COUNT, write_atomic};
@@ -8,7 +8,8 @@ use crate::geometry::{Point, Shape, facet_normal, norm};
 use std::collections::HashMap;
 use std::path::Path;
 
-/// Reads a triangle surface; the format comes from the extension (`.ply`, `.stl`, `.obj`).
+/// Reads a triangle surface; the format comes from the extension (`.ply`, `.stl`, `.obj`,
+/// legacy `.vtk` POLYDATA with POLYGONS).
 /// The surface is checked and oriented by [`prepare_surface`].
 pub fn read_surface(path: &Path) -> Result<Shape<3>> {
     let ext = path
@@ -24,11 +25,22 @@ pub fn read_surface(path: &Path) -> Result<Shape<3>> {
         "ply" => parse_ply(path, &bytes)?,
         "stl" => parse_stl(path, &bytes)?,
         "obj" => parse_obj(path, &bytes)?,
+        "vtk" => {
+            let v = super::read_vtk_polydata(path)?;
+            if v.polygons.is_empty() {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    "no POLYGONS: a surface needs polygons (an outline has LINES)",
+                ));
+            }
+            (v.points, v.polygons)
+        }
         _ => {
             return Err(Error::parse(
                 path,
                 0,
-                format!("unknown surface format '.{ext}' (use .ply, .stl or .obj)"),
+                format!("unknown surface format '.{ext}' (use .ply, .stl, .obj or .vtk)"),
             ));
         }
     };
@@ -696,6 +708,22 @@ mod tests {
             assert_eq!(r.facets.len(), 4, "{ext}");
             assert!((signed_volume(&r) - 1.0 / 6.0).abs() < 1e-6, "{ext}");
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn legacy_vtk_polygons_are_read_as_a_surface() {
+        let dir = std::env::temp_dir().join(format!("atlasmesh-vtk3-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("t.vtk");
+        std::fs::write(
+            &p,
+            "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nPOLYGONS 4 16\n3 0 1 2\n3 0 1 3\n3 1 2 3\n3 0 2 3\n",
+        )
+        .unwrap();
+        let s = read_surface(&p).unwrap();
+        assert_eq!((s.points.len(), s.facets.len()), (4, 4));
+        assert!((signed_volume(&s) - 1.0 / 6.0).abs() < 1e-9);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

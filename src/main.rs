@@ -70,9 +70,15 @@ enum Command {
 
 #[derive(Args)]
 struct PopArgs {
-    /// Shape files: long CSV (shape,point,x,y), text (x y per line) or legacy VTK.
+    /// Shape files: 2D outlines as long CSV (shape,point,x,y), text (x y per line) or legacy
+    /// VTK with LINES; 3D surfaces as PLY, STL, OBJ, VTP or legacy VTK with POLYGONS.
     #[arg(long, num_args = 1.., required = true)]
     shapes: Vec<PathBuf>,
+    /// 3D: template volume meshes (VTU, 8-node hexahedra, one connectivity), one per shape
+    /// in the order of --shapes (or, for `build`, one for the first shape); their mean is the
+    /// atlas's FE mesh instead of the automatic one.
+    #[arg(long, num_args = 1.., value_name = "VTU")]
+    template_mesh: Vec<PathBuf>,
     /// Outlines are open (the hands: the wrist is not part of the outline).
     #[arg(long, conflicts_with = "closed")]
     open: bool,
@@ -166,11 +172,31 @@ fn surfaces(paths: &[PathBuf]) -> anyhow::Result<bool> {
     Ok(n > 0)
 }
 
+/// The template volume meshes of `--template-mesh`, if any.
+fn template_meshes(pop: &PopArgs) -> anyhow::Result<Option<Vec<atlasmesh::fe::FeMesh<3>>>> {
+    if pop.template_mesh.is_empty() {
+        return Ok(None);
+    }
+    let m = pop
+        .template_mesh
+        .iter()
+        .map(|p| atlasmesh::io::vtkxml::read_vtu_hex(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Some(m))
+}
+
 /// Reads the population of `pop` and the run parameters of both argument groups.
 fn population_and_params(
     pop: &PopArgs,
     run: &RunArgs,
 ) -> anyhow::Result<(Vec<atlasmesh::geometry::Shape<2>>, RunParams)> {
+    if !pop.template_mesh.is_empty() {
+        return Err(atlasmesh::Error::Parameter(
+            "--template-mesh applies to 3D surfaces; 2D outlines get the automatic quad mesh"
+                .into(),
+        )
+        .into());
+    }
     let mut params = run.params();
     apply_pop(&mut params, pop);
     let shapes = pipeline::load_population(
@@ -210,8 +236,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let mut params = run.params();
                 apply_pop(&mut params, &pop);
                 let shapes = pipeline::load_surfaces(&pop.shapes)?;
-                pipeline::leave_one_out(
+                let meshes = template_meshes(&pop)?;
+                pipeline::leave_one_out_with_meshes(
                     &shapes,
+                    meshes.as_deref(),
                     &dataset_name(&pop.shapes),
                     &params,
                     &out,
@@ -236,7 +264,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let mut params = run.params();
                 apply_pop(&mut params, &pop);
                 let shapes = pipeline::load_surfaces(&pop.shapes)?;
-                let a = pipeline::build(&shapes, &params, &out)?;
+                let meshes = template_meshes(&pop)?;
+                let a = pipeline::build_with_meshes(&shapes, meshes.as_deref(), &params, &out)?;
                 let m = a.num_modes();
                 (
                     shapes.len(),

@@ -71,7 +71,7 @@ pub fn is_surface_file(path: &Path) -> bool {
         .map(|e| e.to_string_lossy().to_lowercase())
         .as_deref()
     {
-        Some("ply" | "stl" | "obj") => true,
+        Some("ply" | "stl" | "obj" | "vtp") => true,
         Some("vtk") => crate::io::read_vtk_polydata(path).is_ok_and(|v| !v.polygons.is_empty()),
         _ => false,
     }
@@ -352,6 +352,42 @@ pub fn leave_one_out<const D: usize>(
     jobs: usize,
     quiet: bool,
 ) -> Result<Report> {
+    leave_one_out_with_meshes(shapes, None, dataset, params, out, jobs, quiet)
+}
+
+/// The atlas of `shapes`: with `meshes` (one template volume mesh per shape, or one for the
+/// first) their mean as the FE mesh (`Atlas::build_with_meshes`), else the automatic mesh.
+fn atlas_of<const D: usize>(
+    shapes: &[Shape<D>],
+    meshes: Option<&[FeMesh<D>]>,
+    params: &AtlasParams,
+) -> Result<Atlas<D>> {
+    match meshes {
+        Some(m) => Atlas::build_with_meshes(shapes, params, m),
+        None => Atlas::build(shapes, params),
+    }
+}
+
+/// [`leave_one_out`] with template volume meshes, one per shape (each fold's atlas takes the
+/// mean of its training shapes' meshes).
+pub fn leave_one_out_with_meshes<const D: usize>(
+    shapes: &[Shape<D>],
+    meshes: Option<&[FeMesh<D>]>,
+    dataset: &str,
+    params: &RunParams,
+    out: &Path,
+    jobs: usize,
+    quiet: bool,
+) -> Result<Report> {
+    if let Some(m) = meshes
+        && m.len() != shapes.len()
+    {
+        return Err(Error::Population(format!(
+            "leave-one-out with template meshes needs one per shape: {} meshes, {} shapes",
+            m.len(),
+            shapes.len()
+        )));
+    }
     if shapes.len() < 4 {
         return Err(Error::Population(format!(
             "leave-one-out needs at least 4 shapes, got {}",
@@ -360,7 +396,7 @@ pub fn leave_one_out<const D: usize>(
     }
     create_dir(out)?;
     // The full atlas, for the variance figures and to check the population once.
-    let full = Atlas::build(shapes, &params.atlas)?;
+    let full = atlas_of(shapes, meshes, &params.atlas)?;
     let progress = Progress::new("leave-one-out", shapes.len(), quiet);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
@@ -376,7 +412,14 @@ pub fn leave_one_out<const D: usize>(
                     .filter(|(i, _)| *i != k)
                     .map(|(_, s)| s.clone())
                     .collect();
-                let atlas = Atlas::build(&training, &params.atlas)?;
+                let training_meshes: Option<Vec<FeMesh<D>>> = meshes.map(|m| {
+                    m.iter()
+                        .enumerate()
+                        .filter(|(i, _)| *i != k)
+                        .map(|(_, x)| x.clone())
+                        .collect()
+                });
+                let atlas = atlas_of(&training, training_meshes.as_deref(), &params.atlas)?;
                 let fitter = Fitter::new(&atlas);
                 let morpher = Morpher::new(&atlas, &params.morph)?;
                 let r = process_subject(&atlas, &fitter, &morpher, &shapes[k], out, params);
@@ -404,7 +447,17 @@ pub fn build<const D: usize>(
     params: &RunParams,
     atlas_path: &Path,
 ) -> Result<Atlas<D>> {
-    let atlas = Atlas::build(shapes, &params.atlas)?;
+    build_with_meshes(shapes, None, params, atlas_path)
+}
+
+/// [`build`] with template volume meshes (one per shape, or one for the first shape).
+pub fn build_with_meshes<const D: usize>(
+    shapes: &[Shape<D>],
+    meshes: Option<&[FeMesh<D>]>,
+    params: &RunParams,
+    atlas_path: &Path,
+) -> Result<Atlas<D>> {
+    let atlas = atlas_of(shapes, meshes, &params.atlas)?;
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
     }

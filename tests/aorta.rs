@@ -162,3 +162,54 @@ fn aorta_template_mesh_morphed_to_held_out_cases() {
     eprintln!("80-case atlas: mean node error over cases 081-100 {overall:.3} mm");
     assert!(overall < 1.0, "mean node error {overall} mm");
 }
+
+/// The same through the command line: wall surfaces as PLY, hex meshes as VTU,
+/// `atlasmesh loo --template-mesh`, on cases 001-008.
+#[test]
+fn aorta_loo_through_the_cli_with_template_meshes() {
+    let Some(d) = common::data_dir("aorta_loo_through_the_cli_with_template_meshes") else {
+        return;
+    };
+    let data = Aortas::load(&d.join("synthaorta-3d/ref2"));
+    let dir = common::temp_dir("aorta-cli");
+    let mut walls = Vec::new();
+    let mut vtus = Vec::new();
+    for case in 1..=8 {
+        let w = dir.join(format!("wall_{case:03}.ply"));
+        atlasmesh::io::surface::write_ply(&w, &data.wall(case)).unwrap();
+        let v = dir.join(format!("hex_{case:03}.vtu"));
+        atlasmesh::export::write_vtu(&v, &data.mesh(case), None).unwrap();
+        walls.push(w.display().to_string());
+        vtus.push(v.display().to_string());
+    }
+    let out = dir.join("out");
+    let mut args: Vec<String> = vec!["loo".into(), "--shapes".into()];
+    args.extend(walls.iter().cloned());
+    args.push("--template-mesh".into());
+    args.extend(vtus.iter().cloned());
+    args.extend(["--modes", "4", "--no-plots", "--quiet", "--out"].map(String::from));
+    args.push(out.display().to_string());
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["dimension"], 3);
+    assert_eq!(r["summary"]["meshes_valid"], 8);
+    assert_eq!(r["mean_mesh"]["elements"], 1792);
+    // The morphed mesh of case 001 against its own nodes.
+    let m = atlasmesh::io::vtkxml::read_vtu_hex(&out.join("wall_001_mesh.vtu")).unwrap();
+    let truth = data.nodes(1);
+    let err = m
+        .nodes
+        .iter()
+        .zip(&truth)
+        .map(|(a, b)| dist2(*a, *b).sqrt())
+        .sum::<f64>()
+        / truth.len() as f64;
+    eprintln!("CLI leave-one-out, case 001 with the other 7: mean node error {err:.3} mm");
+    assert!(err < 2.0, "mean node error {err} mm");
+    std::fs::remove_dir_all(&dir).ok();
+}

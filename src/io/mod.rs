@@ -9,6 +9,7 @@
 //!   when the segments form a loop. A constant `z` is dropped; varying `z` is an error.
 
 pub mod surface;
+pub mod vtkxml;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};

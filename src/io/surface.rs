@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// Reads a triangle surface; the format comes from the extension (`.ply`, `.stl`, `.obj`,
-/// legacy `.vtk` POLYDATA with POLYGONS).
+/// legacy `.vtk` POLYDATA with POLYGONS, `.vtp` with ASCII arrays).
 /// The surface is checked and oriented by [`prepare_surface`].
 pub fn read_surface(path: &Path) -> Result<Shape<3>> {
     let ext = path
@@ -25,6 +25,7 @@ pub fn read_surface(path: &Path) -> Result<Shape<3>> {
         "ply" => parse_ply(path, &bytes)?,
         "stl" => parse_stl(path, &bytes)?,
         "obj" => parse_obj(path, &bytes)?,
+        "vtp" => super::vtkxml::read_vtp(path)?,
         "vtk" => {
             let v = super::read_vtk_polydata(path)?;
             if v.polygons.is_empty() {
@@ -40,7 +41,7 @@ pub fn read_surface(path: &Path) -> Result<Shape<3>> {
             return Err(Error::parse(
                 path,
                 0,
-                format!("unknown surface format '.{ext}' (use .ply, .stl, .obj or .vtk)"),
+                format!("unknown surface format '.{ext}' (use .ply, .stl, .obj, .vtk or .vtp)"),
             ));
         }
     };

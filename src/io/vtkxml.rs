@@ -1,0 +1,231 @@
+//! VTK XML files in: PolyData (`.vtp`, triangle surfaces) and UnstructuredGrid (`.vtu`,
+//! hexahedral template meshes), with ASCII data arrays (as atlasmesh, ParaView's "ASCII"
+//! option and meshio write them). Binary or appended arrays get a clear error.
+
+use crate::error::{Error, Result};
+use crate::fe::{ElementKind, FeMesh};
+use crate::geometry::Point;
+use std::path::Path;
+
+/// The numbers of the first `DataArray` inside `<section>` (named `name` when given).
+fn array(path: &Path, text: &str, section: &str, name: Option<&str>) -> Result<Vec<f64>> {
+    let open = format!("<{section}");
+    let start = text
+        .find(&open)
+        .ok_or_else(|| Error::parse(path, 0, format!("no <{section}> section")))?;
+    let end = text[start..]
+        .find(&format!("</{section}>"))
+        .map(|e| start + e)
+        .ok_or_else(|| Error::parse(path, 0, format!("<{section}> is not closed (truncated?)")))?;
+    let body = &text[start..end];
+    let mut at = 0;
+    while let Some(p) = body[at..].find("<DataArray") {
+        let tag_start = at + p;
+        let tag_end = body[tag_start..]
+            .find('>')
+            .map(|e| tag_start + e)
+            .ok_or_else(|| Error::parse(path, 0, "a <DataArray> tag is not closed"))?;
+        let tag = &body[tag_start..tag_end];
+        let close = body[tag_end..]
+            .find("</DataArray>")
+            .map(|e| tag_end + e)
+            .ok_or_else(|| Error::parse(path, 0, "a <DataArray> is not closed (truncated?)"))?;
+        at = close;
+        if let Some(n) = name
+            && !tag.contains(&format!("Name=\"{n}\""))
+        {
+            continue;
+        }
+        if !tag.contains("format=\"ascii\"") {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "the {section} data are binary or appended; only ASCII VTK XML is read (save as ASCII)"
+                ),
+            ));
+        }
+        return body[tag_end + 1..close]
+            .split_whitespace()
+            .map(|t| {
+                t.parse::<f64>().map_err(|_| {
+                    Error::parse(path, 0, format!("'{t}' in <{section}> is not a number"))
+                })
+            })
+            .collect();
+    }
+    Err(Error::parse(
+        path,
+        0,
+        format!(
+            "no DataArray{} in <{section}>",
+            name.map(|n| format!(" '{n}'")).unwrap_or_default()
+        ),
+    ))
+}
+
+fn points(path: &Path, text: &str) -> Result<Vec<Point<3>>> {
+    let v = array(path, text, "Points", None)?;
+    if v.len() % 3 != 0 {
+        return Err(Error::parse(
+            path,
+            0,
+            "the point coordinates are not triples",
+        ));
+    }
+    Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+}
+
+fn index(path: &Path, v: f64, n: usize, what: &str) -> Result<usize> {
+    if v >= 0.0 && v.fract() == 0.0 && (v as usize) < n {
+        Ok(v as usize)
+    } else {
+        Err(Error::parse(
+            path,
+            0,
+            format!("{what} {v} is out of range (0..{n})"),
+        ))
+    }
+}
+
+/// Reads the points and polygons of a VTK XML PolyData file (ASCII arrays).
+pub fn read_vtp(path: &Path) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    if !text.contains("type=\"PolyData\"") {
+        return Err(Error::parse(path, 1, "not a VTK XML PolyData file"));
+    }
+    let pts = points(path, &text)?;
+    let conn = array(path, &text, "Polys", Some("connectivity"))?;
+    let offs = array(path, &text, "Polys", Some("offsets"))?;
+    let mut polys = Vec::with_capacity(offs.len());
+    let mut prev = 0usize;
+    for &o in &offs {
+        let o = index(path, o, conn.len() + 1, "offset")?;
+        if o < prev {
+            return Err(Error::parse(path, 0, "the polygon offsets decrease"));
+        }
+        let poly = conn[prev..o]
+            .iter()
+            .map(|&v| index(path, v, pts.len(), "vertex index"))
+            .collect::<Result<Vec<_>>>()?;
+        polys.push(poly);
+        prev = o;
+    }
+    Ok((pts, polys))
+}
+
+/// Reads a hexahedral mesh from a VTK XML UnstructuredGrid file (ASCII arrays; cells of VTK
+/// type 12, 8-node hexahedra, in VTK's node order).
+pub fn read_vtu_hex(path: &Path) -> Result<FeMesh<3>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    if !text.contains("type=\"UnstructuredGrid\"") {
+        return Err(Error::parse(path, 1, "not a VTK XML UnstructuredGrid file"));
+    }
+    let nodes = points(path, &text)?;
+    let conn = array(path, &text, "Cells", Some("connectivity"))?;
+    let offs = array(path, &text, "Cells", Some("offsets"))?;
+    let types = array(path, &text, "Cells", Some("types"))?;
+    if types.len() != offs.len() {
+        return Err(Error::parse(
+            path,
+            0,
+            "cell types and offsets differ in number",
+        ));
+    }
+    let mut connectivity = Vec::with_capacity(conn.len());
+    let mut prev = 0usize;
+    for (e, (&o, &t)) in offs.iter().zip(&types).enumerate() {
+        if t != 12.0 {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "cell {e} has VTK type {t}; only 8-node hexahedra (type 12) are read as template meshes"
+                ),
+            ));
+        }
+        let o = index(path, o, conn.len() + 1, "offset")?;
+        if o != prev + 8 {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("cell {e} does not have 8 nodes"),
+            ));
+        }
+        for &v in &conn[prev..o] {
+            connectivity.push(index(path, v, nodes.len(), "node index")?);
+        }
+        prev = o;
+    }
+    if connectivity.is_empty() {
+        return Err(Error::parse(path, 0, "the mesh has no cells"));
+    }
+    if nodes.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+        return Err(Error::parse(
+            path,
+            0,
+            "a node has a NaN or infinite coordinate",
+        ));
+    }
+    Ok(FeMesh {
+        nodes,
+        kind: ElementKind::Hex8,
+        connectivity,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Shape;
+
+    #[test]
+    fn written_vtp_and_vtu_read_back() {
+        let dir = std::env::temp_dir().join(format!("atlasmesh-xml-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let s = Shape::<3> {
+            name: "t".into(),
+            points: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            facets: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+            landmarks: Vec::new(),
+        };
+        let p = dir.join("t.vtp");
+        crate::export::write_vtp(&p, &s).unwrap();
+        let (pts, polys) = read_vtp(&p).unwrap();
+        assert_eq!(pts, s.points);
+        assert_eq!(
+            polys,
+            s.facets.iter().map(|f| f.to_vec()).collect::<Vec<_>>()
+        );
+        let cube = FeMesh {
+            nodes: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ],
+            kind: ElementKind::Hex8,
+            connectivity: (0..8).collect(),
+        };
+        let p = dir.join("c.vtu");
+        crate::export::write_vtu(&p, &cube, None).unwrap();
+        let m = read_vtu_hex(&p).unwrap();
+        assert_eq!(m.nodes, cube.nodes);
+        assert_eq!(m.connectivity, cube.connectivity);
+        // Truncated: a clear error naming the file.
+        let t = std::fs::read_to_string(&p).unwrap();
+        std::fs::write(&p, &t[..t.len() / 2]).unwrap();
+        let e = read_vtu_hex(&p).unwrap_err().to_string();
+        assert!(e.contains("c.vtu") && e.contains("not closed"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -418,12 +418,31 @@ pub struct FfdFit<const D: usize> {
     lattice: Lattice<D>,
     unit: f64,
     sources: Vec<Point<D>>,
+    weights: Option<Vec<f64>>,
     llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
 }
 
 impl<const D: usize> FfdFit<D> {
     /// Builds and factorizes the normal matrix for the source points `sources` (shape units).
     pub fn new(sources: &[Point<D>], params: &FfdParams) -> Result<Self> {
+        Self::weighted(sources, None, params)
+    }
+
+    /// [`FfdFit::new`] with a weight per source point in the data term (e.g. the landmark
+    /// term `beta` of eq. 2 on the landmark points); `None` means all ones. The lattice is
+    /// laid around all the sources.
+    pub fn weighted(
+        sources: &[Point<D>],
+        weights: Option<&[f64]>,
+        params: &FfdParams,
+    ) -> Result<Self> {
+        if let Some(w) = weights
+            && (w.len() != sources.len() || w.iter().any(|v| !(v.is_finite() && *v >= 0.0)))
+        {
+            return Err(Error::Parameter(
+                "FFD weights: one finite, non-negative weight per source point".into(),
+            ));
+        }
         if params.grid < 4 {
             return Err(Error::Parameter(format!(
                 "FFD grid {} is below 4 control points per axis",
@@ -446,13 +465,17 @@ impl<const D: usize> FfdFit<D> {
         }
         // Add B^T B (data term of eq. 9, lengths in `unit`).
         let mut sup: Vec<(usize, f64)> = Vec::with_capacity(4usize.pow(D as u32));
-        for p in sources {
+        for (k, p) in sources.iter().enumerate() {
+            let pw = weights.map_or(1.0, |w| w[k]);
+            if pw == 0.0 {
+                continue;
+            }
             sup.clear();
             lattice.for_each_basis(p, |i, w| sup.push((i, w)));
             for &(i, wi) in &sup {
                 for &(j, wj) in &sup {
                     let o = a.offset(i, j);
-                    a.rows[i * a.width + o] += wi * wj;
+                    a.rows[i * a.width + o] += pw * wi * wj;
                 }
             }
         }
@@ -473,6 +496,7 @@ impl<const D: usize> FfdFit<D> {
             lattice,
             unit,
             sources: sources.to_vec(),
+            weights: weights.map(|w| w.to_vec()),
             llt,
         })
     }
@@ -494,10 +518,14 @@ impl<const D: usize> FfdFit<D> {
         let n = self.lattice.len();
         let o = self.lattice.origin;
         let mut rhs = Mat::<f64>::zeros(n, D);
-        for (p, q) in self.sources.iter().zip(targets) {
+        for (k, (p, q)) in self.sources.iter().zip(targets).enumerate() {
+            let pw = self.weights.as_ref().map_or(1.0, |w| w[k]);
+            if pw == 0.0 {
+                continue;
+            }
             self.lattice.for_each_basis(p, |i, w| {
                 for d in 0..D {
-                    rhs[(i, d)] += w * (q[d] - o[d]) / self.unit;
+                    rhs[(i, d)] += pw * w * (q[d] - o[d]) / self.unit;
                 }
             });
         }

@@ -26,6 +26,7 @@ pub mod model;
 pub mod morph;
 pub mod pca;
 pub mod procrustes;
+pub mod register;
 pub mod resample;
 
 pub use error::{Error, Result};

@@ -1,0 +1,344 @@
+//! Pairwise registration of a template to a target that is not in correspondence with it
+//! (section 2.1): pre-alignment, a cubic B-spline FFD minimizing eq. 2 with an annealed
+//! smoothing weight, and the correspondence by projection along the normals.
+//!
+//! Frames: the template in its own frame is first brought to the target's frame by the
+//! pre-alignment similarity; the FFD then deforms it there. All outputs are in the target's
+//! frame and units.
+
+use crate::error::{Error, Result};
+use crate::ffd::{FfdFit, FfdParams};
+use crate::fit::project_along_normals;
+use crate::geometry::{
+    ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, centroid, dist2, dot, sub,
+    vertex_normals,
+};
+use crate::procrustes::fit_similarity;
+
+/// Parameters of the registration (eq. 2).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RegisterParams {
+    /// Control points per axis (paper: 20 × 20).
+    pub grid: usize,
+    /// First smoothing weight `alpha` (paper, hands: 30 000).
+    pub alpha_start: f64,
+    /// The schedule stops once `alpha` is below this (paper: 10).
+    pub alpha_stop: f64,
+    /// Correspondence updates per `alpha`; then `alpha` halves (paper: 8).
+    pub iterations_per_alpha: usize,
+    /// Landmark weight `beta` (paper: 5), for `N = 2001` points; scaled by `N / 2001`.
+    pub beta: f64,
+    /// Starting rotations of the pre-alignment without landmarks (2D; 3D uses the 4
+    /// proper sign choices of the principal axes).
+    pub starts: usize,
+}
+
+impl Default for RegisterParams {
+    fn default() -> Self {
+        RegisterParams {
+            grid: 20,
+            alpha_start: 30_000.0,
+            alpha_stop: 10.0,
+            iterations_per_alpha: 8,
+            beta: 5.0,
+            starts: 8,
+        }
+    }
+}
+
+/// The result of registering a template to a target.
+#[derive(Clone, Debug)]
+pub struct Registration<const D: usize> {
+    /// Pre-alignment: template frame to target frame.
+    pub similarity: Similarity<D>,
+    /// The template's points after the FFD, target frame.
+    pub deformed: Vec<Point<D>>,
+    /// The deformed template projected onto the target along its normals: for every
+    /// template point, its corresponding point on the target.
+    pub correspondence: Vec<SurfacePoint<D>>,
+    /// Mean squared distance from the deformed template to the target after each update.
+    pub history: Vec<f64>,
+}
+
+impl<const D: usize> Registration<D> {
+    /// The target resampled at the template's points: the template's connectivity and
+    /// landmarks, the corresponding points' positions. Named after the target.
+    pub fn resampled(&self, template: &Shape<D>, target: &Shape<D>) -> Shape<D> {
+        Shape {
+            name: target.name.clone(),
+            points: self.correspondence.iter().map(|c| c.point).collect(),
+            facets: template.facets.clone(),
+            landmarks: template.landmarks.clone(),
+        }
+    }
+}
+
+/// Pre-alignment of `template` to `target`: the similarity of the landmark pairs when both
+/// have the same number of landmarks; otherwise centroids and RMS radii matched, `starts`
+/// rotations (2D) or the principal axes (3D) tried, each refined by a similarity ICP on the
+/// closest points both ways, and the one of least two-way mean squared distance kept.
+pub fn pre_align<const D: usize>(
+    template: &Shape<D>,
+    target: &Shape<D>,
+    target_index: &ClosestPointIndex<D>,
+    starts: usize,
+) -> Result<Similarity<D>> {
+    if !template.landmarks.is_empty() && template.landmarks.len() == target.landmarks.len() {
+        let src: Vec<Point<D>> = template
+            .landmarks
+            .iter()
+            .map(|&i| template.points[i])
+            .collect();
+        let dst: Vec<Point<D>> = target.landmarks.iter().map(|&i| target.points[i]).collect();
+        return Ok(fit_similarity(&src, &dst, None));
+    }
+    let ct = centroid(&template.points);
+    let cs = centroid(&target.points);
+    let rms = |p: &[Point<D>], c: Point<D>| {
+        (p.iter().map(|q| dist2(*q, c)).sum::<f64>() / p.len() as f64).sqrt()
+    };
+    let s0 = rms(&target.points, cs) / rms(&template.points, ct).max(f64::MIN_POSITIVE);
+    let rotations: Vec<[[f64; D]; D]> = if D == 2 {
+        (0..starts.max(1))
+            .map(|k| {
+                Similarity::<D>::planar_rotation(
+                    std::f64::consts::TAU * k as f64 / starts.max(1) as f64,
+                )
+                .r
+            })
+            .collect()
+    } else {
+        let a = principal_axes(&template.points, ct);
+        let b = principal_axes(&target.points, cs);
+        [
+            [1.0, 1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+        ]
+        .iter()
+        .map(|sg| {
+            // R maps template axis k to sign_k × target axis k: R = B diag(sg) A^T.
+            std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..D).map(|k| b[k][i] * sg[k] * a[k][j]).sum())
+            })
+        })
+        .collect()
+    };
+    let sample = |n: usize| -> Vec<usize> {
+        let step = (n / 400).max(1);
+        (0..n).step_by(step).collect()
+    };
+    let ts = sample(template.points.len());
+    let ss = sample(target.points.len());
+    let mut best: Option<(f64, Similarity<D>)> = None;
+    for r in rotations {
+        let mut sim = Similarity::<D> {
+            s: s0,
+            r,
+            t: [0.0; D],
+        };
+        sim.t = sub(cs, sim.apply(&ct));
+        let mut score = f64::INFINITY;
+        for _ in 0..30 {
+            let moved: Vec<Point<D>> = template.points.iter().map(|p| sim.apply(p)).collect();
+            let tindex = ClosestPointIndex::new(&moved, &template.facets);
+            let mut src = Vec::with_capacity(ts.len() + ss.len());
+            let mut dst = Vec::with_capacity(ts.len() + ss.len());
+            let mut fwd = 0.0;
+            for &j in &ts {
+                let c = target_index.closest(&moved[j]);
+                fwd += c.dist2;
+                src.push(template.points[j]);
+                dst.push(c.point);
+            }
+            let mut bwd = 0.0;
+            for &i in &ss {
+                let c = tindex.closest(&target.points[i]);
+                bwd += c.dist2;
+                let f = &template.facets[c.facet];
+                let mut p = [0.0; D];
+                for k in 0..D {
+                    for d in 0..D {
+                        p[d] += c.weights[k] * template.points[f[k]][d];
+                    }
+                }
+                src.push(p);
+                dst.push(target.points[i]);
+            }
+            score = 0.5 * (fwd / ts.len() as f64 + bwd / ss.len() as f64);
+            sim = fit_similarity(&src, &dst, None);
+        }
+        if best.as_ref().is_none_or(|(b, _)| score < *b) {
+            best = Some((score, sim));
+        }
+    }
+    best.map(|b| b.1)
+        .ok_or_else(|| Error::Numerical(format!("{}: no pre-alignment start", target.name)))
+}
+
+/// Principal axes (rows, unit, right-handed) of a point set about `c`, by Jacobi sweeps on
+/// the 3 × 3 covariance; for `D = 2` the first two rows of the identity are returned.
+fn principal_axes<const D: usize>(points: &[Point<D>], c: Point<D>) -> [[f64; D]; D] {
+    let mut a = [[0.0; D]; D];
+    for p in points {
+        let d = sub(*p, c);
+        for i in 0..D {
+            for j in 0..D {
+                a[i][j] += d[i] * d[j];
+            }
+        }
+    }
+    let mut v: [[f64; D]; D] =
+        std::array::from_fn(|i| std::array::from_fn(|j| f64::from(u8::from(i == j))));
+    for _ in 0..50 {
+        for p in 0..D {
+            for q in p + 1..D {
+                if a[p][q].abs() < 1e-300 {
+                    continue;
+                }
+                let th = 0.5 * (2.0 * a[p][q]).atan2(a[q][q] - a[p][p]);
+                let (s, co) = th.sin_cos();
+                for k in 0..D {
+                    let (akp, akq) = (a[k][p], a[k][q]);
+                    a[k][p] = co * akp - s * akq;
+                    a[k][q] = s * akp + co * akq;
+                }
+                for k in 0..D {
+                    let (apk, aqk) = (a[p][k], a[q][k]);
+                    a[p][k] = co * apk - s * aqk;
+                    a[q][k] = s * apk + co * aqk;
+                }
+                for k in 0..D {
+                    let (vkp, vkq) = (v[k][p], v[k][q]);
+                    v[k][p] = co * vkp - s * vkq;
+                    v[k][q] = s * vkp + co * vkq;
+                }
+            }
+        }
+    }
+    // Columns of v are eigenvectors; order by decreasing eigenvalue.
+    let mut idx: Vec<usize> = (0..D).collect();
+    idx.sort_by(|&i, &j| a[j][j].total_cmp(&a[i][i]));
+    let mut axes: [[f64; D]; D] = std::array::from_fn(|r| std::array::from_fn(|k| v[k][idx[r]]));
+    if D == 3 {
+        // Right-handed: third = first × second.
+        let (x, y) = (axes[0], axes[1]);
+        axes[2][0] = x[1] * y[2] - x[2] * y[1];
+        axes[2][1] = x[2] * y[0] - x[0] * y[2];
+        axes[2][2] = x[0] * y[1] - x[1] * y[0];
+    }
+    axes
+}
+
+/// Registers `template` to `target` (section 2.1, eq. 2): pre-alignment ([`pre_align`]),
+/// then, with the template's points `p_j` fixed as the FFD's sources, for each `alpha` of the
+/// schedule `iterations_per_alpha` times: the closest point `c_j` on the target of every
+/// deformed point `f(p_j)`, and the control points minimizing
+/// `Σ_j ||f(p_j) - c_j||² + alpha E_smooth + beta Σ_l ||f(p_l) - q_l||²` (the last over the
+/// landmark pairs), a sparse linear least-squares problem (faer's sparse Cholesky). Last, the
+/// deformed template is projected onto the target along its normals.
+///
+/// Units: `E_smooth` is in lattice units (see [`crate::ffd`]) and positions in units of the
+/// lattice's extent, so `alpha` means the same for a unit hand and a femur in mm; `beta` is
+/// relative to the data term and scaled by `N / 2001` (the paper's hands had 2001 points).
+/// Pairs whose normals differ by more than 60° (facing sides) do not pull, as in the fit.
+pub fn register<const D: usize>(
+    template: &Shape<D>,
+    target: &Shape<D>,
+    target_index: &ClosestPointIndex<D>,
+    params: &RegisterParams,
+) -> Result<Registration<D>> {
+    template.validate()?;
+    target.validate()?;
+    if template.facets.is_empty() || target.facets.is_empty() {
+        return Err(Error::Population(format!(
+            "registration of {} to {}: both need segments/facets",
+            template.name, target.name
+        )));
+    }
+    if !template.landmarks.is_empty()
+        && !target.landmarks.is_empty()
+        && template.landmarks.len() != target.landmarks.len()
+    {
+        return Err(Error::Population(format!(
+            "{} has {} landmarks but {} has {}; landmarks must pair up",
+            template.name,
+            template.landmarks.len(),
+            target.name,
+            target.landmarks.len()
+        )));
+    }
+    let sim = pre_align(template, target, target_index, params.starts)?;
+    let sources: Vec<Point<D>> = template.points.iter().map(|p| sim.apply(p)).collect();
+    let n = sources.len();
+    let beta = params.beta * n as f64 / crate::fit::REFERENCE_POINTS;
+    let paired = template.landmarks.len() == target.landmarks.len() && !target.landmarks.is_empty();
+    let mut weight = vec![1.0; n];
+    let mut landmark_target: Vec<Option<Point<D>>> = vec![None; n];
+    if paired {
+        for (&a, &b) in template.landmarks.iter().zip(&target.landmarks) {
+            weight[a] += beta;
+            landmark_target[a] = Some(target.points[b]);
+        }
+    }
+    let target_normals = vertex_normals(&target.points, &target.facets);
+    let mut deformed = sources.clone();
+    let mut history = Vec::new();
+    let mut alpha = params.alpha_start;
+    loop {
+        let fit = FfdFit::weighted(
+            &sources,
+            Some(&weight),
+            &FfdParams {
+                grid: params.grid,
+                alpha,
+                margin: 0.1,
+            },
+        )?;
+        for _ in 0..params.iterations_per_alpha.max(1) {
+            let normals = vertex_normals(&deformed, &template.facets);
+            let mut ms = 0.0;
+            let targets: Vec<Point<D>> = (0..n)
+                .map(|j| {
+                    let c = target_index.closest(&deformed[j]);
+                    ms += c.dist2;
+                    let f = &target.facets[c.facet];
+                    let mut nt = [0.0; D];
+                    for k in 0..D {
+                        for d in 0..D {
+                            nt[d] += c.weights[k] * target_normals[f[k]][d];
+                        }
+                    }
+                    // Facing sides do not pull: the point is asked to stay.
+                    let c_point = if dot(nt, normals[j]) < 0.5 * crate::geometry::norm(nt) {
+                        deformed[j]
+                    } else {
+                        c.point
+                    };
+                    match landmark_target[j] {
+                        Some(q) => std::array::from_fn(|d| {
+                            (c_point[d] + (weight[j] - 1.0) * q[d]) / weight[j]
+                        }),
+                        None => c_point,
+                    }
+                })
+                .collect();
+            history.push(ms / n as f64);
+            let f = fit.solve(&targets);
+            deformed = sources.iter().map(|p| f.apply(p)).collect();
+        }
+        if alpha < params.alpha_stop {
+            break;
+        }
+        alpha *= 0.5;
+    }
+    let correspondence =
+        project_along_normals(&deformed, &template.facets, target_index, &target_normals);
+    Ok(Registration {
+        similarity: sim,
+        deformed,
+        correspondence,
+        history,
+    })
+}

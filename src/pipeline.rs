@@ -51,6 +51,102 @@ impl Default for RunParams {
     }
 }
 
+/// Brings shapes that are not in correspondence into correspondence (section 2.1): the
+/// template (`template` names it; by default the shape nearest to the others after
+/// alignment) is registered to every other shape ([`crate::register::register`]) and each is
+/// resampled at the template's points. Returns the corresponded shapes (same order; the
+/// template as it is) and the template's index. `jobs` threads (0 = all cores).
+pub fn register_population<const D: usize>(
+    shapes: &[Shape<D>],
+    template: Option<&str>,
+    params: &crate::register::RegisterParams,
+    jobs: usize,
+    quiet: bool,
+) -> Result<(Vec<Shape<D>>, usize)> {
+    if shapes.len() < 2 {
+        return Err(Error::Population(format!(
+            "registration needs at least 2 shapes, got {}",
+            shapes.len()
+        )));
+    }
+    let t = match template {
+        Some(name) => shapes.iter().position(|s| s.name == name).ok_or_else(|| {
+            Error::Population(format!("--template {name}: no shape of that name"))
+        })?,
+        None => nearest_to_others(shapes, params)?,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| Error::Parameter(format!("--jobs: {e}")))?;
+    let progress = Progress::new("registration", shapes.len(), quiet);
+    let out: Vec<Result<Shape<D>>> = pool.install(|| {
+        shapes
+            .par_iter()
+            .enumerate()
+            .map(|(k, s)| {
+                let r = if k == t {
+                    Ok(s.clone())
+                } else {
+                    let index = ClosestPointIndex::from_shape(s);
+                    crate::register::register(&shapes[t], s, &index, params)
+                        .map(|r| r.resampled(&shapes[t], s))
+                };
+                progress.tick(&s.name);
+                r
+            })
+            .collect()
+    });
+    progress.finish();
+    Ok((out.into_iter().collect::<Result<Vec<_>>>()?, t))
+}
+
+/// The shape nearest to the others: every shape pre-aligned to the first, then the one of
+/// least mean two-way distance to the rest (on up to 200 points of each).
+fn nearest_to_others<const D: usize>(
+    shapes: &[Shape<D>],
+    params: &crate::register::RegisterParams,
+) -> Result<usize> {
+    let first = ClosestPointIndex::from_shape(&shapes[0]);
+    let aligned: Vec<Shape<D>> = shapes
+        .par_iter()
+        .map(|s| {
+            let sim = crate::register::pre_align(s, &shapes[0], &first, params.starts)?;
+            Ok(Shape {
+                points: s.points.iter().map(|p| sim.apply(p)).collect(),
+                ..s.clone()
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let indexes: Vec<ClosestPointIndex<D>> =
+        aligned.iter().map(ClosestPointIndex::from_shape).collect();
+    let sample = |s: &Shape<D>| -> Vec<Point<D>> {
+        let step = (s.points.len() / 200).max(1);
+        s.points.iter().step_by(step).copied().collect()
+    };
+    let samples: Vec<Vec<Point<D>>> = aligned.iter().map(sample).collect();
+    let ms = |a: usize, b: usize| -> f64 {
+        samples[a]
+            .iter()
+            .map(|p| indexes[b].closest(p).dist2)
+            .sum::<f64>()
+            / samples[a].len() as f64
+    };
+    let n = shapes.len();
+    let score: Vec<f64> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            (0..n)
+                .filter(|&j| j != i)
+                .map(|j| ms(i, j) + ms(j, i))
+                .sum()
+        })
+        .collect();
+    Ok((0..n)
+        .min_by(|&a, &b| score[a].total_cmp(&score[b]))
+        .unwrap_or(0))
+}
+
 /// Reads the triangle surfaces in `paths` (PLY, STL, OBJ), in the order given. Shapes in
 /// correspondence must share their vertex count and facets (checked when the atlas is built).
 pub fn load_surfaces(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
@@ -379,6 +475,30 @@ pub fn leave_one_out_with_meshes<const D: usize>(
     jobs: usize,
     quiet: bool,
 ) -> Result<Report> {
+    leave_one_out_of(shapes, shapes, meshes, dataset, params, out, jobs, quiet)
+}
+
+/// Leave-one-out where the atlas of fold `k` is built from `corresponded` without entry `k`,
+/// and `subjects[k]` (the same shape as given, before registration) is the one fitted.
+#[allow(clippy::too_many_arguments)]
+pub fn leave_one_out_of<const D: usize>(
+    corresponded: &[Shape<D>],
+    subjects: &[Shape<D>],
+    meshes: Option<&[FeMesh<D>]>,
+    dataset: &str,
+    params: &RunParams,
+    out: &Path,
+    jobs: usize,
+    quiet: bool,
+) -> Result<Report> {
+    let shapes = corresponded;
+    if subjects.len() != shapes.len() {
+        return Err(Error::Population(format!(
+            "{} subjects for {} corresponded shapes",
+            subjects.len(),
+            shapes.len()
+        )));
+    }
     if let Some(m) = meshes
         && m.len() != shapes.len()
     {
@@ -422,8 +542,8 @@ pub fn leave_one_out_with_meshes<const D: usize>(
                 let atlas = atlas_of(&training, training_meshes.as_deref(), &params.atlas)?;
                 let fitter = Fitter::new(&atlas);
                 let morpher = Morpher::new(&atlas, &params.morph)?;
-                let r = process_subject(&atlas, &fitter, &morpher, &shapes[k], out, params);
-                progress.tick(&shapes[k].name);
+                let r = process_subject(&atlas, &fitter, &morpher, &subjects[k], out, params);
+                progress.tick(&subjects[k].name);
                 r
             })
             .collect()

@@ -79,6 +79,16 @@ struct PopArgs {
     /// atlas's FE mesh instead of the automatic one.
     #[arg(long, num_args = 1.., value_name = "VTU")]
     template_mesh: Vec<PathBuf>,
+    /// The shapes are not in correspondence: register a template to each (FFD, eq. 2) first.
+    #[arg(long)]
+    register: bool,
+    /// The registration's template, by shape name (default: the shape nearest to the others).
+    #[arg(long, value_name = "NAME", requires = "register")]
+    template: Option<String>,
+    /// Landmark files: one CSV for all shapes (shape,landmark,x,y[,z] or shape,landmark,index),
+    /// or one Scalismo JSON / .pts per shape in the order of --shapes.
+    #[arg(long, num_args = 1..)]
+    landmarks: Vec<PathBuf>,
     /// Outlines are open (the hands: the wrist is not part of the outline).
     #[arg(long, conflicts_with = "closed")]
     open: bool,
@@ -172,6 +182,29 @@ fn surfaces(paths: &[PathBuf]) -> anyhow::Result<bool> {
     Ok(n > 0)
 }
 
+/// The shapes in correspondence: registered to a template with `--register`, else as given.
+fn corresponded<const D: usize>(
+    pop: &PopArgs,
+    shapes: &[atlasmesh::geometry::Shape<D>],
+    jobs: usize,
+    quiet: bool,
+) -> anyhow::Result<Vec<atlasmesh::geometry::Shape<D>>> {
+    if !pop.register {
+        return Ok(shapes.to_vec());
+    }
+    let (c, t) = pipeline::register_population(
+        shapes,
+        pop.template.as_deref(),
+        &atlasmesh::register::RegisterParams::default(),
+        jobs,
+        quiet,
+    )?;
+    if !quiet {
+        eprintln!("registration template: {}", shapes[t].name);
+    }
+    Ok(c)
+}
+
 /// The template volume meshes of `--template-mesh`, if any.
 fn template_meshes(pop: &PopArgs) -> anyhow::Result<Option<Vec<atlasmesh::fe::FeMesh<3>>>> {
     if pop.template_mesh.is_empty() {
@@ -199,13 +232,16 @@ fn population_and_params(
     }
     let mut params = run.params();
     apply_pop(&mut params, pop);
-    let shapes = pipeline::load_population(
-        &pop.shapes,
-        &PopulationOptions {
-            closed: !pop.open,
-            resample: pop.resample,
-        },
-    )?;
+    let opts = PopulationOptions {
+        closed: !pop.open,
+        resample: pop.resample,
+    };
+    let mut shapes = if pop.register {
+        pipeline::load_outlines_raw(&pop.shapes, &opts)?
+    } else {
+        pipeline::load_population(&pop.shapes, &opts)?
+    };
+    pipeline::attach_landmarks(&mut shapes, &pop.landmarks)?;
     Ok((shapes, params))
 }
 
@@ -235,9 +271,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let r = if surfaces(&pop.shapes)? {
                 let mut params = run.params();
                 apply_pop(&mut params, &pop);
-                let shapes = pipeline::load_surfaces(&pop.shapes)?;
+                let mut shapes = pipeline::load_surfaces(&pop.shapes)?;
+                pipeline::attach_landmarks(&mut shapes, &pop.landmarks)?;
                 let meshes = template_meshes(&pop)?;
-                pipeline::leave_one_out_with_meshes(
+                let corresponded = corresponded(&pop, &shapes, jobs, cli.quiet)?;
+                pipeline::leave_one_out_of(
+                    &corresponded,
                     &shapes,
                     meshes.as_deref(),
                     &dataset_name(&pop.shapes),
@@ -248,8 +287,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 )?
             } else {
                 let (shapes, params) = population_and_params(&pop, &run)?;
-                pipeline::leave_one_out(
+                let corresponded = corresponded(&pop, &shapes, jobs, cli.quiet)?;
+                pipeline::leave_one_out_of(
+                    &corresponded,
                     &shapes,
+                    None,
                     &dataset_name(&pop.shapes),
                     &params,
                     &out,
@@ -263,8 +305,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let (n, points, modes, share, elements) = if surfaces(&pop.shapes)? {
                 let mut params = run.params();
                 apply_pop(&mut params, &pop);
-                let shapes = pipeline::load_surfaces(&pop.shapes)?;
+                let mut shapes = pipeline::load_surfaces(&pop.shapes)?;
+                pipeline::attach_landmarks(&mut shapes, &pop.landmarks)?;
                 let meshes = template_meshes(&pop)?;
+                let shapes = corresponded(&pop, &shapes, 0, cli.quiet)?;
                 let a = pipeline::build_with_meshes(&shapes, meshes.as_deref(), &params, &out)?;
                 let m = a.num_modes();
                 (
@@ -276,6 +320,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 )
             } else {
                 let (shapes, params) = population_and_params(&pop, &run)?;
+                let shapes = corresponded(&pop, &shapes, 0, cli.quiet)?;
                 let a = pipeline::build(&shapes, &params, &out)?;
                 let m = a.num_modes();
                 (

@@ -51,6 +51,86 @@ impl Default for RunParams {
     }
 }
 
+/// Reads outlines that need not correspond (any point counts), each resampled evenly by arc
+/// length to `resample` points when given.
+pub fn load_outlines_raw(paths: &[PathBuf], opts: &PopulationOptions) -> Result<Vec<Shape<2>>> {
+    if paths.is_empty() {
+        return Err(Error::Population("no input file given".into()));
+    }
+    let mut shapes = Vec::new();
+    for p in paths {
+        for s in crate::io::read_outlines(p, opts.closed)? {
+            s.validate()
+                .map_err(|e| Error::parse(p, 0, e.to_string()))?;
+            let closed = s.is_closed();
+            shapes.push(match opts.resample {
+                Some(n) => resample_uniform(&s, n, closed)?,
+                None => s,
+            });
+        }
+    }
+    Ok(shapes)
+}
+
+/// Gives every shape its landmarks from `files`: one CSV for the whole population (rows by
+/// shape name), or one Scalismo JSON / `.pts` file per shape, in the shapes' order.
+pub fn attach_landmarks<const D: usize>(shapes: &mut [Shape<D>], files: &[PathBuf]) -> Result<()> {
+    use crate::io::landmarks::{attach, read_landmarks, read_landmarks_csv};
+    if files.is_empty() {
+        return Ok(());
+    }
+    let csv = files.len() == 1
+        && files[0]
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    if csv {
+        let map = read_landmarks_csv::<D>(&files[0])?;
+        if let Some(name) = map.keys().find(|k| !shapes.iter().any(|s| &s.name == *k)) {
+            return Err(Error::parse(
+                &files[0],
+                0,
+                format!("landmarks for shape '{name}', which is not in the population"),
+            ));
+        }
+        for s in shapes.iter_mut() {
+            let l = map.get(&s.name).ok_or_else(|| {
+                Error::parse(&files[0], 0, format!("no landmarks for shape '{}'", s.name))
+            })?;
+            attach(s, l, &files[0])?;
+        }
+    } else {
+        if files.len() != shapes.len() {
+            return Err(Error::Population(format!(
+                "{} landmark files for {} shapes; give one per shape, in the same order, or one CSV",
+                files.len(),
+                shapes.len()
+            )));
+        }
+        for (s, f) in shapes.iter_mut().zip(files) {
+            let l = read_landmarks::<D>(f)?;
+            attach(s, &l, f)?;
+        }
+    }
+    let n0 = shapes[0].landmarks.len();
+    if let Some((s, f)) = shapes
+        .iter()
+        .zip(files.iter().cycle())
+        .find(|(s, _)| s.landmarks.len() != n0)
+    {
+        return Err(Error::parse(
+            f,
+            0,
+            format!(
+                "shape '{}' has {} landmarks but '{}' has {n0}; every shape needs the same landmarks",
+                s.name,
+                s.landmarks.len(),
+                shapes[0].name
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Brings shapes that are not in correspondence into correspondence (section 2.1): the
 /// template (`template` names it; by default the shape nearest to the others after
 /// alignment) is registered to every other shape ([`crate::register::register`]) and each is

@@ -1,0 +1,233 @@
+//! Landmark files: Scalismo JSON (`[{"id": ..., "coordinates": [x, y(, z)]}, ...]`), `.pts`
+//! (one point per line, optionally inside the `version: / n_points: / { ... }` frame of the
+//! IBUG format), and CSV for a whole population (`shape,landmark,x,y[,z]` with coordinates,
+//! or `shape,landmark,index` with point indices). Coordinates become the index of the
+//! shape's nearest point ([`attach`]).
+
+use crate::error::{Error, Result};
+use crate::geometry::{Point, Shape, dist2};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// A landmark as given: a position, or the index of a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Landmark<const D: usize> {
+    At(Point<D>),
+    Index(usize),
+}
+
+/// Reads the landmarks of one shape from a Scalismo JSON or `.pts` file, in file order.
+pub fn read_landmarks<const D: usize>(path: &Path) -> Result<Vec<Landmark<D>>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    if ext == "json" {
+        let v: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| Error::parse(path, e.line(), format!("not JSON: {e}")))?;
+        let items = v
+            .as_array()
+            .ok_or_else(|| Error::parse(path, 1, "expected a list of landmarks"))?;
+        items
+            .iter()
+            .enumerate()
+            .map(|(k, it)| {
+                let c = it
+                    .get("coordinates")
+                    .and_then(|c| c.as_array())
+                    .ok_or_else(|| {
+                        Error::parse(path, 0, format!("landmark {k} has no 'coordinates'"))
+                    })?;
+                if c.len() != D {
+                    return Err(Error::parse(
+                        path,
+                        0,
+                        format!(
+                            "landmark {k} has {} coordinates; the shapes are {D}D",
+                            c.len()
+                        ),
+                    ));
+                }
+                let mut p = [0.0; D];
+                for d in 0..D {
+                    p[d] = c[d].as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
+                        Error::parse(
+                            path,
+                            0,
+                            format!("landmark {k}: a coordinate is not a finite number"),
+                        )
+                    })?;
+                }
+                Ok(Landmark::At(p))
+            })
+            .collect()
+    } else {
+        let mut out = Vec::new();
+        for (i, l) in text.lines().enumerate() {
+            let l = l.trim();
+            if l.is_empty()
+                || l.starts_with('#')
+                || l.starts_with("version")
+                || l.starts_with("n_points")
+                || l == "{"
+                || l == "}"
+            {
+                continue;
+            }
+            let t: Vec<&str> = l.split_whitespace().collect();
+            if t.len() != D {
+                return Err(Error::parse(
+                    path,
+                    i + 1,
+                    format!("expected {D} coordinates, got '{l}'"),
+                ));
+            }
+            let mut p = [0.0; D];
+            for d in 0..D {
+                p[d] = t[d]
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        Error::parse(path, i + 1, format!("'{}' is not a finite number", t[d]))
+                    })?;
+            }
+            out.push(Landmark::At(p));
+        }
+        Ok(out)
+    }
+}
+
+/// Reads a population's landmarks from CSV: `shape,landmark,x,y[,z]` or
+/// `shape,landmark,index`. Per shape name, the landmarks ordered by their `landmark` column.
+pub fn read_landmarks_csv<const D: usize>(
+    path: &Path,
+) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut lines = text.lines().enumerate();
+    let header = lines
+        .next()
+        .ok_or_else(|| Error::parse(path, 1, "empty file"))?
+        .1;
+    let cols = header.split(',').count();
+    let by_index = cols == 3;
+    if !(by_index || cols == 2 + D) {
+        return Err(Error::parse(
+            path,
+            1,
+            format!("expected a header shape,landmark,index or shape,landmark and {D} coordinates"),
+        ));
+    }
+    let mut rows: BTreeMap<String, Vec<(String, Landmark<D>)>> = BTreeMap::new();
+    for (i, l) in lines {
+        if l.trim().is_empty() {
+            continue;
+        }
+        let t: Vec<&str> = l.split(',').map(str::trim).collect();
+        if t.len() != cols {
+            return Err(Error::parse(
+                path,
+                i + 1,
+                format!("{} fields, {cols} expected", t.len()),
+            ));
+        }
+        let lm = if by_index {
+            Landmark::Index(t[2].parse().map_err(|_| {
+                Error::parse(path, i + 1, format!("'{}' is not a point index", t[2]))
+            })?)
+        } else {
+            let mut p = [0.0; D];
+            for d in 0..D {
+                p[d] = t[2 + d]
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        Error::parse(
+                            path,
+                            i + 1,
+                            format!("'{}' is not a finite number", t[2 + d]),
+                        )
+                    })?;
+            }
+            Landmark::At(p)
+        };
+        rows.entry(t[0].to_string())
+            .or_default()
+            .push((t[1].to_string(), lm));
+    }
+    Ok(rows
+        .into_iter()
+        .map(|(k, mut v)| {
+            v.sort_by(|a, b| match (a.0.parse::<i64>(), b.0.parse::<i64>()) {
+                (Ok(x), Ok(y)) => x.cmp(&y),
+                _ => a.0.cmp(&b.0),
+            });
+            (k, v.into_iter().map(|x| x.1).collect())
+        })
+        .collect())
+}
+
+/// Sets `shape.landmarks` from `landmarks`: indices as given (checked), positions as the
+/// index of the shape's nearest point. `source` names the file in errors.
+pub fn attach<const D: usize>(
+    shape: &mut Shape<D>,
+    landmarks: &[Landmark<D>],
+    source: &Path,
+) -> Result<()> {
+    let n = shape.points.len();
+    shape.landmarks = landmarks
+        .iter()
+        .enumerate()
+        .map(|(k, l)| match *l {
+            Landmark::Index(i) if i < n => Ok(i),
+            Landmark::Index(i) => Err(Error::parse(
+                source,
+                0,
+                format!(
+                    "landmark {k} of {}: index {i} is out of range (the shape has {n} points)",
+                    shape.name
+                ),
+            )),
+            Landmark::At(p) => Ok((0..n)
+                .min_by(|&a, &b| dist2(shape.points[a], p).total_cmp(&dist2(shape.points[b], p)))
+                .unwrap_or(0)),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_pts_and_csv_landmarks() {
+        let dir = std::env::temp_dir().join(format!("atlasmesh-lm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let j = dir.join("a.json");
+        std::fs::write(
+            &j,
+            r#"[{"id":"tip","coordinates":[1.0,2.0]},{"id":"b","coordinates":[3.0,-1.0]}]"#,
+        )
+        .unwrap();
+        assert_eq!(
+            read_landmarks::<2>(&j).unwrap(),
+            vec![Landmark::At([1.0, 2.0]), Landmark::At([3.0, -1.0])]
+        );
+        let p = dir.join("a.pts");
+        std::fs::write(&p, "version: 1\nn_points: 2\n{\n1 2\n3 -1\n}\n").unwrap();
+        assert_eq!(read_landmarks::<2>(&p).unwrap().len(), 2);
+        let c = dir.join("l.csv");
+        std::fs::write(&c, "shape,landmark,index\ns1,1,7\ns1,0,3\ns2,0,4\n").unwrap();
+        let m = read_landmarks_csv::<2>(&c).unwrap();
+        assert_eq!(m["s1"], vec![Landmark::Index(3), Landmark::Index(7)]);
+        let mut s = Shape::polyline("s1", vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], true);
+        let e = attach(&mut s, &m["s1"], &c).unwrap_err().to_string();
+        assert!(e.contains("out of range") && e.contains("l.csv"), "{e}");
+        attach(&mut s, &[Landmark::At([0.9, 0.9])], &c).unwrap();
+        assert_eq!(s.landmarks, vec![2]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -127,6 +127,11 @@ struct RunArgs {
     /// model, and morph with the model points that have a partner on the subject.
     #[arg(long)]
     partial: bool,
+    /// Also measure the paper's baselines (fig. 12/20): normal correlations of the
+    /// correspondences by similarity ICP and by FFD registration (report.json:
+    /// normal_correlation_icp, normal_correlation_ffd).
+    #[arg(long)]
+    baselines: bool,
     /// Skip the PNG plots.
     #[arg(long)]
     no_plots: bool,
@@ -141,6 +146,7 @@ impl RunArgs {
         p.fit.starts = self.starts;
         p.fit.partial = self.partial;
         p.plots = !self.no_plots;
+        p.baselines = self.baselines;
         p
     }
 }

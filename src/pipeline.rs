@@ -38,11 +38,16 @@ pub struct RunParams {
     pub morph: FfdParams,
     /// Write PNG plots.
     pub plots: bool,
+    /// Also measure the paper's baselines (fig. 12/20): the normal correlation of the
+    /// correspondence by a similarity ICP and by an FFD registration of the mean to the
+    /// subject.
+    pub baselines: bool,
 }
 
 impl Default for RunParams {
     fn default() -> Self {
         RunParams {
+            baselines: false,
             atlas: AtlasParams::default(),
             fit: FitParams::default(),
             morph: FfdParams::default(),
@@ -338,6 +343,16 @@ pub fn process_subject<const D: usize>(
     let rel = rms / subject.bbox_diagonal();
     let mean_normals = atlas.mean_shape().vertex_normals();
     let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
+    let baselines = if params.baselines {
+        Some(baseline_correlations(
+            atlas,
+            subject,
+            &index,
+            &mean_normals,
+        )?)
+    } else {
+        None
+    };
     let base = file_name(&subject.name);
     let mut files = Vec::new();
     let mesh_file = format!("{base}_mesh.vtu");
@@ -394,6 +409,8 @@ pub fn process_subject<const D: usize>(
         rms_distance: rms,
         rms_distance_relative: rel,
         normal_correlation: nc,
+        normal_correlation_icp: baselines.map(|b| b.0),
+        normal_correlation_ffd: baselines.map(|b| b.1),
         jacobian_min: q.jacobian_min,
         scaled_jacobian_min: q.scaled_jacobian_min,
         inverted_elements: q.inverted_elements,
@@ -406,6 +423,33 @@ pub fn process_subject<const D: usize>(
         e_d_history: fit.e_d_history,
         files,
     })
+}
+
+/// The baselines of the paper's fig. 12/20 for one subject: the normal correlation (eq. 13)
+/// between the mean and the subject at the correspondence found (a) by a similarity ICP of
+/// the mean to the subject (the closest points of the aligned mean) and (b) by the FFD
+/// registration of the mean to the subject (eq. 2, with landmarks when both have them).
+pub fn baseline_correlations<const D: usize>(
+    atlas: &Atlas<D>,
+    subject: &Shape<D>,
+    index: &ClosestPointIndex<D>,
+    mean_normals: &[Point<D>],
+) -> Result<(f64, f64)> {
+    let params = crate::register::RegisterParams::default();
+    let mut mean = atlas.mean_shape();
+    if mean.landmarks.len() != subject.landmarks.len() {
+        mean.landmarks.clear();
+    }
+    let sim = crate::register::pre_align(&mean, subject, index, params.starts)?;
+    let icp: Vec<_> = mean
+        .points
+        .iter()
+        .map(|p| index.closest(&sim.apply(p)))
+        .collect();
+    let nc_icp = normal_correlation(mean_normals, &normals_at(subject, &icp));
+    let reg = crate::register::register(&mean, subject, index, &params)?;
+    let nc_ffd = normal_correlation(mean_normals, &normals_at(subject, &reg.correspondence));
+    Ok((nc_icp, nc_ffd))
 }
 
 fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshReport {

@@ -27,6 +27,13 @@ pub struct SubjectReport {
     pub rms_distance_relative: f64,
     /// Correlation of normals between mean and subject at corresponding points (eq. 13).
     pub normal_correlation: f64,
+    /// Baseline (with `--baselines`): normal correlation of the similarity-ICP correspondence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_correlation_icp: Option<f64>,
+    /// Baseline (with `--baselines`): normal correlation of the FFD-registration
+    /// correspondence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_correlation_ffd: Option<f64>,
     pub jacobian_min: f64,
     pub scaled_jacobian_min: f64,
     pub inverted_elements: usize,

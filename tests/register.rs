@@ -175,3 +175,43 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
     assert!(ours < 1.3 * theirs, "ours {ours} vs {theirs}");
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// The paper's comparison (fig. 12) on the 40 IMM hands: correspondences by the SSM fit, by
+/// an FFD registration of the mean (56 landmarks) and by a similarity ICP. The SSM fit and
+/// the FFD are far above the ICP.
+#[test]
+fn baselines_on_the_hands() {
+    let Some(data) = common::data_dir("baselines_on_the_hands") else {
+        return;
+    };
+    let shapes = load_population(
+        &[data.join("imm-hands-2d/hands_long.csv")],
+        &PopulationOptions {
+            closed: false,
+            resample: Some(2001),
+        },
+    )
+    .unwrap();
+    let mut params = RunParams {
+        plots: false,
+        baselines: true,
+        ..RunParams::default()
+    };
+    params.atlas.modes = ModeSelection::Count(11);
+    let out = common::temp_dir("baselines");
+    let r = leave_one_out(&shapes, "hands", &params, &out, 0, true).unwrap();
+    let mean = |f: &dyn Fn(&atlasmesh::report::SubjectReport) -> f64| {
+        r.subjects.iter().map(f).sum::<f64>() / r.subjects.len() as f64
+    };
+    let ssm = mean(&|s| s.normal_correlation);
+    let icp = mean(&|s| s.normal_correlation_icp.unwrap());
+    let ffd = mean(&|s| s.normal_correlation_ffd.unwrap());
+    eprintln!("mean normal correlation: SSM {ssm:.4}, FFD {ffd:.4}, ICP {icp:.4}");
+    assert!(ssm > icp + 0.1, "SSM {ssm} vs ICP {icp}");
+    assert!(ffd > icp + 0.1, "FFD {ffd} vs ICP {icp}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert!(json["subjects"][0]["normal_correlation_icp"].is_number());
+    assert!(json["subjects"][0]["normal_correlation_ffd"].is_number());
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -1,6 +1,7 @@
 //! Benchmarks of issue 3 on the distal femurs (`$ATLASMESH_DATA/knee-distal-femur-synthetic-3d`):
 //! one femur fit (7313 vertices, 15 modes) on one core, the hexahedral mesh of the mean femur
-//! at 2 mm, and the morph plus corner Jacobians of that mesh. Without the data the benchmarks
+//! at 2 mm, the morph plus corner Jacobians of that mesh, and the registration of a femur
+//! pair. Without the data the benchmarks
 //! say so and do nothing.
 
 use atlasmesh::fe::hexmesh::{HexMeshParams, hex_mesh};
@@ -68,6 +69,19 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let m = morpher.morph(&fit).expect("morph");
             summarize(&mesh_quality(&m.mesh))
+        })
+    });
+    // Registration of one femur pair (7313 vertices each, no landmarks): S001 to S002.
+    g.bench_function("femur_pair_registration", |b| {
+        let index = ClosestPointIndex::from_shape(&shapes[1]);
+        b.iter(|| {
+            atlasmesh::register::register(
+                &shapes[0],
+                &shapes[1],
+                &index,
+                &atlasmesh::register::RegisterParams::default(),
+            )
+            .expect("registration")
         })
     });
     g.finish();

@@ -60,6 +60,26 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Register one template shape to one target by the FFD of eq. 2 (section 2.1); writes
+    /// the deformed template and the target resampled at the template's points (VTP), and
+    /// registration.json (pre-alignment, mean squared distance per update).
+    Register {
+        /// Template shape (outline or surface file).
+        #[arg(long)]
+        template: PathBuf,
+        /// Target shape.
+        #[arg(long)]
+        target: PathBuf,
+        /// Landmark files of the template and the target (Scalismo JSON or .pts), in that order.
+        #[arg(long, num_args = 2)]
+        landmarks: Vec<PathBuf>,
+        /// Outlines in CSV/text files are open.
+        #[arg(long)]
+        open: bool,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Run the whole method on built-in synthetic data (no files needed).
     Demo {
         /// Output folder.
@@ -186,6 +206,58 @@ fn surfaces(paths: &[PathBuf]) -> anyhow::Result<bool> {
         .into());
     }
     Ok(n > 0)
+}
+
+/// `atlasmesh register`: one pair, outputs in `out`.
+fn register_pair<const D: usize>(
+    mut shapes: Vec<atlasmesh::geometry::Shape<D>>,
+    landmarks: &[PathBuf],
+    out: &std::path::Path,
+) -> anyhow::Result<()> {
+    pipeline::attach_landmarks(&mut shapes, landmarks)?;
+    let (template, target) = (&shapes[0], &shapes[1]);
+    let index = atlasmesh::geometry::ClosestPointIndex::from_shape(target);
+    let r = atlasmesh::register::register(
+        template,
+        target,
+        &index,
+        &atlasmesh::register::RegisterParams::default(),
+    )?;
+    std::fs::create_dir_all(out).map_err(|e| atlasmesh::Error::Io {
+        path: out.to_path_buf(),
+        source: e,
+    })?;
+    let deformed = atlasmesh::geometry::Shape {
+        name: template.name.clone(),
+        points: r.deformed.clone(),
+        facets: template.facets.clone(),
+        landmarks: template.landmarks.clone(),
+    };
+    atlasmesh::export::write_vtp(&out.join("deformed_template.vtp"), &deformed)?;
+    atlasmesh::export::write_vtp(
+        &out.join("correspondence.vtp"),
+        &r.resampled(template, target),
+    )?;
+    let json = serde_json::json!({
+        "template": template.name,
+        "target": target.name,
+        "points": template.points.len(),
+        "landmarks": template.landmarks.len(),
+        "pre_alignment": {"scale": r.similarity.s, "rotation": r.similarity.r.iter().map(|row| row.to_vec()).collect::<Vec<_>>(), "translation": r.similarity.t.to_vec()},
+        "mean_squared_distance": r.history,
+    });
+    atlasmesh::io::write_atomic(
+        &out.join("registration.json"),
+        serde_json::to_string_pretty(&json)?.as_bytes(),
+    )?;
+    println!(
+        "registered {} to {}: final RMS distance {:.4e}; outputs in {}",
+        template.name,
+        target.name,
+        r.history.last().copied().unwrap_or(0.0).sqrt(),
+        out.display()
+    );
+    Ok(())
 }
 
 /// The shapes in correspondence: registered to a template with `--register`, else as given.
@@ -385,6 +457,34 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 cli.quiet,
             )?;
             print_summary(&r, &out);
+        }
+        Command::Register {
+            template,
+            target,
+            landmarks,
+            open,
+            out,
+        } => {
+            let files = [template.clone(), target.clone()];
+            if surfaces(&files)? {
+                let shapes = pipeline::load_surfaces(&files)?;
+                register_pair(shapes, &landmarks, &out)?;
+            } else {
+                let shapes = pipeline::load_outlines_raw(
+                    &files,
+                    &PopulationOptions {
+                        closed: !open,
+                        resample: None,
+                    },
+                )?;
+                if shapes.len() != 2 {
+                    return Err(atlasmesh::Error::Population(
+                        "register: the template and target files must hold one shape each".into(),
+                    )
+                    .into());
+                }
+                register_pair(shapes, &landmarks, &out)?;
+            }
         }
         Command::Demo { out } => {
             let r = pipeline::demo(&out, cli.quiet).context("demo")?;

@@ -215,3 +215,40 @@ fn baselines_on_the_hands() {
     assert!(json["subjects"][0]["normal_correlation_ffd"].is_number());
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// `atlasmesh register` on one pair of dense hands with their landmarks.
+#[test]
+fn register_command_writes_the_correspondence() {
+    let Some(data) = common::data_dir("register_command_writes_the_correspondence") else {
+        return;
+    };
+    let d = data.join("unibas-hands-2d-dense/aligned");
+    let out = common::temp_dir("register-cli");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .arg("register")
+        .arg("--template")
+        .arg(d.join("mesh/hand-0.vtk"))
+        .arg("--target")
+        .arg(d.join("mesh/hand-5.vtk"))
+        .arg("--landmarks")
+        .arg(d.join("landmarks/hand-0.json"))
+        .arg(d.join("landmarks/hand-5.json"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("registration.json")).unwrap()).unwrap();
+    let h = j["mean_squared_distance"].as_array().unwrap();
+    let (first, last) = (h[0].as_f64().unwrap(), h[h.len() - 1].as_f64().unwrap());
+    assert!(
+        last < 0.05 * first,
+        "the FFD brings the template onto the target: {first} -> {last}"
+    );
+    let (pts, _) = atlasmesh::io::vtkxml::read_vtp(&out.join("correspondence.vtp"))
+        .map(|(p, l)| (p.len(), l.len()))
+        .unwrap_or((0, 0));
+    assert_eq!(pts as u64, j["points"].as_u64().unwrap());
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -88,15 +88,22 @@ fn index(path: &Path, v: f64, n: usize, what: &str) -> Result<usize> {
     }
 }
 
-/// Reads the points and polygons of a VTK XML PolyData file (ASCII arrays).
+/// Reads the points and polygons (or, without polygons, the lines) of a VTK XML PolyData
+/// file (ASCII arrays).
 pub fn read_vtp(path: &Path) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     if !text.contains("type=\"PolyData\"") {
         return Err(Error::parse(path, 1, "not a VTK XML PolyData file"));
     }
     let pts = points(path, &text)?;
-    let conn = array(path, &text, "Polys", Some("connectivity"))?;
-    let offs = array(path, &text, "Polys", Some("offsets"))?;
+    // Surfaces have Polys; outlines (as atlasmesh writes them) Lines.
+    let cells = if text.contains("<Polys") {
+        "Polys"
+    } else {
+        "Lines"
+    };
+    let conn = array(path, &text, cells, Some("connectivity"))?;
+    let offs = array(path, &text, cells, Some("offsets"))?;
     let mut polys = Vec::with_capacity(offs.len());
     let mut prev = 0usize;
     for &o in &offs {

@@ -218,13 +218,15 @@ impl<const D: usize> Banded<D> {
         Some(j)
     }
 
-    fn to_sparse_lower(&self) -> Result<SparseColMat<usize, f64>> {
+    /// The lower triangle as a sparse matrix, with an entry wherever `pattern` says (so that
+    /// matrices of one pattern share a symbolic factorization).
+    fn to_sparse_lower_with(&self, pattern: &[bool]) -> Result<SparseColMat<usize, f64>> {
         let n = self.lattice.len();
         let mut trip = Vec::new();
         for i in 0..n {
             for o in 0..self.width {
                 let v = self.rows[i * self.width + o];
-                if v != 0.0
+                if pattern[i * self.width + o]
                     && let Some(j) = self.column(i, o)
                     && j <= i
                 {
@@ -411,6 +413,152 @@ impl Default for FfdParams {
     }
 }
 
+/// The parts of the normal matrix of eq. 9 (and eq. 2) that do not depend on `alpha`, for
+/// fixed source points: the weighted `B^T B` and the smoothing matrix `K`, and the symbolic
+/// Cholesky factorization of their common pattern. [`FfdSystem::factor`] gives the fit for
+/// any `alpha` (the registration anneals it) at the cost of a numeric factorization only.
+pub struct FfdSystem<const D: usize> {
+    lattice: Lattice<D>,
+    unit: f64,
+    sources: Vec<Point<D>>,
+    weights: Option<Vec<f64>>,
+    btb: Banded<D>,
+    k: Banded<D>,
+    symbolic: Option<faer::sparse::linalg::solvers::SymbolicLlt<usize>>,
+}
+
+impl<const D: usize> FfdSystem<D> {
+    /// Assembles `B^T B` (weights per source, `None` = ones) and `K` on a lattice of `grid`
+    /// control points per axis around the sources.
+    pub fn new(
+        sources: &[Point<D>],
+        weights: Option<&[f64]>,
+        grid: usize,
+        margin: f64,
+    ) -> Result<Self> {
+        if let Some(w) = weights
+            && (w.len() != sources.len() || w.iter().any(|v| !(v.is_finite() && *v >= 0.0)))
+        {
+            return Err(Error::Parameter(
+                "FFD weights: one finite, non-negative weight per source point".into(),
+            ));
+        }
+        if grid < 4 {
+            return Err(Error::Parameter(format!(
+                "FFD grid {grid} is below 4 control points per axis"
+            )));
+        }
+        if sources.is_empty() {
+            return Err(Error::Parameter("FFD fit without source points".into()));
+        }
+        let lattice = Lattice::around(sources, grid, margin);
+        let unit = (0..D)
+            .map(|d| lattice.spacing[d] * (lattice.size[d] - 3) as f64)
+            .fold(0.0, f64::max);
+        let k = smoothing_matrix(&lattice, unit, Scaling::Lattice);
+        // B^T B (data term, lengths in `unit`). Offsets between the 4^D supporting control
+        // points of a source depend only on their local digits: tabulate them once.
+        let nloc = 4usize.pow(D as u32);
+        let digit = |c: usize, d: usize| (c / 4usize.pow(d as u32)) % 4;
+        let mut off = vec![0usize; nloc * nloc];
+        for c1 in 0..nloc {
+            for c2 in 0..nloc {
+                let mut o = 0;
+                let mut s = 1;
+                for d in 0..D {
+                    o += (digit(c2, d) + 3 - digit(c1, d)) * s;
+                    s *= 7;
+                }
+                off[c1 * nloc + c2] = o;
+            }
+        }
+        let mut btb = Banded::new(lattice);
+        let mut sup: Vec<(usize, f64)> = Vec::with_capacity(nloc);
+        for (kk, p) in sources.iter().enumerate() {
+            let pw = weights.map_or(1.0, |w| w[kk]);
+            if pw == 0.0 {
+                continue;
+            }
+            sup.clear();
+            lattice.for_each_basis(p, |i, w| sup.push((i, w)));
+            for (c1, &(i, wi)) in sup.iter().enumerate() {
+                let row = &mut btb.rows[i * btb.width..(i + 1) * btb.width];
+                let o = &off[c1 * nloc..(c1 + 1) * nloc];
+                for (c2, &(_, wj)) in sup.iter().enumerate() {
+                    row[o[c2]] += pw * wi * wj;
+                }
+            }
+        }
+        Ok(FfdSystem {
+            lattice,
+            unit,
+            sources: sources.to_vec(),
+            weights: weights.map(|w| w.to_vec()),
+            btb,
+            k,
+            symbolic: None,
+        })
+    }
+
+    /// The fit for the smoothing weight `alpha`: `B^T B + alpha K` (plus a tiny ridge that
+    /// keeps unsupported control points well-posed at `alpha = 0`), factorized.
+    pub fn factor(&mut self, alpha: f64) -> Result<FfdFit<D>> {
+        if !(alpha.is_finite() && alpha >= 0.0) {
+            return Err(Error::Parameter(format!(
+                "FFD alpha {alpha} must be finite and non-negative"
+            )));
+        }
+        let mut a = Banded::new(self.lattice);
+        let mut pattern = vec![false; a.rows.len()];
+        for (((v, p), b), k) in a
+            .rows
+            .iter_mut()
+            .zip(pattern.iter_mut())
+            .zip(&self.btb.rows)
+            .zip(&self.k.rows)
+        {
+            *v = b + alpha * k;
+            *p = *b != 0.0 || *k != 0.0;
+        }
+        let centre = a.offset(0, 0);
+        let diag_max = (0..self.lattice.len())
+            .map(|i| a.rows[i * a.width + centre])
+            .fold(0.0, f64::max);
+        for i in 0..self.lattice.len() {
+            a.rows[i * a.width + centre] += 1e-10 * diag_max.max(1.0);
+            pattern[i * a.width + centre] = true;
+        }
+        let m = a.to_sparse_lower_with(&pattern)?;
+        if self.symbolic.is_none() {
+            self.symbolic = Some(
+                faer::sparse::linalg::solvers::SymbolicLlt::try_new(
+                    m.symbolic(),
+                    faer::Side::Lower,
+                )
+                .map_err(|e| Error::Numerical(format!("FFD normal matrix: {e:?}")))?,
+            );
+        }
+        let symbolic = self.symbolic.clone().ok_or_else(|| {
+            Error::Numerical("FFD normal matrix: no symbolic factorization".into())
+        })?;
+        let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(
+            symbolic,
+            m.as_ref(),
+            faer::Side::Lower,
+        )
+        .map_err(|e| {
+            Error::Numerical(format!("FFD normal matrix is not positive definite: {e:?}"))
+        })?;
+        Ok(FfdFit {
+            lattice: self.lattice,
+            unit: self.unit,
+            sources: self.sources.clone(),
+            weights: self.weights.clone(),
+            llt,
+        })
+    }
+}
+
 /// The precomputed fit of an FFD to fixed source points (eq. 9): the factorized normal
 /// matrix `B^T B + alpha K`, reusable for any number of target point sets (every subject of an
 /// atlas shares the mean shape as source).
@@ -436,69 +584,7 @@ impl<const D: usize> FfdFit<D> {
         weights: Option<&[f64]>,
         params: &FfdParams,
     ) -> Result<Self> {
-        if let Some(w) = weights
-            && (w.len() != sources.len() || w.iter().any(|v| !(v.is_finite() && *v >= 0.0)))
-        {
-            return Err(Error::Parameter(
-                "FFD weights: one finite, non-negative weight per source point".into(),
-            ));
-        }
-        if params.grid < 4 {
-            return Err(Error::Parameter(format!(
-                "FFD grid {} is below 4 control points per axis",
-                params.grid
-            )));
-        }
-        if !(params.alpha.is_finite() && params.alpha >= 0.0) {
-            return Err(Error::Parameter(format!(
-                "FFD alpha {} must be finite and non-negative",
-                params.alpha
-            )));
-        }
-        let lattice = Lattice::around(sources, params.grid, params.margin);
-        let unit = (0..D)
-            .map(|d| lattice.spacing[d] * (lattice.size[d] - 3) as f64)
-            .fold(0.0, f64::max);
-        let mut a = smoothing_matrix(&lattice, unit, Scaling::Lattice);
-        for v in a.rows.iter_mut() {
-            *v *= params.alpha;
-        }
-        // Add B^T B (data term of eq. 9, lengths in `unit`).
-        let mut sup: Vec<(usize, f64)> = Vec::with_capacity(4usize.pow(D as u32));
-        for (k, p) in sources.iter().enumerate() {
-            let pw = weights.map_or(1.0, |w| w[k]);
-            if pw == 0.0 {
-                continue;
-            }
-            sup.clear();
-            lattice.for_each_basis(p, |i, w| sup.push((i, w)));
-            for &(i, wi) in &sup {
-                for &(j, wj) in &sup {
-                    let o = a.offset(i, j);
-                    a.rows[i * a.width + o] += pw * wi * wj;
-                }
-            }
-        }
-        // A tiny ridge keeps control points with no support and alpha = 0 well-posed.
-        let mut diag_max: f64 = 0.0;
-        let centre = a.offset(0, 0);
-        for i in 0..lattice.len() {
-            diag_max = diag_max.max(a.rows[i * a.width + centre]);
-        }
-        for i in 0..lattice.len() {
-            a.rows[i * a.width + centre] += 1e-10 * diag_max.max(1.0);
-        }
-        let m = a.to_sparse_lower()?;
-        let llt = m.sp_cholesky(faer::Side::Lower).map_err(|e| {
-            Error::Numerical(format!("FFD normal matrix is not positive definite: {e:?}"))
-        })?;
-        Ok(FfdFit {
-            lattice,
-            unit,
-            sources: sources.to_vec(),
-            weights: weights.map(|w| w.to_vec()),
-            llt,
-        })
+        FfdSystem::new(sources, weights, params.grid, params.margin)?.factor(params.alpha)
     }
 
     /// The lattice used.

@@ -535,23 +535,35 @@ impl<const D: usize> ClosestPointIndex<D> {
             weights: [0.0; D],
             dist2: f64::INFINITY,
         };
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        if let Some(h) = hint {
-            best = self.closest_on_facet(*p, h);
-            // Climb from the hint's leaf to the first box that holds the whole ball of
-            // radius `|p - best|` around `p`: every closer facet lies in that subtree.
-            let r = best.dist2.sqrt();
-            let mut ni = self.leaf_of[h] as usize;
-            while ni != 0 {
-                let node = &self.nodes[ni];
-                if (0..D).all(|d| p[d] - r >= node.lo[d] && p[d] + r <= node.hi[d]) {
-                    break;
-                }
-                ni = self.parent[ni] as usize;
-            }
-            stack[0] = ni as u32;
+        let Some(h) = hint else {
+            self.descend(p, 0, &mut best);
+            return best;
+        };
+        // From the hint: its leaf, then, climbing to the root, the sibling subtree of every
+        // node on the way. Every facet lies in exactly one of these; a sibling whose box is
+        // farther than the best found is skipped at once.
+        best = self.closest_on_facet(*p, h);
+        let mut ni = self.leaf_of[h] as usize;
+        self.descend(p, ni, &mut best);
+        while ni != 0 {
+            let parent = self.parent[ni] as usize;
+            let first = self.nodes[parent].child as usize;
+            let sibling = if ni == first { first + 1 } else { first };
+            self.descend(p, sibling, &mut best);
+            ni = parent;
         }
+        best
+    }
+
+    /// Improves `best` with the facets of the subtree at `root` (pruned by box distance).
+    fn descend(&self, p: &Point<D>, root: usize, best: &mut SurfacePoint<D>) {
+        let r = &self.nodes[root];
+        if box_dist2(p, &r.lo, &r.hi) >= best.dist2 {
+            return;
+        }
+        let mut stack = [0u32; 64];
+        stack[0] = root as u32;
+        let mut top = 1;
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
@@ -559,12 +571,12 @@ impl<const D: usize> ClosestPointIndex<D> {
                 let s = node.start as usize;
                 for &fi in &self.order[s..s + node.count as usize] {
                     let fi = fi as usize;
-                    if Some(fi) == hint {
+                    if fi == best.facet {
                         continue;
                     }
                     let c = self.closest_on_facet(*p, fi);
                     if c.dist2 < best.dist2 {
-                        best = c;
+                        *best = c;
                     }
                 }
                 continue;
@@ -587,7 +599,6 @@ impl<const D: usize> ClosestPointIndex<D> {
                 top += 1;
             }
         }
-        best
     }
 
     /// The nearest intersection of the line `p + t n` with the facets, with `|t| <= max_t`
@@ -841,6 +852,34 @@ impl<const D: usize> Similarity<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hinted_closest_points_equal_the_plain_ones() {
+        // A wiggly closed outline, queries near and far, hints good and bad.
+        let pts: Vec<Point<2>> = (0..400)
+            .map(|i| {
+                let t = i as f64 / 400.0 * std::f64::consts::TAU;
+                let r = 1.0 + 0.3 * (5.0 * t).sin();
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect();
+        let s = Shape::polyline("w", pts, true);
+        let idx = ClosestPointIndex::from_shape(&s);
+        for k in 0..500 {
+            let a = k as f64 * 0.7;
+            let q = [1.6 * (a * 1.3).cos() * (k % 7) as f64 / 5.0, 1.4 * a.sin()];
+            let plain = idx.closest(&q);
+            for hint in [0, 57, 399, (k * 13) % 400] {
+                let h = idx.closest_from(&q, hint);
+                assert!(
+                    (h.dist2 - plain.dist2).abs() <= 1e-15 * (1.0 + plain.dist2),
+                    "query {q:?} hint {hint}: {} vs {}",
+                    h.dist2,
+                    plain.dist2
+                );
+            }
+        }
+    }
 
     #[test]
     fn closest_point_on_segments_is_exact_not_vertex() {

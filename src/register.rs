@@ -7,7 +7,7 @@
 //! frame and units.
 
 use crate::error::{Error, Result};
-use crate::ffd::{FfdFit, FfdParams};
+use crate::ffd::FfdSystem;
 use crate::fit::project_along_normals;
 use crate::geometry::{
     ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, centroid, dist2, dot, sub,
@@ -132,6 +132,7 @@ pub fn pre_align<const D: usize>(
     let ts = sample(template.points.len());
     let ss = sample(target.points.len());
     let mut best: Option<(f64, Similarity<D>)> = None;
+    let mut tindex = ClosestPointIndex::new(&template.points, &template.facets);
     for r in rotations {
         let mut sim = Similarity::<D> {
             s: s0,
@@ -142,7 +143,7 @@ pub fn pre_align<const D: usize>(
         let mut score = f64::INFINITY;
         for _ in 0..30 {
             let moved: Vec<Point<D>> = template.points.iter().map(|p| sim.apply(p)).collect();
-            let tindex = ClosestPointIndex::new(&moved, &template.facets);
+            tindex.refit(&moved);
             let mut src = Vec::with_capacity(ts.len() + ss.len());
             let mut dst = Vec::with_capacity(ts.len() + ss.len());
             let mut fwd = 0.0;
@@ -285,23 +286,18 @@ pub fn register<const D: usize>(
     let target_normals = vertex_normals(&target.points, &target.facets);
     let mut deformed = sources.clone();
     let mut history = Vec::new();
+    let mut hints = vec![usize::MAX; n];
     let mut alpha = params.alpha_start;
+    let mut system = FfdSystem::new(&sources, Some(&weight), params.grid, 0.1)?;
     loop {
-        let fit = FfdFit::weighted(
-            &sources,
-            Some(&weight),
-            &FfdParams {
-                grid: params.grid,
-                alpha,
-                margin: 0.1,
-            },
-        )?;
+        let fit = system.factor(alpha)?;
         for _ in 0..params.iterations_per_alpha.max(1) {
             let normals = vertex_normals(&deformed, &template.facets);
             let mut ms = 0.0;
             let targets: Vec<Point<D>> = (0..n)
                 .map(|j| {
-                    let c = target_index.closest(&deformed[j]);
+                    let c = target_index.closest_from(&deformed[j], hints[j]);
+                    hints[j] = c.facet;
                     ms += c.dist2;
                     let f = &target.facets[c.facet];
                     let mut nt = [0.0; D];

@@ -25,7 +25,16 @@ pub fn write_vtu<const D: usize>(
     mesh: &FeMesh<D>,
     reference: Option<&FeMesh<D>>,
 ) -> Result<()> {
-    let q = mesh_quality(mesh);
+    write_vtu_with_quality(path, mesh, reference, &mesh_quality(mesh))
+}
+
+/// [`write_vtu`] with the corner Jacobians already at hand (one per element).
+pub fn write_vtu_with_quality<const D: usize>(
+    path: &Path,
+    mesh: &FeMesh<D>,
+    reference: Option<&FeMesh<D>>,
+    q: &[crate::fe::quality::ElementQuality],
+) -> Result<()> {
     let k = mesh.kind.nodes();
     let ne = mesh.num_elements();
     let mut s = String::with_capacity(mesh.nodes.len() * 80 + ne * 60);
@@ -51,11 +60,11 @@ pub fn write_vtu<const D: usize>(
         s.push_str("        </DataArray>\n      </PointData>\n");
     }
     s.push_str("      <CellData Scalars=\"scaled_jacobian_min\">\n        <DataArray type=\"Float64\" Name=\"jacobian_min\" format=\"ascii\">\n");
-    for e in &q {
+    for e in q {
         let _ = writeln!(s, "          {:.17e}", e.jacobian_min);
     }
     s.push_str("        </DataArray>\n        <DataArray type=\"Float64\" Name=\"scaled_jacobian_min\" format=\"ascii\">\n");
-    for e in &q {
+    for e in q {
         let _ = writeln!(s, "          {:.17e}", e.scaled_jacobian_min);
     }
     s.push_str("        </DataArray>\n      </CellData>\n");

@@ -166,45 +166,6 @@ fn generator<const D: usize>(k: usize, x: &Point<D>) -> Point<D> {
     out
 }
 
-/// `exp(Σ_k ω_k G_k)`: the rotation by the angle `ω` (2D) or the rotation vector `ω` (3D,
-/// Rodrigues).
-fn rotation_exp<const D: usize>(w: &[f64]) -> [[f64; D]; D] {
-    let mut r = Similarity::<D>::identity().r;
-    match D {
-        2 => {
-            let (s, c) = w[0].sin_cos();
-            r[0][0] = c;
-            r[0][1] = -s;
-            r[1][0] = s;
-            r[1][1] = c;
-        }
-        3 => {
-            let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-            if th > 0.0 {
-                let k = [w[0] / th, w[1] / th, w[2] / th];
-                let (s, c) = th.sin_cos();
-                for i in 0..3 {
-                    for j in 0..3 {
-                        let kk = (1.0 - c) * k[i] * k[j];
-                        let cross = match (i, j) {
-                            (0, 1) => -k[2],
-                            (1, 0) => k[2],
-                            (0, 2) => k[1],
-                            (2, 0) => -k[1],
-                            (1, 2) => -k[0],
-                            (2, 1) => k[0],
-                            _ => 0.0,
-                        };
-                        r[i][j] = if i == j { c } else { 0.0 } + kk + s * cross;
-                    }
-                }
-            }
-        }
-        _ => unreachable!("atlasmesh supports D = 2 and D = 3"),
-    }
-    r
-}
-
 /// For a subject with missing parts: a model point has no partner where its projection lands
 /// on the subject's open border (a segment end, or an edge of a single facet) from farther than
 /// one median edge length.
@@ -881,7 +842,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let mut new = st.sim;
         new.t = add(sim.t, scale(sim.rotate(&dt), sim.s));
         new.s = sim.s * dz[0].exp();
-        let rot = rotation_exp::<D>(&dz[1..1 + r]);
+        let rot = crate::geometry::rotation_exp::<D>(&dz[1..1 + r]);
         new.r = std::array::from_fn(|i| {
             std::array::from_fn(|j| (0..D).map(|k| sim.r[i][k] * rot[k][j]).sum::<f64>())
         });
@@ -981,12 +942,7 @@ pub fn project_along_normals<const D: usize>(
     subject_normals: &[Point<D>],
 ) -> Vec<SurfacePoint<D>> {
     let normals = vertex_normals(points, facets);
-    let mut lengths: Vec<f64> = facets
-        .iter()
-        .map(|f| norm(sub(points[f[1]], points[f[0]])))
-        .collect();
-    lengths.sort_by(f64::total_cmp);
-    let h = 0.5 * lengths.get(lengths.len() / 2).copied().unwrap_or(0.0);
+    let h = 0.5 * crate::geometry::median_edge_length(points, facets);
     points
         .iter()
         .zip(&normals)

@@ -114,19 +114,95 @@ impl<const D: usize> Shape<D> {
         vertex_normals(&self.points, &self.facets)
     }
 
-    /// Median facet size (segment length, or square root of twice the triangle area).
+    /// Median facet size: see [`median_edge_length`].
     pub fn median_edge_length(&self) -> f64 {
-        let mut l: Vec<f64> = self
-            .facets
-            .iter()
-            .map(|f| norm(sub(self.points[f[1]], self.points[f[0]])))
-            .collect();
-        if l.is_empty() {
-            return 0.0;
-        }
-        l.sort_by(f64::total_cmp);
-        l[l.len() / 2]
+        median_edge_length(&self.points, &self.facets)
     }
+}
+
+/// `exp(Σ_k ω_k G_k)`: the rotation by the angle `ω` (2D) or the rotation vector `ω` (3D,
+/// Rodrigues).
+pub fn rotation_exp<const D: usize>(w: &[f64]) -> [[f64; D]; D] {
+    let mut r = Similarity::<D>::identity().r;
+    match D {
+        2 => {
+            let (s, c) = w[0].sin_cos();
+            r[0][0] = c;
+            r[0][1] = -s;
+            r[1][0] = s;
+            r[1][1] = c;
+        }
+        3 => {
+            let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+            if th > 0.0 {
+                let k = [w[0] / th, w[1] / th, w[2] / th];
+                let (s, c) = th.sin_cos();
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let kk = (1.0 - c) * k[i] * k[j];
+                        let cross = match (i, j) {
+                            (0, 1) => -k[2],
+                            (1, 0) => k[2],
+                            (0, 2) => k[1],
+                            (2, 0) => -k[1],
+                            (1, 2) => -k[0],
+                            (2, 1) => k[0],
+                            _ => 0.0,
+                        };
+                        r[i][j] = if i == j { c } else { 0.0 } + kk + s * cross;
+                    }
+                }
+            }
+        }
+        _ => unreachable!("atlasmesh supports D = 2 and D = 3"),
+    }
+    r
+}
+
+/// Median length of the facets' first edges (segment lengths in 2D); 0 without facets.
+pub fn median_edge_length<const D: usize>(points: &[Point<D>], facets: &[[usize; D]]) -> f64 {
+    let mut l: Vec<f64> = facets
+        .iter()
+        .map(|f| norm(sub(points[f[1]], points[f[0]])))
+        .collect();
+    if l.is_empty() {
+        return 0.0;
+    }
+    l.sort_by(f64::total_cmp);
+    l[l.len() / 2]
+}
+
+/// A triangulated sphere-like surface: a pole, `rings - 1` rings of `sectors` points, a pole;
+/// point `(theta, phi)` (latitude from -pi/2 to pi/2, longitude) placed by `at`. The facets
+/// face outwards for the unit sphere.
+pub fn uv_sphere(
+    sectors: usize,
+    rings: usize,
+    at: impl Fn(f64, f64) -> Point<3>,
+) -> (Vec<Point<3>>, Vec<[usize; 3]>) {
+    use std::f64::consts::{FRAC_PI_2, PI, TAU};
+    let mut points = vec![at(-FRAC_PI_2, 0.0)];
+    for j in 1..rings {
+        let th = PI * j as f64 / rings as f64 - FRAC_PI_2;
+        for i in 0..sectors {
+            points.push(at(th, TAU * i as f64 / sectors as f64));
+        }
+    }
+    points.push(at(FRAC_PI_2, 0.0));
+    let top = points.len() - 1;
+    let ring = |j: usize, i: usize| 1 + (j - 1) * sectors + i % sectors;
+    let mut facets = Vec::new();
+    for i in 0..sectors {
+        facets.push([0, ring(1, i + 1), ring(1, i)]);
+        facets.push([top, ring(rings - 1, i), ring(rings - 1, i + 1)]);
+    }
+    for j in 1..rings - 1 {
+        for i in 0..sectors {
+            facets.push([ring(j, i), ring(j, i + 1), ring(j + 1, i + 1)]);
+            facets.push([ring(j, i), ring(j + 1, i + 1), ring(j + 1, i)]);
+        }
+    }
+    (points, facets)
 }
 
 /// Vertex normals of `points` with connectivity `facets`: see [`Shape::vertex_normals`].

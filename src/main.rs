@@ -260,6 +260,87 @@ fn register_pair<const D: usize>(
     Ok(())
 }
 
+/// Reads the surfaces of `pop` (with their landmarks), the run parameters and the template
+/// meshes.
+#[allow(clippy::type_complexity)]
+fn surfaces_and_params(
+    pop: &PopArgs,
+    run: &RunArgs,
+) -> anyhow::Result<(
+    Vec<atlasmesh::geometry::Shape<3>>,
+    RunParams,
+    Option<Vec<atlasmesh::fe::FeMesh<3>>>,
+)> {
+    let mut params = run.params();
+    apply_pop(&mut params, pop);
+    let mut shapes = pipeline::load_surfaces(&pop.shapes)?;
+    pipeline::attach_landmarks(&mut shapes, &pop.landmarks)?;
+    Ok((shapes, params, template_meshes(pop)?))
+}
+
+/// `atlasmesh loo` on shapes of either dimension.
+fn loo<const D: usize>(
+    pop: &PopArgs,
+    shapes: &[atlasmesh::geometry::Shape<D>],
+    meshes: Option<&[atlasmesh::fe::FeMesh<D>]>,
+    params: &RunParams,
+    out: &std::path::Path,
+    jobs: usize,
+    quiet: bool,
+) -> anyhow::Result<atlasmesh::report::Report> {
+    let corresponded = corresponded(pop, shapes, jobs, quiet)?;
+    Ok(pipeline::leave_one_out_of(
+        &corresponded,
+        shapes,
+        meshes,
+        &dataset_name(&pop.shapes),
+        params,
+        out,
+        jobs,
+        quiet,
+    )?)
+}
+
+/// `atlasmesh build` on shapes of either dimension.
+fn build<const D: usize>(
+    pop: &PopArgs,
+    shapes: &[atlasmesh::geometry::Shape<D>],
+    meshes: Option<&[atlasmesh::fe::FeMesh<D>]>,
+    params: &RunParams,
+    out: &std::path::Path,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let shapes = corresponded(pop, shapes, 0, quiet)?;
+    let a = pipeline::build_with_meshes(&shapes, meshes, params, out)?;
+    let m = a.num_modes();
+    println!(
+        "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, mean mesh {} elements)",
+        out.display(),
+        shapes.len(),
+        a.mean.len(),
+        a.cumulative_variance[m - 1],
+        a.mesh.num_elements()
+    );
+    Ok(())
+}
+
+/// `atlasmesh fit` on subjects of either dimension.
+fn fit<const D: usize>(
+    atlas: &std::path::Path,
+    files: &[PathBuf],
+    subjects: &[atlasmesh::geometry::Shape<D>],
+    run: &RunArgs,
+    out: &std::path::Path,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let a = Atlas::<D>::load(atlas)?;
+    let mut params = run.params();
+    params.atlas = a.params;
+    let r = pipeline::fit_subjects(&a, subjects, &dataset_name(files), &params, out, quiet)?;
+    print_summary(&r, out);
+    Ok(())
+}
+
 /// The shapes in correspondence: registered to a template with `--register`, else as given.
 fn corresponded<const D: usize>(
     pop: &PopArgs,
@@ -347,17 +428,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             jobs,
         } => {
             let r = if surfaces(&pop.shapes)? {
-                let mut params = run.params();
-                apply_pop(&mut params, &pop);
-                let mut shapes = pipeline::load_surfaces(&pop.shapes)?;
-                pipeline::attach_landmarks(&mut shapes, &pop.landmarks)?;
-                let meshes = template_meshes(&pop)?;
-                let corresponded = corresponded(&pop, &shapes, jobs, cli.quiet)?;
-                pipeline::leave_one_out_of(
-                    &corresponded,
+                let (shapes, params, meshes) = surfaces_and_params(&pop, &run)?;
+                loo(
+                    &pop,
                     &shapes,
                     meshes.as_deref(),
-                    &dataset_name(&pop.shapes),
                     &params,
                     &out,
                     jobs,
@@ -365,54 +440,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 )?
             } else {
                 let (shapes, params) = population_and_params(&pop, &run)?;
-                let corresponded = corresponded(&pop, &shapes, jobs, cli.quiet)?;
-                pipeline::leave_one_out_of(
-                    &corresponded,
-                    &shapes,
-                    None,
-                    &dataset_name(&pop.shapes),
-                    &params,
-                    &out,
-                    jobs,
-                    cli.quiet,
-                )?
+                loo(&pop, &shapes, None, &params, &out, jobs, cli.quiet)?
             };
             print_summary(&r, &out);
         }
         Command::Build { pop, run, out } => {
-            let (n, points, modes, share, elements) = if surfaces(&pop.shapes)? {
-                let mut params = run.params();
-                apply_pop(&mut params, &pop);
-                let mut shapes = pipeline::load_surfaces(&pop.shapes)?;
-                pipeline::attach_landmarks(&mut shapes, &pop.landmarks)?;
-                let meshes = template_meshes(&pop)?;
-                let shapes = corresponded(&pop, &shapes, 0, cli.quiet)?;
-                let a = pipeline::build_with_meshes(&shapes, meshes.as_deref(), &params, &out)?;
-                let m = a.num_modes();
-                (
-                    shapes.len(),
-                    a.mean.len(),
-                    m,
-                    a.cumulative_variance[m - 1],
-                    a.mesh.num_elements(),
-                )
+            if surfaces(&pop.shapes)? {
+                let (shapes, params, meshes) = surfaces_and_params(&pop, &run)?;
+                build(&pop, &shapes, meshes.as_deref(), &params, &out, cli.quiet)?;
             } else {
                 let (shapes, params) = population_and_params(&pop, &run)?;
-                let shapes = corresponded(&pop, &shapes, 0, cli.quiet)?;
-                let a = pipeline::build(&shapes, &params, &out)?;
-                let m = a.num_modes();
-                (
-                    shapes.len(),
-                    a.mean.len(),
-                    m,
-                    a.cumulative_variance[m - 1],
-                    a.mesh.num_elements(),
-                )
-            };
-            println!(
-                "atlas: {} ({n} shapes, {points} points, {modes} modes explaining {share:.4} of the variance, mean mesh {elements} elements)",
-                out.display(),
-            );
+                build(&pop, &shapes, None, &params, &out, cli.quiet)?;
+            }
         }
         Command::Fit {
             atlas,
@@ -422,41 +461,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out,
         } => {
             if surfaces(&subject)? {
-                let a = Atlas::<3>::load(&atlas)?;
-                let mut params = run.params();
-                params.atlas = a.params;
                 let subjects = pipeline::load_surfaces(&subject)?;
-                let r = pipeline::fit_subjects(
-                    &a,
-                    &subjects,
-                    &dataset_name(&subject),
-                    &params,
-                    &out,
-                    cli.quiet,
-                )?;
-                print_summary(&r, &out);
-                return Ok(());
-            }
-            let a = Atlas::<2>::load(&atlas)?;
-            let mut params = run.params();
-            params.atlas = a.params;
-            let mut subjects = Vec::new();
-            for p in &subject {
-                for s in atlasmesh::io::read_outlines(p, !open)? {
-                    s.validate()
-                        .map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;
-                    subjects.push(s);
+                fit(&atlas, &subject, &subjects, &run, &out, cli.quiet)?;
+            } else {
+                let mut subjects = Vec::new();
+                for p in &subject {
+                    for s in atlasmesh::io::read_outlines(p, !open)? {
+                        s.validate()
+                            .map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;
+                        subjects.push(s);
+                    }
                 }
+                fit(&atlas, &subject, &subjects, &run, &out, cli.quiet)?;
             }
-            let r = pipeline::fit_subjects(
-                &a,
-                &subjects,
-                &dataset_name(&subject),
-                &params,
-                &out,
-                cli.quiet,
-            )?;
-            print_summary(&r, &out);
         }
         Command::Register {
             template,

@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 use crate::fe::FeMesh;
-use crate::fe::quality::{mesh_quality, summarize};
+use crate::fe::quality::{ElementQuality, mesh_quality, summarize};
 use crate::ffd::{FfdFit, FfdParams};
 use crate::fit::FitResult;
 use crate::geometry::Point;
@@ -31,6 +31,8 @@ pub struct Morph<const D: usize> {
     /// The `alpha` of eq. 9 used: the requested one, or a stiffer one where that inverted an
     /// element.
     pub alpha: f64,
+    /// Corner Jacobians of every element of `mesh` (section 5.3).
+    pub quality: Vec<ElementQuality>,
 }
 
 impl<const D: usize> Morpher<D> {
@@ -98,9 +100,14 @@ impl<const D: usize> Morpher<D> {
                     .map(|p| t.apply(&f.apply(p)))
                     .collect(),
             );
-            let valid = summarize(&mesh_quality(&mesh)).inverted_elements == 0;
+            let quality = mesh_quality(&mesh);
+            let valid = summarize(&quality).inverted_elements == 0;
             if valid || attempt == MAX_STIFFENINGS || self.params.alpha == 0.0 {
-                return Ok(Morph { mesh, alpha });
+                return Ok(Morph {
+                    mesh,
+                    alpha,
+                    quality,
+                });
             }
             alpha *= STIFFEN_FACTOR;
             stiffer = Some(FfdFit::new(

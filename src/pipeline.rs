@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::eval::{e_d, normal_correlation, normals_at, two_way_rms};
-use crate::export::{write_vtp, write_vtu};
+use crate::export::{write_vtp, write_vtu, write_vtu_with_quality};
 use crate::fe::FeMesh;
 use crate::fe::quality::{mesh_quality, summarize};
 use crate::ffd::FfdParams;
@@ -337,7 +337,7 @@ pub fn process_subject<const D: usize>(
     let fit_seconds = t0.elapsed().as_secs_f64();
     let morph = morpher.morph(&fit)?;
     let mesh = morph.mesh;
-    let per_element = mesh_quality(&mesh);
+    let per_element = morph.quality;
     let q = summarize(&per_element);
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
@@ -364,7 +364,12 @@ pub fn process_subject<const D: usize>(
             .map(|p| fit.similarity.apply(p))
             .collect(),
     );
-    write_vtu(&out.join(&mesh_file), &mesh, Some(&mean_in_subject))?;
+    write_vtu_with_quality(
+        &out.join(&mesh_file),
+        &mesh,
+        Some(&mean_in_subject),
+        &per_element,
+    )?;
     files.push(mesh_file);
     let fitted = Shape {
         name: subject.name.clone(),
@@ -440,7 +445,12 @@ pub fn baseline_correlations<const D: usize>(
     if mean.landmarks.len() != subject.landmarks.len() {
         mean.landmarks.clear();
     }
-    let sim = crate::register::pre_align(&mean, subject, index, params.starts)?;
+    // The ICP baseline uses no landmarks (with them pre_align would pair the landmarks).
+    let unmarked = Shape {
+        landmarks: Vec::new(),
+        ..mean.clone()
+    };
+    let sim = crate::register::pre_align(&unmarked, subject, index, params.starts)?;
     let icp: Vec<_> = mean
         .points
         .iter()
@@ -572,7 +582,7 @@ pub fn leave_one_out<const D: usize>(
     jobs: usize,
     quiet: bool,
 ) -> Result<Report> {
-    leave_one_out_with_meshes(shapes, None, dataset, params, out, jobs, quiet)
+    leave_one_out_of(shapes, shapes, None, dataset, params, out, jobs, quiet)
 }
 
 /// The atlas of `shapes`: with `meshes` (one template volume mesh per shape, or one for the
@@ -588,22 +598,10 @@ fn atlas_of<const D: usize>(
     }
 }
 
-/// [`leave_one_out`] with template volume meshes, one per shape (each fold's atlas takes the
-/// mean of its training shapes' meshes).
-pub fn leave_one_out_with_meshes<const D: usize>(
-    shapes: &[Shape<D>],
-    meshes: Option<&[FeMesh<D>]>,
-    dataset: &str,
-    params: &RunParams,
-    out: &Path,
-    jobs: usize,
-    quiet: bool,
-) -> Result<Report> {
-    leave_one_out_of(shapes, shapes, meshes, dataset, params, out, jobs, quiet)
-}
-
-/// Leave-one-out where the atlas of fold `k` is built from `corresponded` without entry `k`,
-/// and `subjects[k]` (the same shape as given, before registration) is the one fitted.
+/// Leave-one-out where the atlas of fold `k` is built from `corresponded` without entry `k`
+/// (with `meshes`, one template volume mesh per shape, the mean of the training ones as its
+/// FE mesh), and `subjects[k]` (the same shape as given, before registration) is the one
+/// fitted.
 #[allow(clippy::too_many_arguments)]
 pub fn leave_one_out_of<const D: usize>(
     corresponded: &[Shape<D>],
@@ -812,7 +810,7 @@ pub fn demo_population_3d(n: usize, rings: usize, seed: u64) -> Result<Vec<Shape
             ]);
             let angle: f64 = rng.random_range(-0.5..0.5);
             let mut pose = Similarity::<3>::identity();
-            pose.r = axis_rotation(axis, angle);
+            pose.r = crate::geometry::rotation_exp::<3>(&crate::geometry::scale(axis, angle));
             pose.s = rng.random_range(10.0..40.0);
             pose.t = std::array::from_fn(|_| rng.random_range(-50.0..50.0));
             let shape_at = |th: f64, ph: f64| -> Point<3> {
@@ -829,27 +827,7 @@ pub fn demo_population_3d(n: usize, rings: usize, seed: u64) -> Result<Vec<Shape
                 let z = r * d[2] + 0.12 * c[2] * (x * x - 1.0);
                 pose.apply(&[x, y, z])
             };
-            let mut points = vec![shape_at(-std::f64::consts::FRAC_PI_2, 0.0)];
-            for j in 1..nv {
-                let th = std::f64::consts::PI * j as f64 / nv as f64 - std::f64::consts::FRAC_PI_2;
-                for i in 0..nu {
-                    points.push(shape_at(th, std::f64::consts::TAU * i as f64 / nu as f64));
-                }
-            }
-            points.push(shape_at(std::f64::consts::FRAC_PI_2, 0.0));
-            let top = points.len() - 1;
-            let ring = |j: usize, i: usize| 1 + (j - 1) * nu + i % nu;
-            let mut facets = Vec::new();
-            for i in 0..nu {
-                facets.push([0, ring(1, i + 1), ring(1, i)]);
-                facets.push([top, ring(nv - 1, i), ring(nv - 1, i + 1)]);
-            }
-            for j in 1..nv - 1 {
-                for i in 0..nu {
-                    facets.push([ring(j, i), ring(j, i + 1), ring(j + 1, i + 1)]);
-                    facets.push([ring(j, i), ring(j + 1, i + 1), ring(j + 1, i)]);
-                }
-            }
+            let (points, facets) = crate::geometry::uv_sphere(nu, nv, shape_at);
             crate::io::surface::prepare_surface(Shape {
                 name: format!("demo3d-{k:02}"),
                 points,
@@ -858,17 +836,6 @@ pub fn demo_population_3d(n: usize, rings: usize, seed: u64) -> Result<Vec<Shape
             })
         })
         .collect()
-}
-
-/// The rotation by `angle` (radians) about the unit vector `axis` (Rodrigues).
-fn axis_rotation(k: Point<3>, angle: f64) -> [[f64; 3]; 3] {
-    let (s, c) = angle.sin_cos();
-    let cross = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
-    std::array::from_fn(|i| {
-        std::array::from_fn(|j| {
-            (if i == j { c } else { 0.0 }) + (1.0 - c) * k[i] * k[j] + s * cross[i][j]
-        })
-    })
 }
 
 /// The built-in 3D demo: a seeded synthetic population of closed surfaces, an atlas from 24

@@ -5,7 +5,7 @@
 mod common;
 
 use atlasmesh::model::ModeSelection;
-use atlasmesh::pipeline::{RunParams, leave_one_out, load_surfaces};
+use atlasmesh::pipeline::{RunParams, leave_one_out};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -17,14 +17,7 @@ fn femur_leave_one_out_with_15_and_5_modes() {
     let Some(data) = common::data_dir("femur_leave_one_out_with_15_and_5_modes") else {
         return;
     };
-    let paths: Vec<_> = (1..=30)
-        .map(|k| {
-            data.join(format!(
-                "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
-            ))
-        })
-        .collect();
-    let shapes = load_surfaces(&paths).unwrap();
+    let shapes = common::femurs(&data);
     assert!(shapes.iter().all(|s| s.points.len() == 7313));
     let edge = median(shapes.iter().map(|s| s.median_edge_length()).collect());
     assert!((edge - 1.85).abs() < 0.1, "median edge length {edge} mm");
@@ -73,14 +66,7 @@ fn incomplete_femur_gives_the_weights_of_the_complete_one() {
     else {
         return;
     };
-    let paths: Vec<_> = (1..=30)
-        .map(|k| {
-            data.join(format!(
-                "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
-            ))
-        })
-        .collect();
-    let shapes = load_surfaces(&paths).unwrap();
+    let shapes = common::femurs(&data);
     let atlas = Atlas::build(
         &shapes[5..],
         &AtlasParams {

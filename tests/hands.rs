@@ -10,7 +10,7 @@ use atlasmesh::io::read_outlines;
 use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
 use atlasmesh::morph::Morpher;
 use atlasmesh::pca::pca;
-use atlasmesh::pipeline::{PopulationOptions, RunParams, leave_one_out, load_population};
+use atlasmesh::pipeline::{RunParams, leave_one_out};
 use atlasmesh::procrustes::generalized_procrustes;
 
 /// GPA with tangent projection + PCA of the 40 × 56 landmarks: the first mode explains
@@ -44,14 +44,7 @@ fn resampled_hands_keep_their_landmarks() {
         return;
     };
     let raw = read_outlines(&data.join("imm-hands-2d/hands_long.csv"), false).unwrap();
-    let shapes: Vec<Shape<2>> = load_population(
-        &[data.join("imm-hands-2d/hands_long.csv")],
-        &PopulationOptions {
-            closed: false,
-            resample: Some(2001),
-        },
-    )
-    .unwrap();
+    let shapes: Vec<Shape<2>> = common::hands(&data, Some(2001));
     assert_eq!(shapes.len(), 40);
     for (s, r) in shapes.iter().zip(&raw) {
         assert_eq!(s.points.len(), 2001);
@@ -72,14 +65,7 @@ fn hands_leave_one_out() {
     let Some(data) = common::data_dir("hands_leave_one_out") else {
         return;
     };
-    let shapes = load_population(
-        &[data.join("imm-hands-2d/hands_long.csv")],
-        &PopulationOptions {
-            closed: false,
-            resample: Some(2001),
-        },
-    )
-    .unwrap();
+    let shapes = common::hands(&data, Some(2001));
     let mut params = RunParams::default();
     params.atlas.modes = atlasmesh::model::ModeSelection::Count(11);
     params.plots = false;
@@ -185,14 +171,7 @@ fn morphed_mesh_boundary_lies_on_the_subject() {
     let Some(data) = common::data_dir("morphed_mesh_boundary_lies_on_the_subject") else {
         return;
     };
-    let shapes = load_population(
-        &[data.join("imm-hands-2d/hands_long.csv")],
-        &PopulationOptions {
-            closed: false,
-            resample: Some(2001),
-        },
-    )
-    .unwrap();
+    let shapes = common::hands(&data, Some(2001));
     for k in [0usize, 37] {
         let train: Vec<_> = shapes
             .iter()

@@ -47,15 +47,7 @@ fn hands_without_correspondence_register_and_fit() {
     let Some(data) = common::data_dir("hands_without_correspondence_register_and_fit") else {
         return;
     };
-    let csv = data.join("imm-hands-2d/hands_long.csv");
-    let landmarks = load_population(
-        std::slice::from_ref(&csv),
-        &PopulationOptions {
-            closed: false,
-            resample: None,
-        },
-    )
-    .unwrap();
+    let landmarks = common::hands(&data, None);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2026);
     let raw: Vec<Shape<2>> = landmarks
         .iter()
@@ -89,14 +81,7 @@ fn hands_without_correspondence_register_and_fit() {
     )
     .unwrap();
     // The same hands with the given correspondence (the issue-2 run).
-    let given = load_population(
-        &[csv],
-        &PopulationOptions {
-            closed: false,
-            resample: Some(2001),
-        },
-    )
-    .unwrap();
+    let given = common::hands(&data, Some(2001));
     let g = leave_one_out(&given, "hands", &params, &out.join("given"), 0, true).unwrap();
     eprintln!(
         "raw: {}/40 succeeded, {} valid, median normal correlation {:.3}; given correspondence: {:.3}",
@@ -184,14 +169,7 @@ fn baselines_on_the_hands() {
     let Some(data) = common::data_dir("baselines_on_the_hands") else {
         return;
     };
-    let shapes = load_population(
-        &[data.join("imm-hands-2d/hands_long.csv")],
-        &PopulationOptions {
-            closed: false,
-            resample: Some(2001),
-        },
-    )
-    .unwrap();
+    let shapes = common::hands(&data, Some(2001));
     let mut params = RunParams {
         plots: false,
         baselines: true,

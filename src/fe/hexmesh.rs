@@ -620,32 +620,13 @@ mod tests {
 
     /// A triangulated sphere (UV) of radius `r`.
     fn sphere(r: f64, nu: usize, nv: usize) -> Shape<3> {
-        let mut points = vec![[0.0, 0.0, -r]];
-        for j in 1..nv {
-            let th = std::f64::consts::PI * j as f64 / nv as f64 - std::f64::consts::FRAC_PI_2;
-            for i in 0..nu {
-                let ph = std::f64::consts::TAU * i as f64 / nu as f64;
-                points.push([
-                    r * th.cos() * ph.cos(),
-                    r * th.cos() * ph.sin(),
-                    r * th.sin(),
-                ]);
-            }
-        }
-        points.push([0.0, 0.0, r]);
-        let top = points.len() - 1;
-        let ring = |j: usize, i: usize| 1 + (j - 1) * nu + i % nu;
-        let mut facets = Vec::new();
-        for i in 0..nu {
-            facets.push([0, ring(1, i + 1), ring(1, i)]);
-            facets.push([top, ring(nv - 1, i), ring(nv - 1, i + 1)]);
-        }
-        for j in 1..nv - 1 {
-            for i in 0..nu {
-                facets.push([ring(j, i), ring(j, i + 1), ring(j + 1, i + 1)]);
-                facets.push([ring(j, i), ring(j + 1, i + 1), ring(j + 1, i)]);
-            }
-        }
+        let (points, facets) = crate::geometry::uv_sphere(nu, nv, |th, ph| {
+            [
+                r * th.cos() * ph.cos(),
+                r * th.cos() * ph.sin(),
+                r * th.sin(),
+            ]
+        });
         crate::io::surface::prepare_surface(Shape {
             name: "sphere".into(),
             points,

@@ -538,13 +538,7 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Parsed> {
         for (i, l) in text.lines().enumerate() {
             let t: Vec<&str> = l.split_whitespace().collect();
             if t.first() == Some(&"vertex") {
-                let mut p = [0.0; 3];
-                for d in 0..3 {
-                    p[d] = t.get(d + 1).and_then(|s| s.parse().ok()).ok_or_else(|| {
-                        Error::parse(path, i + 1, format!("bad vertex line '{l}'"))
-                    })?;
-                }
-                corners.push(p);
+                corners.push(xyz_after_keyword(path, i + 1, l, &t)?);
             }
         }
         if !corners.len().is_multiple_of(3) {
@@ -573,6 +567,18 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Parsed> {
     Ok((points, polys))
 }
 
+/// The three coordinates after the keyword of a `vertex x y z` (STL) or `v x y z` (OBJ) line.
+fn xyz_after_keyword(path: &Path, line: usize, text: &str, tokens: &[&str]) -> Result<Point<3>> {
+    let mut p = [0.0; 3];
+    for (d, v) in p.iter_mut().enumerate() {
+        *v = tokens
+            .get(d + 1)
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| Error::parse(path, line, format!("bad vertex line '{text}'")))?;
+    }
+    Ok(p)
+}
+
 /// OBJ: `v x y z` and `f i j k ...` lines (1-based, `i/t/n` forms, negative indices from
 /// the end); other lines are skipped.
 fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Parsed> {
@@ -582,15 +588,7 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Parsed> {
     for (i, l) in text.lines().enumerate() {
         let t: Vec<&str> = l.split_whitespace().collect();
         match t.first().copied() {
-            Some("v") => {
-                let mut p = [0.0; 3];
-                for d in 0..3 {
-                    p[d] = t.get(d + 1).and_then(|s| s.parse().ok()).ok_or_else(|| {
-                        Error::parse(path, i + 1, format!("bad vertex line '{l}'"))
-                    })?;
-                }
-                points.push(p);
-            }
+            Some("v") => points.push(xyz_after_keyword(path, i + 1, l, &t)?),
             Some("f") => {
                 let mut poly = Vec::new();
                 for tok in &t[1..] {

@@ -26,3 +26,31 @@ pub fn temp_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// The 40 IMM hands of `data`, resampled in correspondence to 2001 points (`Some`) or as
+/// given (56 landmarks, `None`); open outlines.
+pub fn hands(
+    data: &std::path::Path,
+    resample: Option<usize>,
+) -> Vec<atlasmesh::geometry::Shape<2>> {
+    atlasmesh::pipeline::load_population(
+        &[data.join("imm-hands-2d/hands_long.csv")],
+        &atlasmesh::pipeline::PopulationOptions {
+            closed: false,
+            resample,
+        },
+    )
+    .unwrap()
+}
+
+/// The distal femurs S001-S030 of `data`.
+pub fn femurs(data: &std::path::Path) -> Vec<atlasmesh::geometry::Shape<3>> {
+    let paths: Vec<_> = (1..=30)
+        .map(|k| {
+            data.join(format!(
+                "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
+            ))
+        })
+        .collect();
+    atlasmesh::pipeline::load_surfaces(&paths).unwrap()
+}

@@ -79,7 +79,7 @@ fn bench(c: &mut Criterion) {
                 &shapes[0],
                 &shapes[1],
                 &index,
-                &atlasmesh::register::RegisterParams::default(),
+                &atlasmesh::register::RegisterParams::for_dimension(3),
             )
             .expect("registration")
         })

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{Point, bounding_box};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::SparseColMat;
 
 /// The four uniform cubic B-spline bases on a span at local parameter `t ∈ [0, 1]`, and
 /// their first and second derivatives (`order` 0, 1, 2).
@@ -72,6 +72,37 @@ impl<const D: usize> Lattice<D> {
             origin,
             spacing,
             size: [grid; D],
+        }
+    }
+
+    /// A lattice of equal spacing on every axis: `grid` control points along the longest
+    /// extent of the bounding box of `points` (enlarged by `margin` of each extent on every
+    /// side), and as many along the other axes as that spacing needs (at least 4). A long or
+    /// flat shape gets square cells and far fewer control points than `grid^D`.
+    #[track_caller]
+    pub fn around_isotropic(points: &[Point<D>], grid: usize, margin: f64) -> Self {
+        assert!(
+            grid >= 4,
+            "a cubic B-spline lattice needs at least 4 control points per axis"
+        );
+        let (lo, hi) = bounding_box(points);
+        let ext = (0..D)
+            .map(|d| hi[d] - lo[d])
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let h = ext * (1.0 + 2.0 * margin) / (grid - 3) as f64;
+        let mut origin = [0.0; D];
+        let mut size = [grid; D];
+        for d in 0..D {
+            let e = (hi[d] - lo[d]) * (1.0 + 2.0 * margin);
+            let spans = ((e / h - 1e-9).ceil() as usize).clamp(1, grid - 3);
+            size[d] = spans + 3;
+            origin[d] = 0.5 * (lo[d] + hi[d]) - 0.5 * spans as f64 * h;
+        }
+        Lattice {
+            origin,
+            spacing: [h; D],
+            size,
         }
     }
 
@@ -216,26 +247,6 @@ impl<const D: usize> Banded<D> {
             stride *= self.lattice.size[d];
         }
         Some(j)
-    }
-
-    /// The lower triangle as a sparse matrix, with an entry wherever `pattern` says (so that
-    /// matrices of one pattern share a symbolic factorization).
-    fn to_sparse_lower_with(&self, pattern: &[bool]) -> Result<SparseColMat<usize, f64>> {
-        let n = self.lattice.len();
-        let mut trip = Vec::new();
-        for i in 0..n {
-            for o in 0..self.width {
-                let v = self.rows[i * self.width + o];
-                if pattern[i * self.width + o]
-                    && let Some(j) = self.column(i, o)
-                    && j <= i
-                {
-                    trip.push(Triplet::new(i, j, v));
-                }
-            }
-        }
-        SparseColMat::try_new_from_triplets(n, n, &trip)
-            .map_err(|e| Error::Numerical(format!("FFD normal matrix: {e:?}")))
     }
 }
 
@@ -425,6 +436,9 @@ pub struct FfdSystem<const D: usize> {
     btb: Banded<D>,
     k: Banded<D>,
     symbolic: Option<faer::sparse::linalg::solvers::SymbolicLlt<usize>>,
+    /// The lower triangle's sparse structure and, per stored entry, its slot in the banded
+    /// rows (the same for every `alpha`).
+    csc: Option<(faer::sparse::SymbolicSparseColMat<usize>, Vec<usize>)>,
 }
 
 impl<const D: usize> FfdSystem<D> {
@@ -451,7 +465,28 @@ impl<const D: usize> FfdSystem<D> {
         if sources.is_empty() {
             return Err(Error::Parameter("FFD fit without source points".into()));
         }
-        let lattice = Lattice::around(sources, grid, margin);
+        Self::on_lattice(Lattice::around(sources, grid, margin), sources, weights)
+    }
+
+    /// [`FfdSystem::new`] on a given lattice (e.g. [`Lattice::around_isotropic`]); the
+    /// sources should lie inside its domain.
+    pub fn on_lattice(
+        lattice: Lattice<D>,
+        sources: &[Point<D>],
+        weights: Option<&[f64]>,
+    ) -> Result<Self> {
+        if let Some(w) = weights
+            && (w.len() != sources.len() || w.iter().any(|v| !(v.is_finite() && *v >= 0.0)))
+        {
+            return Err(Error::Parameter(
+                "FFD weights: one finite, non-negative weight per source point".into(),
+            ));
+        }
+        if lattice.size.iter().any(|&s| s < 4) || sources.is_empty() {
+            return Err(Error::Parameter(
+                "FFD fit needs source points and at least 4 control points per axis".into(),
+            ));
+        }
         let unit = (0..D)
             .map(|d| lattice.spacing[d] * (lattice.size[d] - 3) as f64)
             .fold(0.0, f64::max);
@@ -497,7 +532,38 @@ impl<const D: usize> FfdSystem<D> {
             btb,
             k,
             symbolic: None,
+            csc: None,
         })
+    }
+
+    /// The lower triangle's structure: column `j` holds the rows `i >= j` coupled to `j`
+    /// by `B^T B` or `K`, and every diagonal entry; rows ascending (the banded offsets of
+    /// a row increase with the neighbour's linear index).
+    fn lower_structure(&self) -> Result<(faer::sparse::SymbolicSparseColMat<usize>, Vec<usize>)> {
+        let n = self.lattice.len();
+        let width = self.btb.width;
+        let centre = self.btb.offset(0, 0);
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        let mut source = Vec::new();
+        col_ptr.push(0);
+        for j in 0..n {
+            for o in 0..width {
+                let r = j * width + o;
+                if (self.btb.rows[r] != 0.0 || self.k.rows[r] != 0.0 || o == centre)
+                    && let Some(i) = self.btb.column(j, o)
+                    && i >= j
+                {
+                    row_idx.push(i);
+                    source.push(r);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        // Sorted, in bounds and without duplicates by construction (checked by faer).
+        let symbolic =
+            faer::sparse::SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        Ok((symbolic, source))
     }
 
     /// The fit for the smoothing weight `alpha`: `B^T B + alpha K` (plus a tiny ridge that
@@ -508,27 +574,31 @@ impl<const D: usize> FfdSystem<D> {
                 "FFD alpha {alpha} must be finite and non-negative"
             )));
         }
-        let mut a = Banded::new(self.lattice);
-        let mut pattern = vec![false; a.rows.len()];
-        for (((v, p), b), k) in a
-            .rows
-            .iter_mut()
-            .zip(pattern.iter_mut())
-            .zip(&self.btb.rows)
-            .zip(&self.k.rows)
-        {
-            *v = b + alpha * k;
-            *p = *b != 0.0 || *k != 0.0;
+        if self.csc.is_none() {
+            self.csc = Some(self.lower_structure()?);
         }
-        let centre = a.offset(0, 0);
+        let Some((csc, source)) = self.csc.as_ref() else {
+            return Err(Error::Numerical(
+                "FFD normal matrix: no sparse structure".into(),
+            ));
+        };
+        let centre = self.btb.offset(0, 0);
+        let width = self.btb.width;
         let diag_max = (0..self.lattice.len())
-            .map(|i| a.rows[i * a.width + centre])
+            .map(|i| {
+                let r = i * width + centre;
+                self.btb.rows[r] + alpha * self.k.rows[r]
+            })
             .fold(0.0, f64::max);
-        for i in 0..self.lattice.len() {
-            a.rows[i * a.width + centre] += 1e-10 * diag_max.max(1.0);
-            pattern[i * a.width + centre] = true;
-        }
-        let m = a.to_sparse_lower_with(&pattern)?;
+        let ridge = 1e-10 * diag_max.max(1.0);
+        let values: Vec<f64> = source
+            .iter()
+            .map(|&r| {
+                let v = self.btb.rows[r] + alpha * self.k.rows[r];
+                if r % width == centre { v + ridge } else { v }
+            })
+            .collect();
+        let m = SparseColMat::new(csc.clone(), values);
         if self.symbolic.is_none() {
             self.symbolic = Some(
                 faer::sparse::linalg::solvers::SymbolicLlt::try_new(

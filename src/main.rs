@@ -76,6 +76,9 @@ enum Command {
         /// Outlines in CSV/text files are open.
         #[arg(long)]
         open: bool,
+        /// FFD control points along the template's longest axis (default: 20 in 2D, 16 in 3D).
+        #[arg(long, value_name = "N")]
+        grid: Option<usize>,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -102,6 +105,10 @@ struct PopArgs {
     /// The shapes are not in correspondence: register a template to each (FFD, eq. 2) first.
     #[arg(long)]
     register: bool,
+    /// FFD control points of the registration along the shape's longest axis (default: 20
+    /// in 2D as the paper, 16 in 3D).
+    #[arg(long, value_name = "N", requires = "register")]
+    register_grid: Option<usize>,
     /// The registration's template, by shape name (default: the shape nearest to the others).
     #[arg(long, value_name = "NAME", requires = "register")]
     template: Option<String>,
@@ -212,6 +219,7 @@ fn surfaces(paths: &[PathBuf]) -> anyhow::Result<bool> {
 fn register_pair<const D: usize>(
     mut shapes: Vec<atlasmesh::geometry::Shape<D>>,
     landmarks: &[PathBuf],
+    grid: Option<usize>,
     out: &std::path::Path,
 ) -> anyhow::Result<()> {
     pipeline::attach_landmarks(&mut shapes, landmarks)?;
@@ -221,7 +229,10 @@ fn register_pair<const D: usize>(
         template,
         target,
         &index,
-        &atlasmesh::register::RegisterParams::default(),
+        &atlasmesh::register::RegisterParams {
+            grid: grid.unwrap_or(atlasmesh::register::RegisterParams::for_dimension(D).grid),
+            ..atlasmesh::register::RegisterParams::for_dimension(D)
+        },
     )?;
     std::fs::create_dir_all(out).map_err(|e| atlasmesh::Error::Io {
         path: out.to_path_buf(),
@@ -351,13 +362,12 @@ fn corresponded<const D: usize>(
     if !pop.register {
         return Ok(shapes.to_vec());
     }
-    let (c, t) = pipeline::register_population(
-        shapes,
-        pop.template.as_deref(),
-        &atlasmesh::register::RegisterParams::default(),
-        jobs,
-        quiet,
-    )?;
+    let mut params = atlasmesh::register::RegisterParams::for_dimension(D);
+    if let Some(g) = pop.register_grid {
+        params.grid = g;
+    }
+    let (c, t) =
+        pipeline::register_population(shapes, pop.template.as_deref(), &params, jobs, quiet)?;
     if !quiet {
         eprintln!("registration template: {}", shapes[t].name);
     }
@@ -480,12 +490,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             target,
             landmarks,
             open,
+            grid,
             out,
         } => {
             let files = [template.clone(), target.clone()];
             if surfaces(&files)? {
                 let shapes = pipeline::load_surfaces(&files)?;
-                register_pair(shapes, &landmarks, &out)?;
+                register_pair(shapes, &landmarks, grid, &out)?;
             } else {
                 let shapes = pipeline::load_outlines_raw(
                     &files,
@@ -500,7 +511,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     )
                     .into());
                 }
-                register_pair(shapes, &landmarks, &out)?;
+                register_pair(shapes, &landmarks, grid, &out)?;
             }
         }
         Command::Demo { out } => {

@@ -440,7 +440,7 @@ pub fn baseline_correlations<const D: usize>(
     index: &ClosestPointIndex<D>,
     mean_normals: &[Point<D>],
 ) -> Result<(f64, f64)> {
-    let params = crate::register::RegisterParams::default();
+    let params = crate::register::RegisterParams::for_dimension(D);
     let mut mean = atlas.mean_shape();
     if mean.landmarks.len() != subject.landmarks.len() {
         mean.landmarks.clear();

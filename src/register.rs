@@ -18,7 +18,8 @@ use crate::procrustes::fit_similarity;
 /// Parameters of the registration (eq. 2).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RegisterParams {
-    /// Control points per axis (paper: 20 × 20).
+    /// Control points along the longest axis of the template's bounding box; the other axes
+    /// get the same spacing (paper, hands: 20 × 20).
     pub grid: usize,
     /// First smoothing weight `alpha` (paper, hands: 30 000).
     pub alpha_start: f64,
@@ -28,12 +29,28 @@ pub struct RegisterParams {
     pub iterations_per_alpha: usize,
     /// Landmark weight `beta` (paper: 5), for `N = 2001` points; scaled by `N / 2001`.
     pub beta: f64,
+    /// An `alpha` ends early once no point moved more than this fraction of the template's
+    /// extent in one update (the correspondences have settled); 0 runs every update.
+    pub tolerance: f64,
     /// Starting rotations of the pre-alignment without landmarks (2D; 3D uses the 4
     /// proper sign choices of the principal axes).
     pub starts: usize,
 }
 
+impl RegisterParams {
+    /// The defaults for shapes of dimension `dim`: the paper's 20 control points per axis in
+    /// 2D; 16 along the longest axis in 3D (the paper gives no 3D lattice; on the femur pairs
+    /// 16 finds correspondences within 2-4 % of 20's error in half the time, README).
+    pub fn for_dimension(dim: usize) -> Self {
+        RegisterParams {
+            grid: if dim == 3 { 16 } else { 20 },
+            ..Self::default()
+        }
+    }
+}
+
 impl Default for RegisterParams {
+    /// The paper's hand parameters (2D).
     fn default() -> Self {
         RegisterParams {
             grid: 20,
@@ -41,6 +58,7 @@ impl Default for RegisterParams {
             alpha_stop: 10.0,
             iterations_per_alpha: 8,
             beta: 5.0,
+            tolerance: 1e-4,
             starts: 8,
         }
     }
@@ -167,8 +185,13 @@ pub fn pre_align<const D: usize>(
                 src.push(p);
                 dst.push(target.points[i]);
             }
+            let previous = score;
             score = 0.5 * (fwd / ts.len() as f64 + bwd / ss.len() as f64);
             sim = fit_similarity(&src, &dst, None);
+            // Settled: the closest points no longer change the alignment's error.
+            if (previous - score).abs() <= 1e-4 * score {
+                break;
+            }
         }
         if best.as_ref().is_none_or(|(b, _)| score < *b) {
             best = Some((score, sim));
@@ -288,7 +311,18 @@ pub fn register<const D: usize>(
     let mut history = Vec::new();
     let mut hints = vec![usize::MAX; n];
     let mut alpha = params.alpha_start;
-    let mut system = FfdSystem::new(&sources, Some(&weight), params.grid, 0.1)?;
+    if params.grid < 4 {
+        return Err(Error::Parameter(format!(
+            "registration grid {} is below 4 control points per axis",
+            params.grid
+        )));
+    }
+    let extent = {
+        let (lo, hi) = crate::geometry::bounding_box(&sources);
+        (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max)
+    };
+    let lattice = crate::ffd::Lattice::around_isotropic(&sources, params.grid, 0.1);
+    let mut system = FfdSystem::on_lattice(lattice, &sources, Some(&weight))?;
     loop {
         let fit = system.factor(alpha)?;
         for _ in 0..params.iterations_per_alpha.max(1) {
@@ -322,7 +356,17 @@ pub fn register<const D: usize>(
                 .collect();
             history.push(ms / n as f64);
             let f = fit.solve(&targets);
-            deformed = sources.iter().map(|p| f.apply(p)).collect();
+            let next: Vec<Point<D>> = sources.iter().map(|p| f.apply(p)).collect();
+            let moved = next
+                .iter()
+                .zip(&deformed)
+                .map(|(a, b)| dist2(*a, *b))
+                .fold(0.0, f64::max)
+                .sqrt();
+            deformed = next;
+            if moved < params.tolerance * extent {
+                break;
+            }
         }
         if alpha < params.alpha_stop {
             break;

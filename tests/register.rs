@@ -230,3 +230,128 @@ fn register_command_writes_the_correspondence() {
     assert_eq!(pts as u64, j["points"].as_u64().unwrap());
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// Vertices of the distal femurs (in their given correspondence) used as the 3 landmarks:
+/// the two epicondyles (the mean femur's extreme vertices along its medio-lateral axis x)
+/// and the most proximal vertex of the shaft (extreme along z).
+const FEMUR_LANDMARKS: [usize; 3] = [7311, 62, 4198];
+
+/// The femurs S001-S030 made non-corresponding: each decimated by vertex clustering with
+/// its own cell (2.0-2.6 mm) and grid offset (redrawn until the result is a closed,
+/// edge-manifold surface, as a segmentation gives), its vertices shuffled, and the 3 landmarks
+/// re-picked as the kept vertices nearest to the true ones. Returns the shapes and, per
+/// shape and kept vertex, the original vertex it is (the truth, kept aside).
+fn raw_femurs(originals: &[Shape<3>], seed: u64) -> (Vec<Shape<3>>, Vec<Vec<usize>>) {
+    use rand::seq::SliceRandom;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    originals
+        .iter()
+        .map(|s| {
+            let (d, kept) = (0..100)
+                .find_map(|_| {
+                    let cell = rng.random_range(2.0..2.6);
+                    let offset = std::array::from_fn(|_| rng.random_range(0.0..cell));
+                    let (d, kept) = s.decimate_by_clustering(cell, offset).unwrap();
+                    let d = atlasmesh::io::surface::prepare_surface(d).ok()?;
+                    atlasmesh::io::surface::is_closed_surface(&d).then_some((d, kept))
+                })
+                .expect("a closed decimation in 100 draws");
+            let mut perm: Vec<usize> = (0..d.points.len()).collect();
+            perm.shuffle(&mut rng);
+            // New vertex k is old vertex perm[k].
+            let mut inverse = vec![0; perm.len()];
+            for (k, &o) in perm.iter().enumerate() {
+                inverse[o] = k;
+            }
+            let mut shape = Shape {
+                name: d.name.clone(),
+                points: perm.iter().map(|&o| d.points[o]).collect(),
+                facets: d.facets.iter().map(|f| f.map(|v| inverse[v])).collect(),
+                landmarks: Vec::new(),
+            };
+            shape.landmarks = FEMUR_LANDMARKS
+                .iter()
+                .map(|&l| {
+                    (0..shape.points.len())
+                        .min_by(|&a, &b| {
+                            dist2(shape.points[a], s.points[l])
+                                .total_cmp(&dist2(shape.points[b], s.points[l]))
+                        })
+                        .unwrap()
+                })
+                .collect();
+            let truth = perm.iter().map(|&o| kept[o]).collect();
+            (shape, truth)
+        })
+        .unzip()
+}
+
+/// The paper's femur experiment from shapes without correspondence: 30 femurs decimated
+/// differently and shuffled, registered with 3 landmarks; the correspondence found is
+/// compared with the truth, then leave-one-out on the raw femurs.
+#[test]
+fn femurs_without_correspondence() {
+    let Some(data) = common::data_dir("femurs_without_correspondence") else {
+        return;
+    };
+    let originals = common::femurs(&data);
+    let edge = originals[0].median_edge_length();
+    let (raw, truth) = raw_femurs(&originals, 30);
+    let counts: Vec<usize> = raw.iter().map(|s| s.points.len()).collect();
+    eprintln!(
+        "raw femurs: {}-{} vertices",
+        counts.iter().min().unwrap(),
+        counts.iter().max().unwrap()
+    );
+    assert!(counts.iter().any(|&c| c != counts[0]));
+    let (corresponded, t) =
+        register_population(&raw, None, &RegisterParams::for_dimension(3), 0, true).unwrap();
+    // For template vertex v (original vertex truth[t][v]), the true partner on femur j is
+    // original vertex truth[t][v] of femur j.
+    let mut errors: Vec<f64> = Vec::new();
+    for (j, c) in corresponded.iter().enumerate() {
+        if j == t {
+            continue;
+        }
+        for (v, p) in c.points.iter().enumerate() {
+            errors.push(dist2(*p, originals[j].points[truth[t][v]]).sqrt());
+        }
+    }
+    errors.sort_by(f64::total_cmp);
+    let med = errors[errors.len() / 2];
+    eprintln!(
+        "template {} ({} vertices); correspondence error vs truth: median {med:.3} mm, 90 % {:.3} mm (edge {edge:.3} mm)",
+        raw[t].name,
+        raw[t].points.len(),
+        errors[errors.len() * 9 / 10]
+    );
+    assert!(
+        med <= edge,
+        "median correspondence error {med} mm > one edge {edge} mm"
+    );
+    let mut params = RunParams::default();
+    params.atlas.modes = ModeSelection::Count(15);
+    params.atlas.element_size = 0.02;
+    params.plots = false;
+    let out = common::temp_dir("femurs-raw");
+    let r = leave_one_out_of(
+        &corresponded,
+        &raw,
+        None,
+        "raw femurs",
+        &params,
+        &out,
+        0,
+        true,
+    )
+    .unwrap();
+    let mut rms: Vec<f64> = r.subjects.iter().map(|s| s.rms_distance).collect();
+    rms.sort_by(f64::total_cmp);
+    eprintln!(
+        "raw femurs LOO: {}/30 succeeded, {} valid, median two-way RMS {:.3} mm",
+        r.summary.succeeded, r.summary.meshes_valid, rms[15]
+    );
+    assert_eq!(r.summary.succeeded, 30);
+    assert_eq!(r.summary.meshes_valid, 30);
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -42,6 +42,10 @@ enum Command {
         /// Atlas file to write (safetensors).
         #[arg(long)]
         out: PathBuf,
+        /// Also measure the model's compactness, generalization and specificity (up to 30
+        /// modes; 1000 random instances): ATLAS.measures.json and ATLAS.measures.png.
+        #[arg(long)]
+        measures: bool,
     },
     /// Fit subjects with a saved atlas, morph the mean mesh onto them, and measure.
     Fit {
@@ -319,10 +323,34 @@ fn build<const D: usize>(
     meshes: Option<&[atlasmesh::fe::FeMesh<D>]>,
     params: &RunParams,
     out: &std::path::Path,
+    measures: bool,
     quiet: bool,
 ) -> anyhow::Result<()> {
     let shapes = corresponded(pop, shapes, 0, quiet)?;
     let a = pipeline::build_with_meshes(&shapes, meshes, params, out)?;
+    if measures {
+        let m = atlasmesh::eval::shape_model_measures(&shapes, 30, 1000, 0)?;
+        let json = out.with_extension("measures.json");
+        m.write(&json)?;
+        if params.plots {
+            atlasmesh::report::plot_shape_model_measures(
+                &out.with_extension("measures.png"),
+                &m,
+                "shape units",
+            )?;
+        }
+        let k = m.modes.len().min(a.num_modes()).max(1) - 1;
+        println!(
+            "measures ({} modes): compactness {:.4}, generalization {:.4} ± {:.4}, specificity {:.4} ± {:.4} (shape units): {}",
+            k + 1,
+            m.compactness[k],
+            m.generalization[k],
+            m.generalization_sd[k],
+            m.specificity[k],
+            m.specificity_sd[k],
+            json.display()
+        );
+    }
     let m = a.num_modes();
     println!(
         "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, mean mesh {} elements)",
@@ -454,13 +482,26 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             print_summary(&r, &out);
         }
-        Command::Build { pop, run, out } => {
+        Command::Build {
+            pop,
+            run,
+            out,
+            measures,
+        } => {
             if surfaces(&pop.shapes)? {
                 let (shapes, params, meshes) = surfaces_and_params(&pop, &run)?;
-                build(&pop, &shapes, meshes.as_deref(), &params, &out, cli.quiet)?;
+                build(
+                    &pop,
+                    &shapes,
+                    meshes.as_deref(),
+                    &params,
+                    &out,
+                    measures,
+                    cli.quiet,
+                )?;
             } else {
                 let (shapes, params) = population_and_params(&pop, &run)?;
-                build(&pop, &shapes, None, &params, &out, cli.quiet)?;
+                build(&pop, &shapes, None, &params, &out, measures, cli.quiet)?;
             }
         }
         Command::Fit {

@@ -749,14 +749,6 @@ pub fn fit_subjects<const D: usize>(
     )
 }
 
-/// Standard normal deviate (Box-Muller) from a seeded generator.
-fn normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
-    use rand::RngExt;
-    let u: f64 = rng.random_range(1e-12..1.0);
-    let v: f64 = rng.random_range(0.0..1.0);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-}
-
 /// The demo's synthetic population: `n` closed outlines of an asymmetric bone-like section
 /// with four independent modes of variation (elongation, a lobe, a bend, a notch), each in a
 /// random similarity pose. Points correspond (same parameter values on every shape).
@@ -765,7 +757,7 @@ pub fn demo_population(n: usize, points: usize, seed: u64) -> Vec<Shape<2>> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     (0..n)
         .map(|k| {
-            let c: [f64; 4] = std::array::from_fn(|_| normal(&mut rng));
+            let c: [f64; 4] = std::array::from_fn(|_| crate::eval::standard_normal(&mut rng));
             let mut pose = Similarity::<2>::planar_rotation(rng.random_range(-0.6..0.6));
             pose.s = rng.random_range(20.0..60.0);
             pose.t = [
@@ -802,7 +794,7 @@ pub fn demo_population_3d(n: usize, rings: usize, seed: u64) -> Result<Vec<Shape
     let nv = rings;
     (0..n)
         .map(|k| {
-            let c: [f64; 4] = std::array::from_fn(|_| normal(&mut rng));
+            let c: [f64; 4] = std::array::from_fn(|_| crate::eval::standard_normal(&mut rng));
             let axis = crate::geometry::normalize([
                 rng.random_range(-1.0..1.0),
                 rng.random_range(-1.0..1.0),

@@ -180,20 +180,22 @@ pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Resul
         }
     }
     // Final alignment to the converged mean, then tangent-space projection.
-    let aligned = x
-        .iter()
-        .map(|s| {
-            let t = fit_similarity(s, &mean, None);
-            let a: Vec<Point<D>> = s.iter().map(|p| t.apply(p)).collect();
-            let proj: f64 = a.iter().zip(&mean).map(|(p, q)| dot(*p, *q)).sum();
-            a.iter().map(|p| scale(*p, 1.0 / proj)).collect()
-        })
-        .collect();
+    let aligned = x.iter().map(|s| align_to_mean(s, &mean)).collect();
     Ok(Gpa {
         mean,
         aligned,
         iterations,
     })
+}
+
+/// A shape in the frame of a Procrustes mean `mean` (centred, unit norm): aligned by the
+/// least-squares similarity, then projected to the mean's tangent space, `x / (x · S_bar)`
+/// (section 2.2). For a shape outside the population (a held-out one).
+pub fn align_to_mean<const D: usize>(shape: &[Point<D>], mean: &[Point<D>]) -> Vec<Point<D>> {
+    let t = fit_similarity(shape, mean, None);
+    let a: Vec<Point<D>> = shape.iter().map(|p| t.apply(p)).collect();
+    let proj: f64 = a.iter().zip(mean).map(|(p, q)| dot(*p, *q)).sum();
+    a.iter().map(|p| scale(*p, 1.0 / proj)).collect()
 }
 
 #[cfg(test)]

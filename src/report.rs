@@ -211,6 +211,100 @@ pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) ->
     Ok(())
 }
 
+/// Plots compactness, generalization and specificity against the number of modes, side by
+/// side, each with its standard error as a band (Styner et al. 2003, fig. 2).
+pub fn plot_shape_model_measures(
+    path: &Path,
+    m: &crate::eval::ShapeModelMeasures,
+    units: &str,
+) -> Result<()> {
+    let text = font_available();
+    let root = BitMapBackend::new(path, (1200, 400)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let panels = root.split_evenly((1, 3));
+    let series = [
+        (
+            "Compactness",
+            "share of variance".to_string(),
+            &m.compactness,
+            &m.compactness_sd,
+        ),
+        (
+            "Generalization",
+            format!("mean distance ({units})"),
+            &m.generalization,
+            &m.generalization_sd,
+        ),
+        (
+            "Specificity",
+            format!("mean distance ({units})"),
+            &m.specificity,
+            &m.specificity_sd,
+        ),
+    ];
+    let n = m.modes.len().max(1) as f64;
+    for (area, (title, ylabel, v, sd)) in panels.iter().zip(series) {
+        let lo = v
+            .iter()
+            .zip(sd.iter())
+            .map(|(a, b)| a - b)
+            .fold(f64::INFINITY, f64::min);
+        let hi = v
+            .iter()
+            .zip(sd.iter())
+            .map(|(a, b)| a + b)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let (lo, hi) = if lo.is_finite() && hi > lo {
+            let pad = 0.05 * (hi - lo);
+            (lo - pad, hi + pad)
+        } else {
+            (0.0, 1.0)
+        };
+        let mut b = ChartBuilder::on(area);
+        b.margin(12)
+            .x_label_area_size(if text { 36 } else { 5 })
+            .y_label_area_size(if text { 64 } else { 5 });
+        if text {
+            b.caption(title, ("sans-serif", 20));
+        }
+        let mut chart = b
+            .build_cartesian_2d(0.5f64..n + 0.5, lo..hi)
+            .map_err(perr(path))?;
+        if text {
+            chart
+                .configure_mesh()
+                .x_desc("number of modes")
+                .y_desc(ylabel.as_str())
+                .draw()
+                .map_err(perr(path))?;
+        }
+        let band: Vec<(f64, f64)> = m
+            .modes
+            .iter()
+            .zip(v.iter().zip(sd.iter()))
+            .map(|(k, (a, e))| (*k as f64, a + e))
+            .chain(
+                m.modes
+                    .iter()
+                    .zip(v.iter().zip(sd.iter()))
+                    .rev()
+                    .map(|(k, (a, e))| (*k as f64, a - e)),
+            )
+            .collect();
+        chart
+            .draw_series(std::iter::once(Polygon::new(band, BLUE.mix(0.2).filled())))
+            .map_err(perr(path))?;
+        chart
+            .draw_series(LineSeries::new(
+                m.modes.iter().zip(v.iter()).map(|(k, a)| (*k as f64, *a)),
+                BLUE.stroke_width(2),
+            ))
+            .map_err(perr(path))?;
+    }
+    root.present().map_err(perr(path))?;
+    Ok(())
+}
+
 /// Plots `E_d` against the iteration for every subject (fig. 11), log scale.
 pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
     let text = font_available();

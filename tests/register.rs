@@ -355,3 +355,53 @@ fn femurs_without_correspondence() {
     assert_eq!(r.summary.meshes_valid, 30);
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// No landmarks at all: 100 osteosarcoma cells (every 6th of geomstats' 650, 20-1759 points,
+/// no correspondence) registered without landmarks; compactness, generalization and
+/// specificity of the model, beside those of a model that takes the arc-length
+/// parametrization from each file's first point as the correspondence.
+#[test]
+fn cells_without_landmarks_shape_model_measures() {
+    let Some(data) = common::data_dir("cells_without_landmarks_shape_model_measures") else {
+        return;
+    };
+    let all = load_population(
+        &[data.join("geomstats-cells-2d/cells.txt")],
+        &PopulationOptions {
+            closed: true,
+            resample: Some(200),
+        },
+    )
+    .unwrap();
+    assert_eq!(all.len(), 650);
+    let cells: Vec<Shape<2>> = all.into_iter().step_by(6).take(100).collect();
+    assert_eq!(cells.len(), 100);
+    let (corresponded, t) =
+        register_population(&cells, None, &RegisterParams::for_dimension(2), 0, true).unwrap();
+    let ours = atlasmesh::eval::shape_model_measures(&corresponded, 20, 500, 7).unwrap();
+    let naive = atlasmesh::eval::shape_model_measures(&cells, 20, 500, 7).unwrap();
+    eprintln!("template {}", cells[t].name);
+    for m in [0, 4, 9, 19] {
+        eprintln!(
+            "{} modes: compactness {:.3} (naive {:.3}), generalization {:.2} ± {:.2} px (naive {:.2}), specificity {:.2} ± {:.2} px (naive {:.2})",
+            m + 1,
+            ours.compactness[m],
+            naive.compactness[m],
+            ours.generalization[m],
+            ours.generalization_sd[m],
+            naive.generalization[m],
+            ours.specificity[m],
+            ours.specificity_sd[m],
+            naive.specificity[m]
+        );
+    }
+    assert_eq!(ours.modes.len(), 20);
+    assert!(ours.compactness.windows(2).all(|w| w[1] >= w[0]) && ours.compactness[19] <= 1.0);
+    assert!(ours.generalization[19] < 0.6 * ours.generalization[0]);
+    // Registration gives a more compact, more general and more specific model.
+    assert!(ours.compactness[0] > naive.compactness[0]);
+    for m in [0, 4, 9] {
+        assert!(ours.generalization[m] < naive.generalization[m]);
+        assert!(ours.specificity[m] < naive.specificity[m]);
+    }
+}

@@ -3,7 +3,7 @@
 //! Outline formats (2D):
 //! - long CSV with a header of four columns `shape,point,x,y` (also `shape,landmark,x,y` or
 //!   `hand,point,x,y`): one or more shapes, points ordered by their index;
-//! - plain text, one point `x y` per line (`#` comments, blank lines skipped);
+//! - plain text, one point `x y` per line (`#` comments); blank lines separate shapes;
 //! - legacy VTK `POLYDATA` with `LINES`, ASCII or binary (big-endian), as written by VTK and
 //!   Scalismo; the points are ordered by walking the line segments, and an outline is closed
 //!   when the segments form a loop. A constant `z` is dropped; varying `z` is an error.
@@ -49,7 +49,7 @@ pub fn read_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
     let shapes = match ext.as_str() {
         "csv" => read_long_csv(path, closed)?,
         "vtk" => vec![read_vtk_outline(path)?],
-        _ => vec![read_text_outline(path, closed)?],
+        _ => read_text_outlines(path, closed)?,
     };
     if shapes.is_empty() {
         return Err(Error::parse(path, 0, "the file holds no shape"));
@@ -193,12 +193,20 @@ pub fn read_long_csv(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
         .collect()
 }
 
-/// Plain text: one `x y` (or `x,y`) per line.
-pub fn read_text_outline(path: &Path, closed: bool) -> Result<Shape<2>> {
+/// Plain text: one `x y` (or `x,y`) per line; `#` starts a comment. Blank lines separate
+/// shapes (as in geomstats' `cells.txt`): a file of one block is one shape named after the
+/// file; blocks of a file with several are named `STEM-000`, `STEM-001`, ... in file order.
+pub fn read_text_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
     let text = read_text(path)?;
-    let mut pts = Vec::new();
-    for (i, l) in text.lines().enumerate() {
-        let l = l.split('#').next().unwrap_or("").trim();
+    let mut blocks: Vec<Vec<Point<2>>> = vec![Vec::new()];
+    for (i, raw) in text.lines().enumerate() {
+        if raw.trim().is_empty() {
+            if blocks.last().is_some_and(|b| !b.is_empty()) {
+                blocks.push(Vec::new());
+            }
+            continue;
+        }
+        let l = raw.split('#').next().unwrap_or("").trim();
         if l.is_empty() {
             continue;
         }
@@ -213,12 +221,29 @@ pub fn read_text_outline(path: &Path, closed: bool) -> Result<Shape<2>> {
                 format!("{} values, 2 expected (x y); is this a 3D file?", f.len()),
             ));
         }
-        pts.push([parse_f64(path, i + 1, f[0])?, parse_f64(path, i + 1, f[1])?]);
+        let p = [parse_f64(path, i + 1, f[0])?, parse_f64(path, i + 1, f[1])?];
+        if let Some(b) = blocks.last_mut() {
+            b.push(p);
+        }
     }
-    if pts.is_empty() {
+    blocks.retain(|b| !b.is_empty());
+    if blocks.is_empty() {
         return Err(Error::parse(path, 0, "the file holds no point"));
     }
-    Ok(Shape::polyline(stem(path), pts, closed))
+    let name = stem(path);
+    let many = blocks.len() > 1;
+    Ok(blocks
+        .into_iter()
+        .enumerate()
+        .map(|(k, pts)| {
+            let n = if many {
+                format!("{name}-{k:03}")
+            } else {
+                name.clone()
+            };
+            Shape::polyline(n, pts, closed)
+        })
+        .collect())
 }
 
 /// A cursor over a legacy VTK file's bytes.
@@ -563,6 +588,20 @@ mod tests {
         let p = tmp("t.vtk", &b);
         let e = read_vtk_outline(&p).unwrap_err().to_string();
         assert!(e.contains("truncated") && e.contains("t.vtk"), "{e}");
+    }
+
+    #[test]
+    fn blank_lines_separate_the_shapes_of_a_text_file() {
+        let p = tmp(
+            "blocks.txt",
+            b"# cells\n0 0\n1 0\n0 1\n\n\n2 2\n3 2\n# comment\n2 3\n3 3\n",
+        );
+        let s = read_outlines(&p, true).unwrap();
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[0].name.as_str(), s[0].points.len()), ("blocks-000", 3));
+        assert_eq!((s[1].name.as_str(), s[1].points.len()), ("blocks-001", 4));
+        let one = tmp("one.txt", b"0 0\n1 0\n0 1\n");
+        assert_eq!(read_outlines(&one, true).unwrap()[0].name, "one");
     }
 
     #[test]

@@ -1,8 +1,13 @@
 //! Benchmarks of issue 3 on the distal femurs (`$ATLASMESH_DATA/knee-distal-femur-synthetic-3d`):
 //! one femur fit (7313 vertices, 15 modes) on one core, the hexahedral mesh of the mean femur
 //! at 2 mm, the morph plus corner Jacobians of that mesh, and the registration of a femur
-//! pair. Without the data the benchmarks
-//! say so and do nothing.
+//! pair (issue 4), and the atlas from the 30 femurs made non-corresponding (decimated and
+//! shuffled as in `tests/register.rs`; registration with 3 landmarks on both cores, then
+//! GPA, PCA and the hexahedral mesh of the mean). Without the data the benchmarks say so
+//! and do nothing.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
 
 use atlasmesh::fe::hexmesh::{HexMeshParams, hex_mesh};
 use atlasmesh::fe::quality::{mesh_quality, summarize};
@@ -82,6 +87,23 @@ fn bench(c: &mut Criterion) {
                 &atlasmesh::register::RegisterParams::for_dimension(3),
             )
             .expect("registration")
+        })
+    });
+    g.finish();
+    let (raw, _) = common::raw_femurs(&shapes, 30);
+    let mut g = c.benchmark_group("issue4");
+    g.sample_size(10);
+    g.bench_function("atlas_from_30_raw_femurs_2_cores", |b| {
+        b.iter(|| {
+            let (corresponded, _) = atlasmesh::pipeline::register_population(
+                &raw,
+                None,
+                &atlasmesh::register::RegisterParams::for_dimension(3),
+                0,
+                true,
+            )
+            .expect("registration");
+            Atlas::build(&corresponded, &params).expect("atlas")
         })
     });
     g.finish();

@@ -260,6 +260,7 @@ fn register_pair<const D: usize>(
         "landmarks": template.landmarks.len(),
         "pre_alignment": {"scale": r.similarity.s, "rotation": r.similarity.r.iter().map(|row| row.to_vec()).collect::<Vec<_>>(), "translation": r.similarity.t.to_vec()},
         "mean_squared_distance": r.history,
+        "alignment_misfit": r.misfit,
     });
     atlasmesh::io::write_atomic(
         &out.join("registration.json"),

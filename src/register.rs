@@ -64,6 +64,13 @@ impl Default for RegisterParams {
     }
 }
 
+/// The largest two-way RMS distance after the ICP pre-alignment, as a share of the target's
+/// RMS radius, for which the registration goes on. Measured: the IMM hands, the femurs and
+/// geomstats' 650 cells stay below 0.34 (an ellipse against a spiral, a cross or a line:
+/// 0.25-0.37), so this guards against gross failures only; the misfit of every pair is in
+/// [`Registration::misfit`].
+pub const MAX_ALIGNMENT_MISFIT: f64 = 0.5;
+
 /// The result of registering a template to a target.
 #[derive(Clone, Debug)]
 pub struct Registration<const D: usize> {
@@ -76,6 +83,9 @@ pub struct Registration<const D: usize> {
     pub correspondence: Vec<SurfacePoint<D>>,
     /// Mean squared distance from the deformed template to the target after each update.
     pub history: Vec<f64>,
+    /// Without landmarks, the two-way RMS distance after the pre-alignment over the target's
+    /// RMS radius (0 with landmarks).
+    pub misfit: f64,
 }
 
 impl<const D: usize> Registration<D> {
@@ -101,6 +111,18 @@ pub fn pre_align<const D: usize>(
     target_index: &ClosestPointIndex<D>,
     starts: usize,
 ) -> Result<Similarity<D>> {
+    pre_align_scored(template, target, target_index, starts).map(|(s, _)| s)
+}
+
+/// [`pre_align`] and, without landmarks, the relative misfit of the alignment: the two-way
+/// RMS distance between the aligned template and the target over the target's RMS radius
+/// (0 when the landmarks aligned them).
+fn pre_align_scored<const D: usize>(
+    template: &Shape<D>,
+    target: &Shape<D>,
+    target_index: &ClosestPointIndex<D>,
+    starts: usize,
+) -> Result<(Similarity<D>, f64)> {
     if !template.landmarks.is_empty() && template.landmarks.len() == target.landmarks.len() {
         let src: Vec<Point<D>> = template
             .landmarks
@@ -108,13 +130,29 @@ pub fn pre_align<const D: usize>(
             .map(|&i| template.points[i])
             .collect();
         let dst: Vec<Point<D>> = target.landmarks.iter().map(|&i| target.points[i]).collect();
-        return Ok(fit_similarity(&src, &dst, None));
+        return Ok((fit_similarity(&src, &dst, None), 0.0));
     }
     let ct = centroid(&template.points);
     let cs = centroid(&target.points);
     let rms = |p: &[Point<D>], c: Point<D>| {
         (p.iter().map(|q| dist2(*q, c)).sum::<f64>() / p.len() as f64).sqrt()
     };
+    // A shape of no extent (numerically: below 1e-9 of its coordinates' size) has no pose.
+    for (s, c) in [(template, ct), (target, cs)] {
+        let size = s
+            .points
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let r = rms(&s.points, c);
+        if !(r > 1e-9 * size) {
+            return Err(Error::Population(format!(
+                "the ICP pre-alignment could not align {} to {}: {} has no extent (RMS radius \
+                 {r:.3e} at coordinates of size {size:.3e})",
+                template.name, target.name, s.name
+            )));
+        }
+    }
     let s0 = rms(&target.points, cs) / rms(&template.points, ct).max(f64::MIN_POSITIVE);
     let rotations: Vec<[[f64; D]; D]> = if D == 2 {
         (0..starts.max(1))
@@ -197,7 +235,8 @@ pub fn pre_align<const D: usize>(
             best = Some((score, sim));
         }
     }
-    best.map(|b| b.1)
+    let radius = rms(&target.points, cs);
+    best.map(|(score, sim)| (sim, score.sqrt() / radius.max(f64::MIN_POSITIVE)))
         .ok_or_else(|| Error::Numerical(format!("{}: no pre-alignment start", target.name)))
 }
 
@@ -293,7 +332,25 @@ pub fn register<const D: usize>(
             target.landmarks.len()
         )));
     }
-    let sim = pre_align(template, target, target_index, params.starts)?;
+    let (sim, misfit) = pre_align_scored(template, target, target_index, params.starts)?;
+    let finite = sim.s.is_finite()
+        && sim.s > 0.0
+        && sim
+            .t
+            .iter()
+            .chain(sim.r.iter().flatten())
+            .all(|v| v.is_finite());
+    if !finite || !(misfit <= MAX_ALIGNMENT_MISFIT) {
+        return Err(Error::Population(format!(
+            "the ICP pre-alignment could not align {} to {}: after the best of its starts the \
+             two-way RMS distance is {:.0} % of the target's RMS radius (at most {:.0} % is \
+             accepted); check that the shapes show the same structure, or give landmarks",
+            template.name,
+            target.name,
+            100.0 * misfit,
+            100.0 * MAX_ALIGNMENT_MISFIT
+        )));
+    }
     let sources: Vec<Point<D>> = template.points.iter().map(|p| sim.apply(p)).collect();
     let n = sources.len();
     let beta = params.beta * n as f64 / crate::fit::REFERENCE_POINTS;
@@ -380,5 +437,6 @@ pub fn register<const D: usize>(
         deformed,
         correspondence,
         history,
+        misfit,
     })
 }

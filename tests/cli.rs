@@ -305,3 +305,110 @@ fn bad_surfaces_are_clear_errors() {
     assert!(!d.join("o/report.json").exists(), "no output on error");
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// Landmark files that do not fit the population, and a target that the ICP cannot align:
+/// clear errors naming the file or the shapes, exit code 2, no atlas written.
+#[test]
+fn bad_landmarks_and_unalignable_targets_are_clear_errors() {
+    let d = common::temp_dir("badlm");
+    // Four ellipses of 40 points, no correspondence needed (they are registered).
+    let ellipse = |a: f64, b: f64| -> String {
+        (0..40)
+            .map(|i| {
+                let t = i as f64 / 40.0 * std::f64::consts::TAU;
+                format!("{} {}\n", a * t.cos(), b * t.sin())
+            })
+            .collect()
+    };
+    let shapes: Vec<String> = [(2.0, 1.0), (2.2, 1.0), (1.8, 1.1), (2.0, 0.9)]
+        .iter()
+        .enumerate()
+        .map(|(k, (a, b))| write(&d, &format!("s{k}.txt"), &ellipse(*a, *b)))
+        .collect();
+    let out = d.join("atlas.safetensors");
+    let build = |extra: &[&str]| {
+        let mut args = vec!["build", "--register", "--closed", "--shapes"];
+        args.extend(shapes.iter().map(String::as_str));
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        atlasmesh(&args)
+    };
+    let rows = |f: &dyn Fn(usize) -> String| -> String {
+        let mut s = String::from("shape,landmark,index\n");
+        for k in 0..4 {
+            s.push_str(&f(k));
+        }
+        s
+    };
+    let ghost = write(
+        &d,
+        "ghost.csv",
+        &(rows(&|k| format!("s{k},0,0\ns{k},1,10\n")) + "ghost,0,3\nghost,1,5\n"),
+    );
+    assert_clean_error(&build(&["--landmarks", &ghost]), "ghost.csv", "'ghost'");
+    let counts = write(
+        &d,
+        "counts.csv",
+        &rows(&|k| {
+            if k == 2 {
+                format!("s{k},0,0\n")
+            } else {
+                format!("s{k},0,0\ns{k},1,10\n")
+            }
+        }),
+    );
+    assert_clean_error(
+        &build(&["--landmarks", &counts]),
+        "counts.csv",
+        "same landmarks",
+    );
+    let range = write(
+        &d,
+        "range.csv",
+        &rows(&|k| format!("s{k},0,0\ns{k},1,{}\n", if k == 1 { 40 } else { 10 })),
+    );
+    assert_clean_error(
+        &build(&["--landmarks", &range]),
+        "range.csv",
+        "out of range",
+    );
+    // A landmark given by coordinates far away from its shape (another shape's file?).
+    let far: Vec<String> = (0..4)
+        .map(|k| {
+            let x = if k == 3 { 500.0 } else { 2.0 };
+            write(
+                &d,
+                &format!("l{k}.json"),
+                &format!(
+                    r#"[{{"id":"a","coordinates":[{x},0.0]}},{{"id":"b","coordinates":[-2.0,0.0]}}]"#
+                ),
+            )
+        })
+        .collect();
+    let mut args = vec!["--landmarks"];
+    args.extend(far.iter().map(String::as_str));
+    assert_clean_error(&build(&args), "l3.json", "far from");
+    // A target the ICP cannot align: no extent (40 points within 1e-13 of each other).
+    let speck: String = (0..40)
+        .map(|i| {
+            format!(
+                "{} {}\n",
+                1.0 + 1e-13 * (i % 3) as f64,
+                1.0 + 1e-13 * (i % 5) as f64
+            )
+        })
+        .collect();
+    let z = write(&d, "speck.txt", &speck);
+    let o = atlasmesh(&[
+        "register",
+        "--template",
+        &shapes[0],
+        "--target",
+        &z,
+        "--out",
+        d.join("reg").to_str().unwrap(),
+    ]);
+    assert_clean_error(&o, "speck", "could not align");
+    assert!(!out.exists(), "no atlas written after an error");
+    assert!(!d.join("reg").join("registration.json").exists());
+}

@@ -184,7 +184,15 @@ fn baselines_on_the_hands() {
     let ssm = mean(&|s| s.normal_correlation);
     let icp = mean(&|s| s.normal_correlation_icp.unwrap());
     let ffd = mean(&|s| s.normal_correlation_ffd.unwrap());
-    eprintln!("mean normal correlation: SSM {ssm:.4}, FFD {ffd:.4}, ICP {icp:.4}");
+    let ssm_wins = r
+        .subjects
+        .iter()
+        .filter(|s| s.normal_correlation >= s.normal_correlation_ffd.unwrap())
+        .count();
+    eprintln!(
+        "mean normal correlation: SSM {ssm:.4}, FFD {ffd:.4}, ICP {icp:.4}; SSM >= FFD on {ssm_wins}/{}",
+        r.subjects.len()
+    );
     assert!(ssm > icp + 0.1, "SSM {ssm} vs ICP {icp}");
     assert!(ffd > icp + 0.1, "FFD {ffd} vs ICP {icp}");
     let json: serde_json::Value =
@@ -231,61 +239,6 @@ fn register_command_writes_the_correspondence() {
     std::fs::remove_dir_all(&out).ok();
 }
 
-/// Vertices of the distal femurs (in their given correspondence) used as the 3 landmarks:
-/// the two epicondyles (the mean femur's extreme vertices along its medio-lateral axis x)
-/// and the most proximal vertex of the shaft (extreme along z).
-const FEMUR_LANDMARKS: [usize; 3] = [7311, 62, 4198];
-
-/// The femurs S001-S030 made non-corresponding: each decimated by vertex clustering with
-/// its own cell (2.0-2.6 mm) and grid offset (redrawn until the result is a closed,
-/// edge-manifold surface, as a segmentation gives), its vertices shuffled, and the 3 landmarks
-/// re-picked as the kept vertices nearest to the true ones. Returns the shapes and, per
-/// shape and kept vertex, the original vertex it is (the truth, kept aside).
-fn raw_femurs(originals: &[Shape<3>], seed: u64) -> (Vec<Shape<3>>, Vec<Vec<usize>>) {
-    use rand::seq::SliceRandom;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    originals
-        .iter()
-        .map(|s| {
-            let (d, kept) = (0..100)
-                .find_map(|_| {
-                    let cell = rng.random_range(2.0..2.6);
-                    let offset = std::array::from_fn(|_| rng.random_range(0.0..cell));
-                    let (d, kept) = s.decimate_by_clustering(cell, offset).unwrap();
-                    let d = atlasmesh::io::surface::prepare_surface(d).ok()?;
-                    atlasmesh::io::surface::is_closed_surface(&d).then_some((d, kept))
-                })
-                .expect("a closed decimation in 100 draws");
-            let mut perm: Vec<usize> = (0..d.points.len()).collect();
-            perm.shuffle(&mut rng);
-            // New vertex k is old vertex perm[k].
-            let mut inverse = vec![0; perm.len()];
-            for (k, &o) in perm.iter().enumerate() {
-                inverse[o] = k;
-            }
-            let mut shape = Shape {
-                name: d.name.clone(),
-                points: perm.iter().map(|&o| d.points[o]).collect(),
-                facets: d.facets.iter().map(|f| f.map(|v| inverse[v])).collect(),
-                landmarks: Vec::new(),
-            };
-            shape.landmarks = FEMUR_LANDMARKS
-                .iter()
-                .map(|&l| {
-                    (0..shape.points.len())
-                        .min_by(|&a, &b| {
-                            dist2(shape.points[a], s.points[l])
-                                .total_cmp(&dist2(shape.points[b], s.points[l]))
-                        })
-                        .unwrap()
-                })
-                .collect();
-            let truth = perm.iter().map(|&o| kept[o]).collect();
-            (shape, truth)
-        })
-        .unzip()
-}
-
 /// The paper's femur experiment from shapes without correspondence: 30 femurs decimated
 /// differently and shuffled, registered with 3 landmarks; the correspondence found is
 /// compared with the truth, then leave-one-out on the raw femurs.
@@ -296,7 +249,7 @@ fn femurs_without_correspondence() {
     };
     let originals = common::femurs(&data);
     let edge = originals[0].median_edge_length();
-    let (raw, truth) = raw_femurs(&originals, 30);
+    let (raw, truth) = common::raw_femurs(&originals, 30);
     let counts: Vec<usize> = raw.iter().map(|s| s.points.len()).collect();
     eprintln!(
         "raw femurs: {}-{} vertices",
@@ -333,6 +286,7 @@ fn femurs_without_correspondence() {
     params.atlas.modes = ModeSelection::Count(15);
     params.atlas.element_size = 0.02;
     params.plots = false;
+    params.baselines = true;
     let out = common::temp_dir("femurs-raw");
     let r = leave_one_out_of(
         &corresponded,
@@ -353,6 +307,22 @@ fn femurs_without_correspondence() {
     );
     assert_eq!(r.summary.succeeded, 30);
     assert_eq!(r.summary.meshes_valid, 30);
+    // The paper's comparison (fig. 20): SSM fit vs FFD registration (3 landmarks) vs ICP.
+    let mean = |f: &dyn Fn(&atlasmesh::report::SubjectReport) -> f64| {
+        r.subjects.iter().map(f).sum::<f64>() / r.subjects.len() as f64
+    };
+    let ssm = mean(&|s| s.normal_correlation);
+    let icp = mean(&|s| s.normal_correlation_icp.unwrap());
+    let ffd = mean(&|s| s.normal_correlation_ffd.unwrap());
+    let ssm_wins = r
+        .subjects
+        .iter()
+        .filter(|s| s.normal_correlation >= s.normal_correlation_ffd.unwrap())
+        .count();
+    eprintln!(
+        "femurs, mean normal correlation: SSM {ssm:.4}, FFD {ffd:.4}, ICP {icp:.4}; SSM >= FFD on {ssm_wins}/30"
+    );
+    assert!(ssm > icp && ffd > icp, "SSM {ssm}, FFD {ffd}, ICP {icp}");
     std::fs::remove_dir_all(&out).ok();
 }
 

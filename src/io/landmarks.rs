@@ -169,14 +169,21 @@ pub fn read_landmarks_csv<const D: usize>(
         .collect())
 }
 
+/// The farthest a landmark given by coordinates may lie from its shape's nearest point, as a
+/// share of the diagonal of the shape's bounding box.
+pub const MAX_LANDMARK_OFFSET: f64 = 0.1;
+
 /// Sets `shape.landmarks` from `landmarks`: indices as given (checked), positions as the
-/// index of the shape's nearest point. `source` names the file in errors.
+/// index of the shape's nearest point (an error beyond [`MAX_LANDMARK_OFFSET`]). `source`
+/// names the file in errors.
 pub fn attach<const D: usize>(
     shape: &mut Shape<D>,
     landmarks: &[Landmark<D>],
     source: &Path,
 ) -> Result<()> {
     let n = shape.points.len();
+    let (lo, hi) = crate::geometry::bounding_box(&shape.points);
+    let diagonal = dist2(lo, hi).sqrt();
     shape.landmarks = landmarks
         .iter()
         .enumerate()
@@ -190,9 +197,29 @@ pub fn attach<const D: usize>(
                     shape.name
                 ),
             )),
-            Landmark::At(p) => Ok((0..n)
-                .min_by(|&a, &b| dist2(shape.points[a], p).total_cmp(&dist2(shape.points[b], p)))
-                .unwrap_or(0)),
+            Landmark::At(p) => {
+                let i = (0..n)
+                    .min_by(|&a, &b| {
+                        dist2(shape.points[a], p).total_cmp(&dist2(shape.points[b], p))
+                    })
+                    .unwrap_or(0);
+                let d = dist2(shape.points[i], p).sqrt();
+                if d > MAX_LANDMARK_OFFSET * diagonal {
+                    return Err(Error::parse(
+                        source,
+                        0,
+                        format!(
+                            "landmark {k} of {} at {p:?} is far from the shape: {d:.3} from its \
+                             nearest point, {:.0} % of the shape's size (at most {:.0} %); is \
+                             the file for another shape or in other units?",
+                            shape.name,
+                            100.0 * d / diagonal,
+                            100.0 * MAX_LANDMARK_OFFSET
+                        ),
+                    ));
+                }
+                Ok(i)
+            }
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(())

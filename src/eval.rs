@@ -207,7 +207,7 @@ pub fn shape_model_measures<const D: usize>(
     let gpa = generalized_procrustes(&raw)?;
     let full = crate::pca::pca(&gpa.aligned, &gpa.mean)?;
     let total: f64 = full.eigenvalues.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Err(Error::Population(
             "the shapes are identical after alignment: no variance to model".into(),
         ));

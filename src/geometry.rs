@@ -188,13 +188,7 @@ impl<const D: usize> Shape<D> {
                     }
                 }
             }
-            if D == 2 {
-                1
-            } else if inversions % 2 == 0 {
-                1
-            } else {
-                -1
-            }
+            if D == 2 || inversions % 2 == 0 { 1 } else { -1 }
         };
         let mut keep = vec![false; mapped.len()];
         for ids in by_key.values() {

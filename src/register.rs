@@ -145,7 +145,7 @@ fn pre_align_scored<const D: usize>(
             .flatten()
             .fold(0.0f64, |m, v| m.max(v.abs()));
         let r = rms(&s.points, c);
-        if !(r > 1e-9 * size) {
+        if r.is_nan() || r <= 1e-9 * size {
             return Err(Error::Population(format!(
                 "the ICP pre-alignment could not align {} to {}: {} has no extent (RMS radius \
                  {r:.3e} at coordinates of size {size:.3e})",
@@ -340,7 +340,7 @@ pub fn register<const D: usize>(
             .iter()
             .chain(sim.r.iter().flatten())
             .all(|v| v.is_finite());
-    if !finite || !(misfit <= MAX_ALIGNMENT_MISFIT) {
+    if !finite || misfit.is_nan() || misfit > MAX_ALIGNMENT_MISFIT {
         return Err(Error::Population(format!(
             "the ICP pre-alignment could not align {} to {}: after the best of its starts the \
              two-way RMS distance is {:.0} % of the target's RMS radius (at most {:.0} % is \

@@ -411,7 +411,7 @@ fn template_meshes(pop: &PopArgs) -> anyhow::Result<Option<Vec<atlasmesh::fe::Fe
     let m = pop
         .template_mesh
         .iter()
-        .map(|p| atlasmesh::io::vtkxml::read_vtu_hex(p))
+        .map(|p| atlasmesh::io::vtkxml::read_vtu(p))
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Some(m))
 }

@@ -104,6 +104,7 @@ pub fn mesh_mean_shape<const D: usize>(
                 nodes: m.nodes.iter().map(same_dim::<2, D>).collect(),
                 kind: m.kind,
                 connectivity: m.connectivity,
+                sets: Default::default(),
             })
         }
         _ => {
@@ -124,6 +125,7 @@ pub fn mesh_mean_shape<const D: usize>(
                 nodes: m.mesh.nodes.iter().map(same_dim::<3, D>).collect(),
                 kind: m.mesh.kind,
                 connectivity: m.mesh.connectivity,
+                sets: Default::default(),
             })
         }
     }
@@ -329,7 +331,8 @@ impl<const D: usize> Atlas<D> {
     /// Saves the atlas as safetensors: tensors `mean [N, D]`, `modes [N·D, m]`,
     /// `eigenvalues [m]`, `cumulative_variance [n_s-1]`, `facets [F, D]` (i64),
     /// `landmarks [L]` (i64), `mesh_nodes [#nodes, D]`, `mesh_elements [#el, k]` (i64); metadata
-    /// `format`, `format_version`, `dimension`, `element_kind`, `params` (JSON),
+    /// `format`, `format_version`, `dimension`, `element_kind`, `params` (JSON), `mesh_sets`
+    /// (JSON: node sets, element sets, surfaces of the mean mesh),
     /// `training_shapes`. Written to a temporary name, then renamed.
     pub fn save(&self, path: &Path) -> Result<()> {
         use safetensors::{Dtype, tensor::TensorView};
@@ -416,6 +419,10 @@ impl<const D: usize> Atlas<D> {
             "params".to_string(),
             serde_json::to_string(&self.params).unwrap_or_default(),
         );
+        meta.insert(
+            "mesh_sets".to_string(),
+            serde_json::to_string(&self.mesh.sets).unwrap_or_default(),
+        );
         let bytes = safetensors::serialize(views, Some(meta))
             .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
         crate::io::write_atomic(path, &bytes)
@@ -459,6 +466,11 @@ impl<const D: usize> Atlas<D> {
             .get("params")
             .and_then(|s| serde_json::from_str(s).ok())
             .ok_or_else(|| bad("missing or malformed params".into()))?;
+        let sets: crate::fe::MeshSets = match meta.get("mesh_sets") {
+            None => Default::default(),
+            Some(j) => serde_json::from_str(j)
+                .map_err(|e| bad(format!("malformed mesh_sets metadata: {e}")))?,
+        };
         let training_shapes = meta
             .get("training_shapes")
             .and_then(|s| s.parse().ok())
@@ -533,6 +545,8 @@ impl<const D: usize> Atlas<D> {
             .collect();
         let (_, elb) = get("mesh_elements", Dtype::I64, Some(kind.nodes()))?;
         let connectivity = idxv(&elb, nodes.len(), "mesh node")?;
+        sets.check(kind, nodes.len(), connectivity.len() / kind.nodes())
+            .map_err(|m| bad(format!("mesh sets: {m}")))?;
         let all: Vec<f64> = mean
             .iter()
             .flatten()
@@ -554,6 +568,7 @@ impl<const D: usize> Atlas<D> {
                 nodes,
                 kind,
                 connectivity,
+                sets,
             },
             params,
             training_shapes,

@@ -394,6 +394,7 @@ pub fn process_subject<const D: usize>(
             nodes: to2(&mesh.nodes),
             kind: mesh.kind,
             connectivity: mesh.connectivity.clone(),
+            sets: Default::default(),
         };
         plot_subject(
             &out.join(&png),

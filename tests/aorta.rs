@@ -200,7 +200,7 @@ fn aorta_loo_through_the_cli_with_template_meshes() {
     assert_eq!(r["summary"]["meshes_valid"], 8);
     assert_eq!(r["mean_mesh"]["elements"], 1792);
     // The morphed mesh of case 001 against its own nodes.
-    let m = atlasmesh::io::vtkxml::read_vtu_hex(&out.join("wall_001_mesh.vtu")).unwrap();
+    let m = atlasmesh::io::vtkxml::read_vtu(&out.join("wall_001_mesh.vtu")).unwrap();
     let truth = data.nodes(1);
     let err = m
         .nodes

@@ -362,6 +362,7 @@ fn hex_mesh_once(
         nodes,
         kind: ElementKind::Hex8,
         connectivity: hexes,
+        sets: Default::default(),
     };
 
     // 4. Smoothing that never lowers the worst incident element.

@@ -152,6 +152,7 @@ pub fn quad_mesh(outline: &Shape<2>, params: &QuadMeshParams) -> Result<FeMesh<2
         nodes,
         kind: ElementKind::Quad4,
         connectivity: conn,
+        sets: Default::default(),
     };
     // Drop unused nodes (vertices of excluded faces only).
     compact(&mut mesh);

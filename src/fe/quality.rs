@@ -46,7 +46,12 @@ pub fn element_quality_at<const D: usize>(
         let j = det(&v);
         let l: f64 = v.iter().map(|e| norm(*e)).product();
         jmin = jmin.min(j);
-        smin = smin.min(if l > 0.0 { j / l } else { -1.0 });
+        let sj = if l > 0.0 {
+            (j / l * kind.scaled_jacobian_factor()).min(1.0)
+        } else {
+            -1.0
+        };
+        smin = smin.min(sj);
     }
     ElementQuality {
         jacobian_min: jmin,
@@ -96,6 +101,7 @@ mod tests {
             nodes: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
             kind: ElementKind::Quad4,
             connectivity: vec![0, 1, 2, 3],
+            sets: Default::default(),
         };
         let q = element_quality(&m, 0);
         assert!((q.scaled_jacobian_min - 1.0).abs() < 1e-15);
@@ -118,6 +124,7 @@ mod tests {
             nodes,
             kind: ElementKind::Hex8,
             connectivity: (0..8).collect(),
+            sets: Default::default(),
         };
         assert!((element_quality(&m, 0).scaled_jacobian_min - 1.0).abs() < 1e-15);
         let flipped = FeMesh {
@@ -133,6 +140,7 @@ mod tests {
             nodes: vec![[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]],
             kind: ElementKind::Quad4,
             connectivity: vec![0, 1, 2, 3],
+            sets: Default::default(),
         };
         let s = summarize(&mesh_quality(&m));
         assert_eq!(s.inverted_elements, 1);

@@ -8,6 +8,7 @@
 //!   Scalismo; the points are ordered by walking the line segments, and an outline is closed
 //!   when the segments form a loop. A constant `z` is dropped; varying `z` is an error.
 
+pub mod femesh;
 pub mod landmarks;
 pub mod surface;
 pub mod vtkxml;

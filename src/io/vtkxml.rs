@@ -121,9 +121,11 @@ pub fn read_vtp(path: &Path) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
     Ok((pts, polys))
 }
 
-/// Reads a hexahedral mesh from a VTK XML UnstructuredGrid file (ASCII arrays; cells of VTK
-/// type 12, 8-node hexahedra, in VTK's node order).
-pub fn read_vtu_hex(path: &Path) -> Result<FeMesh<3>> {
+/// Reads an FE mesh from a VTK XML UnstructuredGrid file (ASCII arrays; one cell type of
+/// VTK's 5, 9, 10 or 12: triangles, quadrilaterals, tetrahedra, hexahedra, in VTK's node
+/// order). Point and cell data `set_NAME` (0/1, as [`crate::export::write_vtu`] writes them)
+/// are read back as node and element sets.
+pub fn read_vtu(path: &Path) -> Result<FeMesh<3>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     if !text.contains("type=\"UnstructuredGrid\"") {
         return Err(Error::parse(path, 1, "not a VTK XML UnstructuredGrid file"));
@@ -139,24 +141,39 @@ pub fn read_vtu_hex(path: &Path) -> Result<FeMesh<3>> {
             "cell types and offsets differ in number",
         ));
     }
+    let kind = types
+        .first()
+        .and_then(|&t| ElementKind::from_vtk_type(t as u8))
+        .ok_or_else(|| {
+            Error::parse(
+                path,
+                0,
+                format!(
+                    "cell type {:?}: only triangles (5), quadrilaterals (9), tetrahedra (10) and hexahedra (12) are read",
+                    types.first()
+                ),
+            )
+        })?;
+    let k = kind.nodes();
     let mut connectivity = Vec::with_capacity(conn.len());
     let mut prev = 0usize;
     for (e, (&o, &t)) in offs.iter().zip(&types).enumerate() {
-        if t != 12.0 {
+        if t != kind.vtk_type() as f64 {
             return Err(Error::parse(
                 path,
                 0,
                 format!(
-                    "cell {e} has VTK type {t}; only 8-node hexahedra (type 12) are read as template meshes"
+                    "cell {e} has VTK type {t} but cell 0 has {}; one element type per mesh",
+                    kind.vtk_type()
                 ),
             ));
         }
         let o = index(path, o, conn.len() + 1, "offset")?;
-        if o != prev + 8 {
+        if o != prev + k {
             return Err(Error::parse(
                 path,
                 0,
-                format!("cell {e} does not have 8 nodes"),
+                format!("cell {e} does not have {k} nodes"),
             ));
         }
         for &v in &conn[prev..o] {
@@ -174,11 +191,54 @@ pub fn read_vtu_hex(path: &Path) -> Result<FeMesh<3>> {
             "a node has a NaN or infinite coordinate",
         ));
     }
+    let mut sets = crate::fe::MeshSets::default();
+    for (section, n, target) in [
+        ("PointData", nodes.len(), 0),
+        ("CellData", connectivity.len() / k, 1),
+    ] {
+        let Some(body) = section_body(&text, section) else {
+            continue;
+        };
+        for name in set_array_names(body) {
+            let v = array(path, &text, section, Some(&format!("set_{name}")))?;
+            if v.len() != n {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    format!("set_{name} has {} values, {n} expected", v.len()),
+                ));
+            }
+            let members: Vec<usize> = (0..n).filter(|&i| v[i] != 0.0).collect();
+            if target == 0 {
+                sets.node_sets.insert(name, members);
+            } else {
+                sets.element_sets.insert(name, members);
+            }
+        }
+    }
     Ok(FeMesh {
         nodes,
-        kind: ElementKind::Hex8,
+        kind,
         connectivity,
+        sets,
     })
+}
+
+/// The text between `<section` and `</section>`.
+fn section_body<'a>(text: &'a str, section: &str) -> Option<&'a str> {
+    let a = text.find(&format!("<{section}"))?;
+    let b = text[a..].find(&format!("</{section}>"))? + a;
+    Some(&text[a..b])
+}
+
+/// Names `X` of the `DataArray`s named `set_X` in `body`.
+fn set_array_names(body: &str) -> Vec<String> {
+    body.match_indices("Name=\"set_")
+        .filter_map(|(i, m)| {
+            let rest = &body[i + m.len()..];
+            rest.find('"').map(|j| rest[..j].to_string())
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -222,16 +282,17 @@ mod tests {
             ],
             kind: ElementKind::Hex8,
             connectivity: (0..8).collect(),
+            sets: Default::default(),
         };
         let p = dir.join("c.vtu");
         crate::export::write_vtu(&p, &cube, None).unwrap();
-        let m = read_vtu_hex(&p).unwrap();
+        let m = read_vtu(&p).unwrap();
         assert_eq!(m.nodes, cube.nodes);
         assert_eq!(m.connectivity, cube.connectivity);
         // Truncated: a clear error naming the file.
         let t = std::fs::read_to_string(&p).unwrap();
         std::fs::write(&p, &t[..t.len() / 2]).unwrap();
-        let e = read_vtu_hex(&p).unwrap_err().to_string();
+        let e = read_vtu(&p).unwrap_err().to_string();
         assert!(e.contains("c.vtu") && e.contains("not closed"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }

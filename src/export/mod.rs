@@ -1,5 +1,10 @@
 //! Writing results: VTU (VTK XML unstructured grid) for FE meshes, VTP (VTK XML polydata) for
-//! shapes. Files are written atomically (temporary name, then rename).
+//! shapes, and the solver formats in [`solver`] (Abaqus/CalculiX `.inp`, Gmsh `.msh` 4.1,
+//! FEBio `.feb` 4.0, legacy VTK). Files are written atomically (temporary name, then rename).
+
+pub mod solver;
+
+pub use solver::{MeshFormat, write_mesh};
 
 use crate::error::Result;
 use crate::fe::FeMesh;
@@ -17,9 +22,34 @@ fn points_xml<const D: usize>(out: &mut String, pts: &[Point<D>]) {
     out.push_str("        </DataArray>\n      </Points>\n");
 }
 
+/// One set as a 0/1 mask array named `set_NAME`.
+fn set_mask_xml(s: &mut String, name: &str, members: &[usize], n: usize) {
+    let mut mask = vec![0u8; n];
+    for &m in members {
+        if m < n {
+            mask[m] = 1;
+        }
+    }
+    let _ = writeln!(
+        s,
+        "        <DataArray type=\"UInt8\" Name=\"set_{name}\" format=\"ascii\">"
+    );
+    for chunk in mask.chunks(32) {
+        s.push_str("          ");
+        for v in chunk {
+            s.push(if *v == 1 { '1' } else { '0' });
+            s.push(' ');
+        }
+        s.push('\n');
+    }
+    s.push_str("        </DataArray>\n");
+}
+
 /// Writes an FE mesh as VTU (readable by ParaView and meshio), with cell data `jacobian_min`
 /// and `scaled_jacobian_min` (corner minima, section 5.3), and, when `reference` is given (the
 /// same mesh before morphing), point data `displacement` (node position minus reference).
+/// Node sets and element sets are point and cell data `set_NAME` (1 for members, else 0);
+/// surfaces are not written (VTU has no face sets; use `.inp`, `.msh` or `.feb`).
 pub fn write_vtu<const D: usize>(
     path: &Path,
     mesh: &FeMesh<D>,
@@ -45,8 +75,12 @@ pub fn write_vtu_with_quality<const D: usize>(
         mesh.nodes.len(),
         ne
     );
+    s.push_str("      <PointData>\n");
+    for (name, members) in &mesh.sets.node_sets {
+        set_mask_xml(&mut s, name, members, mesh.nodes.len());
+    }
     if let Some(r) = reference {
-        s.push_str("      <PointData Vectors=\"displacement\">\n        <DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+        s.push_str("        <DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n");
         for (p, o) in mesh.nodes.iter().zip(&r.nodes) {
             let z = if D > 2 { p[2] - o[2] } else { 0.0 };
             let _ = writeln!(
@@ -57,9 +91,14 @@ pub fn write_vtu_with_quality<const D: usize>(
                 z
             );
         }
-        s.push_str("        </DataArray>\n      </PointData>\n");
+        s.push_str("        </DataArray>\n");
     }
-    s.push_str("      <CellData Scalars=\"scaled_jacobian_min\">\n        <DataArray type=\"Float64\" Name=\"jacobian_min\" format=\"ascii\">\n");
+    s.push_str("      </PointData>\n");
+    s.push_str("      <CellData Scalars=\"scaled_jacobian_min\">\n");
+    for (name, members) in &mesh.sets.element_sets {
+        set_mask_xml(&mut s, name, members, ne);
+    }
+    s.push_str("        <DataArray type=\"Float64\" Name=\"jacobian_min\" format=\"ascii\">\n");
     for e in q {
         let _ = writeln!(s, "          {:.17e}", e.jacobian_min);
     }

@@ -87,6 +87,27 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Element quality of an FE mesh (.inp, .msh, .vtu, .vtk): min and 1 %/5 % percentiles of
+    /// the corner Jacobian and scaled Jacobian, elements below the acceptance bound (hexahedra
+    /// 0.5, quadrilaterals 0.3, simplices 0.2). Exits with 4 when an element is inverted.
+    Quality {
+        /// The mesh file.
+        mesh: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Converts an FE mesh between .inp, .msh, .vtu, .vtk and .feb, with its sets; an atlas
+    /// file (.safetensors) as input gives its mean mesh (reference frame).
+    Convert {
+        /// Input mesh or atlas.
+        input: PathBuf,
+        /// Output file (format from the extension).
+        output: PathBuf,
+        /// Sets (TOML) to add, evaluated on the input mesh.
+        #[arg(long, value_name = "TOML")]
+        sets: Option<PathBuf>,
+    },
     /// Run the whole method on built-in synthetic data (no files needed).
     Demo {
         /// Output folder.
@@ -101,7 +122,8 @@ struct PopArgs {
     /// VTK with LINES; 3D surfaces as PLY, STL, OBJ, VTP or legacy VTK with POLYGONS.
     #[arg(long, num_args = 1.., required = true)]
     shapes: Vec<PathBuf>,
-    /// 3D: template volume meshes (VTU, 8-node hexahedra, one connectivity), one per shape
+    /// 3D: template volume meshes (.inp, .msh, .vtu or .vtk; hexahedra or tetrahedra, one
+    /// connectivity, with their sets), one per shape
     /// in the order of --shapes (or, for `build`, one for the first shape); their mean is the
     /// atlas's FE mesh instead of the automatic one.
     #[arg(long, num_args = 1.., value_name = "VTU")]
@@ -166,11 +188,40 @@ struct RunArgs {
     /// Skip the PNG plots.
     #[arg(long)]
     no_plots: bool,
+    /// Formats of every subject's FE mesh, comma-separated: vtu, vtk, inp (Abaqus/CalculiX),
+    /// msh (Gmsh 4.1), feb (FEBio 4.0, 3D).
+    #[arg(long, value_delimiter = ',', default_value = "vtu", value_name = "FORMATS")]
+    format: Vec<String>,
+    /// Node sets, element sets and surfaces defined on the mean mesh (TOML; see
+    /// `fe::sets`), carried to every subject's mesh.
+    #[arg(long, value_name = "TOML")]
+    sets: Option<PathBuf>,
+    /// An Abaqus/CalculiX deck built around the atlas's mean mesh (`atlasmesh convert ATLAS
+    /// mean.inp`): every subject gets a copy with its node coordinates, NAME_deck.inp.
+    #[arg(long, value_name = "INP")]
+    deck: Option<PathBuf>,
 }
 
 impl RunArgs {
-    fn params(&self) -> RunParams {
+    fn params(&self) -> anyhow::Result<RunParams> {
         let mut p = RunParams::default();
+        p.formats = self
+            .format
+            .iter()
+            .map(|f| {
+                atlasmesh::export::MeshFormat::parse(f).ok_or_else(|| {
+                    atlasmesh::Error::Parameter(format!(
+                        "--format {f}: use vtu, vtk, inp, msh or feb"
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        if let Some(f) = &self.sets {
+            p.sets = Some(atlasmesh::fe::sets::SetsConfig::read(f)?);
+        }
+        if let Some(f) = &self.deck {
+            p.deck = Some(std::sync::Arc::new(atlasmesh::io::femesh::read_inp(f)?));
+        }
         p.morph.grid = self.grid;
         p.morph.alpha = self.alpha;
         p.fit.symmetric = !self.one_way;
@@ -178,7 +229,7 @@ impl RunArgs {
         p.fit.partial = self.partial;
         p.plots = !self.no_plots;
         p.baselines = self.baselines;
-        p
+        Ok(p)
     }
 }
 
@@ -217,6 +268,60 @@ fn surfaces(paths: &[PathBuf]) -> anyhow::Result<bool> {
         .into());
     }
     Ok(n > 0)
+}
+
+/// The dimension of a mesh or atlas file: an atlas says so; a mesh is 2D when its elements
+/// are.
+fn mesh_dimension(path: &std::path::Path) -> anyhow::Result<usize> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"))
+    {
+        return Ok(if Atlas::<2>::load(path).is_ok() { 2 } else { 3 });
+    }
+    match atlasmesh::io::femesh::read_fe_mesh::<3>(path) {
+        Ok(_) => Ok(3),
+        Err(e3) => match atlasmesh::io::femesh::read_fe_mesh::<2>(path) {
+            Ok(_) => Ok(2),
+            Err(_) => Err(e3.into()),
+        },
+    }
+}
+
+/// `atlasmesh quality` of a mesh of dimension `D`.
+fn quality_of<const D: usize>(
+    path: &std::path::Path,
+) -> anyhow::Result<atlasmesh::fe::quality::QualityDistribution> {
+    let m = atlasmesh::io::femesh::read_fe_mesh::<D>(path)?;
+    let q = atlasmesh::fe::quality::mesh_quality(&m);
+    Ok(atlasmesh::fe::quality::distribution(m.kind, &q))
+}
+
+/// `atlasmesh convert` of a mesh (or an atlas's mean mesh) of dimension `D`.
+fn convert<const D: usize>(
+    input: &std::path::Path,
+    output: &std::path::Path,
+    sets: Option<&atlasmesh::fe::sets::SetsConfig>,
+) -> anyhow::Result<()> {
+    let atlas_in = input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"));
+    let (mut mesh, landmarks) = if atlas_in {
+        let a = Atlas::<D>::load(input)?;
+        let l: Vec<atlasmesh::geometry::Point<D>> = a.landmarks.iter().map(|&i| a.mean[i]).collect();
+        (a.mesh, l)
+    } else {
+        (atlasmesh::io::femesh::read_fe_mesh::<D>(input)?, Vec::new())
+    };
+    if let Some(c) = sets {
+        let s = c.evaluate(&mesh, &landmarks)?;
+        mesh.sets.node_sets.extend(s.node_sets);
+        mesh.sets.element_sets.extend(s.element_sets);
+        mesh.sets.surfaces.extend(s.surfaces);
+    }
+    let q = atlasmesh::fe::quality::mesh_quality(&mesh);
+    atlasmesh::export::write_mesh(output, &mesh, None, &q)?;
+    Ok(())
 }
 
 /// `atlasmesh register`: one pair, outputs in `out`.
@@ -287,7 +392,7 @@ fn surfaces_and_params(
     RunParams,
     Option<Vec<atlasmesh::fe::FeMesh<3>>>,
 )> {
-    let mut params = run.params();
+    let mut params = run.params()?;
     apply_pop(&mut params, pop);
     let mut shapes = pipeline::load_surfaces(&pop.shapes)?;
     pipeline::attach_landmarks(&mut shapes, &pop.landmarks)?;
@@ -373,9 +478,15 @@ fn fit<const D: usize>(
     out: &std::path::Path,
     quiet: bool,
 ) -> anyhow::Result<()> {
-    let a = Atlas::<D>::load(atlas)?;
-    let mut params = run.params();
+    let mut a = Atlas::<D>::load(atlas)?;
+    let mut params = run.params()?;
     params.atlas = a.params;
+    if let Some(c) = &params.sets {
+        pipeline::apply_sets(&mut a, c)?;
+    }
+    if let (Some(deck), Some(path)) = (&params.deck, &run.deck) {
+        pipeline::check_deck(&a, deck, path)?;
+    }
     let r = pipeline::fit_subjects(&a, subjects, &dataset_name(files), &params, out, quiet)?;
     print_summary(&r, out);
     Ok(())
@@ -411,7 +522,7 @@ fn template_meshes(pop: &PopArgs) -> anyhow::Result<Option<Vec<atlasmesh::fe::Fe
     let m = pop
         .template_mesh
         .iter()
-        .map(|p| atlasmesh::io::vtkxml::read_vtu(p))
+        .map(|p| atlasmesh::io::femesh::read_fe_mesh::<3>(p))
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Some(m))
 }
@@ -428,7 +539,7 @@ fn population_and_params(
         )
         .into());
     }
-    let mut params = run.params();
+    let mut params = run.params()?;
     apply_pop(&mut params, pop);
     let opts = PopulationOptions {
         closed: !pop.open,
@@ -555,6 +666,55 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
                 register_pair(shapes, &landmarks, grid, &out)?;
             }
+        }
+        Command::Quality { mesh, json } => {
+            let dim = mesh_dimension(&mesh)?;
+            let d = if dim == 2 {
+                quality_of::<2>(&mesh)?
+            } else {
+                quality_of::<3>(&mesh)?
+            };
+            if json {
+                println!("{}", serde_json::to_string_pretty(&d)?);
+            } else {
+                println!(
+                    "{}: {} elements; Jacobian min {:.4e}, 1 % {:.4e}, 5 % {:.4e}; scaled Jacobian min {:.4}, 1 % {:.4}, 5 % {:.4}; {} below {}; {} inverted",
+                    mesh.display(),
+                    d.elements,
+                    d.jacobian_min,
+                    d.jacobian_p01,
+                    d.jacobian_p05,
+                    d.scaled_jacobian_min,
+                    d.scaled_jacobian_p01,
+                    d.scaled_jacobian_p05,
+                    d.elements_below_bound,
+                    d.bound,
+                    d.inverted_elements
+                );
+            }
+            if d.inverted_elements > 0 {
+                return Err(atlasmesh::Error::Mesh(format!(
+                    "{}: {} inverted elements",
+                    mesh.display(),
+                    d.inverted_elements
+                ))
+                .into());
+            }
+        }
+        Command::Convert {
+            input,
+            output,
+            sets,
+        } => {
+            let sets = sets
+                .map(|f| atlasmesh::fe::sets::SetsConfig::read(&f))
+                .transpose()?;
+            if mesh_dimension(&input)? == 2 {
+                convert::<2>(&input, &output, sets.as_ref())?;
+            } else {
+                convert::<3>(&input, &output, sets.as_ref())?;
+            }
+            println!("{} -> {}", input.display(), output.display());
         }
         Command::Demo { out } => {
             let r = pipeline::demo(&out, cli.quiet).context("demo")?;

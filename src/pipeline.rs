@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::eval::{e_d, normal_correlation, normals_at, two_way_rms};
-use crate::export::{write_vtp, write_vtu, write_vtu_with_quality};
+use crate::export::{write_mesh, write_vtp, write_vtu};
 use crate::fe::FeMesh;
 use crate::fe::quality::{mesh_quality, summarize};
 use crate::ffd::FfdParams;
@@ -31,7 +31,7 @@ pub struct PopulationOptions {
 }
 
 /// All parameters of a run.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct RunParams {
     pub atlas: AtlasParams,
     pub fit: FitParams,
@@ -42,12 +42,24 @@ pub struct RunParams {
     /// correspondence by a similarity ICP and by an FFD registration of the mean to the
     /// subject.
     pub baselines: bool,
+    /// Formats of every subject's FE mesh (`NAME_mesh.EXT`).
+    pub formats: Vec<crate::export::MeshFormat>,
+    /// Sets defined on the mean mesh (added to those the atlas carries).
+    #[serde(skip)]
+    pub sets: Option<crate::fe::sets::SetsConfig>,
+    /// A whole Abaqus/CalculiX deck around the atlas's mean mesh: every subject gets a copy
+    /// with its node coordinates (`NAME_deck.inp`).
+    #[serde(skip)]
+    pub deck: Option<std::sync::Arc<crate::io::femesh::InpDeck>>,
 }
 
 impl Default for RunParams {
     fn default() -> Self {
         RunParams {
             baselines: false,
+            formats: vec![crate::export::MeshFormat::Vtu],
+            sets: None,
+            deck: None,
             atlas: AtlasParams::default(),
             fit: FitParams::default(),
             morph: FfdParams::default(),
@@ -339,6 +351,7 @@ pub fn process_subject<const D: usize>(
     let mesh = morph.mesh;
     let per_element = morph.quality;
     let q = summarize(&per_element);
+    let dist = crate::fe::quality::distribution(mesh.kind, &per_element);
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
     let mean_normals = atlas.mean_shape().vertex_normals();
@@ -355,7 +368,6 @@ pub fn process_subject<const D: usize>(
     };
     let base = file_name(&subject.name);
     let mut files = Vec::new();
-    let mesh_file = format!("{base}_mesh.vtu");
     let mean_in_subject = atlas.mesh.with_nodes(
         atlas
             .mesh
@@ -364,13 +376,21 @@ pub fn process_subject<const D: usize>(
             .map(|p| fit.similarity.apply(p))
             .collect(),
     );
-    write_vtu_with_quality(
-        &out.join(&mesh_file),
-        &mesh,
-        Some(&mean_in_subject),
-        &per_element,
-    )?;
-    files.push(mesh_file);
+    for f in &params.formats {
+        let mesh_file = format!("{base}_mesh.{}", f.extension());
+        write_mesh(
+            &out.join(&mesh_file),
+            &mesh,
+            Some(&mean_in_subject),
+            &per_element,
+        )?;
+        files.push(mesh_file);
+    }
+    if let Some(deck) = &params.deck {
+        let deck_file = format!("{base}_deck.inp");
+        crate::io::write_atomic(&out.join(&deck_file), deck.with_nodes(&mesh.nodes)?.as_bytes())?;
+        files.push(deck_file);
+    }
     let fitted = Shape {
         name: subject.name.clone(),
         points: fit.projected.iter().map(|p| p.point).collect(),
@@ -424,6 +444,9 @@ pub fn process_subject<const D: usize>(
         scaled_jacobian_histogram: jacobian_histogram(
             per_element.iter().map(|e| e.scaled_jacobian_min),
         ),
+        scaled_jacobian_p01: dist.scaled_jacobian_p01,
+        scaled_jacobian_p05: dist.scaled_jacobian_p05,
+        elements_below_bound: dist.elements_below_bound,
         success: rel < 0.01 && q.inverted_elements == 0,
         converged: fit.converged,
         e_d_history: fit.e_d_history,
@@ -591,12 +614,57 @@ pub fn leave_one_out<const D: usize>(
 fn atlas_of<const D: usize>(
     shapes: &[Shape<D>],
     meshes: Option<&[FeMesh<D>]>,
-    params: &AtlasParams,
+    params: &RunParams,
 ) -> Result<Atlas<D>> {
-    match meshes {
-        Some(m) => Atlas::build_with_meshes(shapes, params, m),
-        None => Atlas::build(shapes, params),
+    let mut atlas = match meshes {
+        Some(m) => Atlas::build_with_meshes(shapes, &params.atlas, m)?,
+        None => Atlas::build(shapes, &params.atlas)?,
+    };
+    if let Some(c) = &params.sets {
+        apply_sets(&mut atlas, c)?;
     }
+    Ok(atlas)
+}
+
+/// Adds the sets of `config` (evaluated on the mean mesh, with the atlas's landmarks) to the
+/// atlas's mesh; a set of the same name is replaced.
+pub fn apply_sets<const D: usize>(
+    atlas: &mut Atlas<D>,
+    config: &crate::fe::sets::SetsConfig,
+) -> Result<()> {
+    let landmarks: Vec<Point<D>> = atlas.landmarks.iter().map(|&i| atlas.mean[i]).collect();
+    let s = config.evaluate(&atlas.mesh, &landmarks)?;
+    atlas.mesh.sets.node_sets.extend(s.node_sets);
+    atlas.mesh.sets.element_sets.extend(s.element_sets);
+    atlas.mesh.sets.surfaces.extend(s.surfaces);
+    Ok(())
+}
+
+/// Checks that a deck's mesh is the atlas's mean mesh (same elements and node count).
+pub fn check_deck<const D: usize>(
+    atlas: &Atlas<D>,
+    deck: &crate::io::femesh::InpDeck,
+    path: &Path,
+) -> Result<()> {
+    if deck.mesh.nodes.len() != atlas.mesh.nodes.len()
+        || deck.mesh.kind != atlas.mesh.kind
+        || deck.mesh.connectivity != atlas.mesh.connectivity
+    {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "the deck's mesh ({} nodes, {} {} elements) is not the atlas's mean mesh ({} nodes, {} {} elements); start the deck from `atlasmesh convert ATLAS mean.inp`",
+                deck.mesh.nodes.len(),
+                deck.mesh.num_elements(),
+                deck.mesh.kind.name(),
+                atlas.mesh.nodes.len(),
+                atlas.mesh.num_elements(),
+                atlas.mesh.kind.name()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Leave-one-out where the atlas of fold `k` is built from `corresponded` without entry `k`
@@ -639,7 +707,7 @@ pub fn leave_one_out_of<const D: usize>(
     }
     create_dir(out)?;
     // The full atlas, for the variance figures and to check the population once.
-    let full = atlas_of(shapes, meshes, &params.atlas)?;
+    let full = atlas_of(shapes, meshes, params)?;
     let progress = Progress::new("leave-one-out", shapes.len(), quiet);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
@@ -662,7 +730,7 @@ pub fn leave_one_out_of<const D: usize>(
                         .map(|(_, x)| x.clone())
                         .collect()
                 });
-                let atlas = atlas_of(&training, training_meshes.as_deref(), &params.atlas)?;
+                let atlas = atlas_of(&training, training_meshes.as_deref(), params)?;
                 let fitter = Fitter::new(&atlas);
                 let morpher = Morpher::new(&atlas, &params.morph)?;
                 let r = process_subject(&atlas, &fitter, &morpher, &subjects[k], out, params);
@@ -700,7 +768,7 @@ pub fn build_with_meshes<const D: usize>(
     params: &RunParams,
     atlas_path: &Path,
 ) -> Result<Atlas<D>> {
-    let atlas = atlas_of(shapes, meshes, &params.atlas)?;
+    let atlas = atlas_of(shapes, meshes, params)?;
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
     }

@@ -44,6 +44,12 @@ pub struct SubjectReport {
     /// from -1 to 1 (bin `k` covers `[-1 + 0.05 k, -1 + 0.05 (k + 1))`, the last includes 1).
     #[serde(default)]
     pub scaled_jacobian_histogram: Vec<u32>,
+    /// 1st and 5th percentiles of the elements' scaled Jacobians.
+    pub scaled_jacobian_p01: f64,
+    pub scaled_jacobian_p05: f64,
+    /// Elements below the usual acceptance bound of their kind (hexahedra 0.5,
+    /// quadrilaterals 0.3, simplices 0.2).
+    pub elements_below_bound: usize,
     /// `rms_distance_relative < 0.01` and no inverted element.
     pub success: bool,
     /// Whether the last inner loop of Algorithm 1 met its tolerance.

@@ -3,7 +3,8 @@
 //! - **Abaqus / CalculiX `.inp`**: `*NODE`, `*ELEMENT` (`C3D8`, `C3D4`, `CPS4`, `CPS3`),
 //!   `*NSET`, `*ELSET`, `*SURFACE, TYPE=ELEMENT` (lines `element, Sk`), 1-based ids.
 //! - **Gmsh `.msh` 4.1** (ASCII): physical groups for the sets. Elements are split into one
-//!   entity per combination of element sets (each entity carries those sets' physical tags);
+//!   entity per combination of element sets (each entity carries the physical tag `EALL` and
+//!   those of its sets);
 //!   every surface is an entity of boundary-face elements of dimension `D - 1`; every node in
 //!   a node set gets a point entity holding a 1-node element, tagged with its sets.
 //! - **FEBio `.feb` 4.0**: the `Mesh` section (`Nodes`, `Elements`, `NodeSet`, `ElementSet`,
@@ -134,13 +135,14 @@ pub fn inp<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> String {
 
 /// `*NODE`, `*ELEMENT` and the sets (appended to `s`).
 pub fn inp_mesh<const D: usize>(s: &mut String, mesh: &FeMesh<D>) {
+    // CalculiX reads at most 20 characters per number: 13 significant digits.
     s.push_str("*NODE, NSET=NALL\n");
     for (i, p) in mesh.nodes.iter().enumerate() {
         if D == 2 {
-            let _ = writeln!(s, "{}, {:.17e}, {:.17e}", i + 1, p[0], p[1]);
+            let _ = writeln!(s, "{}, {:.12e}, {:.12e}", i + 1, p[0], p[1]);
         } else {
             let q = xyz(p);
-            let _ = writeln!(s, "{}, {:.17e}, {:.17e}, {:.17e}", i + 1, q[0], q[1], q[2]);
+            let _ = writeln!(s, "{}, {:.12e}, {:.12e}, {:.12e}", i + 1, q[0], q[1], q[2]);
         }
     }
     let _ = writeln!(s, "*ELEMENT, TYPE={}, ELSET=EALL", mesh.kind.abaqus_type());
@@ -179,6 +181,9 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
         names.push((d, tag, n.to_string()));
         tag
     };
+    // Every element is in the physical group EALL (readers such as meshio expect a physical
+    // tag on every element), then in those of its element sets.
+    let all_tag = tag_of(D, "EALL", &mut names);
     let mut el_tags: BTreeMap<&str, usize> = BTreeMap::new();
     for n in sets.element_sets.keys() {
         el_tags.insert(n, tag_of(D, n, &mut names));
@@ -193,7 +198,7 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
     }
     // Elements grouped by the element sets that hold them.
     let ne = mesh.num_elements();
-    let mut member_of: Vec<Vec<usize>> = vec![Vec::new(); ne];
+    let mut member_of: Vec<Vec<usize>> = vec![vec![all_tag]; ne];
     for (n, m) in &sets.element_sets {
         for &e in m {
             if e < ne {
@@ -568,10 +573,12 @@ mod tests {
             let p = dir.join(format!("{name}.{ext}"));
             write_mesh(&p, m, None, &q).unwrap();
             let r: FeMesh<D> = crate::io::femesh::read_fe_mesh(&p).unwrap();
+            // .inp keeps 13 significant digits (CalculiX reads 20 characters per number).
+            let tol = if ext == "inp" { 1e-11 } else { 1e-15 };
             assert_eq!(r.kind, m.kind, "{ext}");
             assert_eq!(r.connectivity, m.connectivity, "{ext}");
             for (a, b) in r.nodes.iter().zip(&m.nodes) {
-                assert!((0..D).all(|d| (a[d] - b[d]).abs() < 1e-12), "{ext}");
+                assert!((0..D).all(|d| (a[d] - b[d]).abs() <= tol * (1.0 + b[d].abs())), "{ext}");
             }
             assert_eq!(r.sets.node_sets, m.sets.node_sets, "{ext} node sets");
             assert_eq!(
@@ -609,7 +616,9 @@ mod tests {
         assert!(out.contains("*MATERIAL, NAME=BONE\n*ELASTIC\n17000., 0.3\n*STEP"));
         std::fs::write(&p, &out).unwrap();
         let again = crate::io::femesh::read_inp(&p).unwrap();
-        assert_eq!(again.mesh.nodes, moved);
+        for (a, b) in again.mesh.nodes.iter().zip(&moved) {
+            assert!((0..3).all(|d| (a[d] - b[d]).abs() < 1e-11 * (1.0 + b[d].abs())));
+        }
         assert_eq!(again.mesh.connectivity, m.connectivity);
         assert_eq!(again.mesh.sets, m.sets);
         std::fs::remove_dir_all(&dir).ok();

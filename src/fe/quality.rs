@@ -90,6 +90,53 @@ pub fn summarize(q: &[ElementQuality]) -> QualitySummary {
     }
 }
 
+/// Percentiles and acceptance counts of a mesh's element quality.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct QualityDistribution {
+    pub jacobian_min: f64,
+    pub jacobian_p01: f64,
+    pub jacobian_p05: f64,
+    pub scaled_jacobian_min: f64,
+    pub scaled_jacobian_p01: f64,
+    pub scaled_jacobian_p05: f64,
+    /// The bound used ([`super::ElementKind::scaled_jacobian_bound`]).
+    pub bound: f64,
+    pub elements_below_bound: usize,
+    pub inverted_elements: usize,
+    pub elements: usize,
+}
+
+/// The `p`-quantile (nearest rank) of sorted values.
+fn quantile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let k = ((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[k - 1]
+}
+
+/// Min, 1 % and 5 % percentiles of the corner Jacobians and scaled Jacobians, and the counts
+/// of elements below the acceptance bound of `kind` and inverted.
+pub fn distribution(kind: super::ElementKind, q: &[ElementQuality]) -> QualityDistribution {
+    let mut j: Vec<f64> = q.iter().map(|e| e.jacobian_min).collect();
+    let mut s: Vec<f64> = q.iter().map(|e| e.scaled_jacobian_min).collect();
+    j.sort_by(f64::total_cmp);
+    s.sort_by(f64::total_cmp);
+    let bound = kind.scaled_jacobian_bound();
+    QualityDistribution {
+        jacobian_min: quantile(&j, 0.0),
+        jacobian_p01: quantile(&j, 0.01),
+        jacobian_p05: quantile(&j, 0.05),
+        scaled_jacobian_min: quantile(&s, 0.0),
+        scaled_jacobian_p01: quantile(&s, 0.01),
+        scaled_jacobian_p05: quantile(&s, 0.05),
+        bound,
+        elements_below_bound: s.iter().filter(|v| **v < bound).count(),
+        inverted_elements: j.iter().filter(|v| **v <= 0.0).count(),
+        elements: q.len(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

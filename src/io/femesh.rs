@@ -95,6 +95,7 @@ fn check_mesh<const D: usize>(
 
 /// An `.inp` deck: the mesh, and the 1-based node ids in file order (node `k` of the mesh has
 /// id `node_ids[k]`).
+#[derive(Clone, Debug)]
 pub struct InpDeck {
     pub mesh: FeMesh<3>,
     pub node_ids: Vec<u64>,
@@ -544,8 +545,9 @@ impl InpDeck {
                 if let Some(k) = id.and_then(|id| index.get(&id).copied()) {
                     let p = nodes[k];
                     out.push_str(&self.node_ids[k].to_string());
+                    // CalculiX reads at most 20 characters per number.
                     for v in p.iter() {
-                        out.push_str(&format!(", {v:.17e}"));
+                        out.push_str(&format!(", {v:.12e}"));
                     }
                     out.push('\n');
                     continue;
@@ -895,7 +897,10 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
                 .get(&(*dim, *p))
                 .cloned()
                 .unwrap_or_else(|| format!("physical_{p}"));
-            sets.element_sets.entry(name).or_default().push(e);
+            // The whole-mesh group the writer adds is not carried as a set.
+            if name != "EALL" {
+                sets.element_sets.entry(name).or_default().push(e);
+            }
         }
     }
     let kind = kind.ok_or_else(|| Error::parse(path, el, "no elements"))?;

@@ -190,7 +190,12 @@ struct RunArgs {
     no_plots: bool,
     /// Formats of every subject's FE mesh, comma-separated: vtu, vtk, inp (Abaqus/CalculiX),
     /// msh (Gmsh 4.1), feb (FEBio 4.0, 3D).
-    #[arg(long, value_delimiter = ',', default_value = "vtu", value_name = "FORMATS")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "vtu",
+        value_name = "FORMATS"
+    )]
     format: Vec<String>,
     /// Node sets, element sets and surfaces defined on the mean mesh (TOML; see
     /// `fe::sets`), carried to every subject's mesh.
@@ -204,8 +209,7 @@ struct RunArgs {
 
 impl RunArgs {
     fn params(&self) -> anyhow::Result<RunParams> {
-        let mut p = RunParams::default();
-        p.formats = self
+        let formats = self
             .format
             .iter()
             .map(|f| {
@@ -216,6 +220,10 @@ impl RunArgs {
                 })
             })
             .collect::<Result<_, _>>()?;
+        let mut p = RunParams {
+            formats,
+            ..RunParams::default()
+        };
         if let Some(f) = &self.sets {
             p.sets = Some(atlasmesh::fe::sets::SetsConfig::read(f)?);
         }
@@ -308,7 +316,8 @@ fn convert<const D: usize>(
         .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"));
     let (mut mesh, landmarks) = if atlas_in {
         let a = Atlas::<D>::load(input)?;
-        let l: Vec<atlasmesh::geometry::Point<D>> = a.landmarks.iter().map(|&i| a.mean[i]).collect();
+        let l: Vec<atlasmesh::geometry::Point<D>> =
+            a.landmarks.iter().map(|&i| a.mean[i]).collect();
         (a.mesh, l)
     } else {
         (atlasmesh::io::femesh::read_fe_mesh::<D>(input)?, Vec::new())

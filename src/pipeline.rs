@@ -388,7 +388,10 @@ pub fn process_subject<const D: usize>(
     }
     if let Some(deck) = &params.deck {
         let deck_file = format!("{base}_deck.inp");
-        crate::io::write_atomic(&out.join(&deck_file), deck.with_nodes(&mesh.nodes)?.as_bytes())?;
+        crate::io::write_atomic(
+            &out.join(&deck_file),
+            deck.with_nodes(&mesh.nodes)?.as_bytes(),
+        )?;
         files.push(deck_file);
     }
     let fitted = Shape {

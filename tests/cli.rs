@@ -412,3 +412,92 @@ fn bad_landmarks_and_unalignable_targets_are_clear_errors() {
     assert!(!out.exists(), "no atlas written after an error");
     assert!(!d.join("reg").join("registration.json").exists());
 }
+
+const CUBE_INP: &str = "*NODE
+1, 0, 0, 0
+2, 1, 0, 0
+3, 1, 1, 0
+4, 0, 1, 0
+5, 0, 0, 1
+6, 1, 0, 1
+7, 1, 1, 1
+8, 0, 1, 1
+*ELEMENT, TYPE=C3D8, ELSET=ALL
+1, 1, 2, 3, 4, 5, 6, 7, 8
+*NSET, NSET=BOTTOM
+1, 2, 3, 4
+*SURFACE, NAME=TOP, TYPE=ELEMENT
+1, S2
+";
+
+/// `atlasmesh quality` and `convert` on a one-cube mesh; bad FE meshes and sets configs are
+/// clear errors (exit 2), an inverted mesh exits with 4.
+#[test]
+fn quality_convert_and_bad_fe_meshes() {
+    let d = common::temp_dir("femesh");
+    let cube = write(&d, "cube.inp", CUBE_INP);
+    let o = atlasmesh(&["quality", &cube, "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let q: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(q["elements"], 1);
+    assert!((q["scaled_jacobian_min"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    assert_eq!(q["elements_below_bound"], 0);
+    // Converted to every format and back: the same mesh and sets.
+    for ext in ["msh", "vtu", "vtk", "inp"] {
+        let p = d.join(format!("c.{ext}")).display().to_string();
+        let o = atlasmesh(&["convert", &cube, &p]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let m: atlasmesh::fe::FeMesh<3> =
+            atlasmesh::io::femesh::read_fe_mesh(std::path::Path::new(&p)).unwrap();
+        assert_eq!(m.sets.node_sets["BOTTOM"], vec![0, 1, 2, 3], "{ext}");
+        assert_eq!(m.sets.element_sets["ALL"], vec![0], "{ext}");
+    }
+    // Inverted: top and bottom swapped.
+    let inverted = write(
+        &d,
+        "inverted.inp",
+        &CUBE_INP.replace("1, 1, 2, 3, 4, 5, 6, 7, 8", "1, 5, 6, 7, 8, 1, 2, 3, 4"),
+    );
+    let o = atlasmesh(&["quality", &inverted]);
+    assert_eq!(
+        o.status.code(),
+        Some(4),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("inverted"));
+    // Bad inputs.
+    let unknown = write(&d, "beam.inp", &CUBE_INP.replace("C3D8", "B31"));
+    assert_clean_error(&atlasmesh(&["quality", &unknown]), "beam.inp", "B31");
+    let missing = write(
+        &d,
+        "missing.inp",
+        &CUBE_INP.replace("1, 2, 3, 4\n*SURFACE", "1, 2, 3, 44\n*SURFACE"),
+    );
+    assert_clean_error(&atlasmesh(&["quality", &missing]), "missing.inp", "44");
+    let msh = d.join("c.msh");
+    let full = std::fs::read_to_string(&msh).unwrap();
+    let cut = write(&d, "cut.msh", &full[..full.len() * 2 / 3]);
+    assert_clean_error(&atlasmesh(&["quality", &cut]), "cut.msh", "truncated");
+    let nothing = write(
+        &d,
+        "nothing.toml",
+        "[[node_set]]\nname = \"FAR\"\nbox = { min = [2, 2, 2], max = [3, 3, 3] }\n",
+    );
+    let out = d.join("o.inp").display().to_string();
+    assert_clean_error(
+        &atlasmesh(&["convert", &cube, &out, "--sets", &nothing]),
+        "nothing.toml",
+        "selects no node",
+    );
+    assert!(
+        !std::path::Path::new(&out).exists(),
+        "no output after an error"
+    );
+    let typo = write(&d, "typo.toml", "[[node_set]]\nname = \"A\"\nbx = 1\n");
+    assert_clean_error(
+        &atlasmesh(&["convert", &cube, &out, "--sets", &typo]),
+        "typo.toml",
+        "bx",
+    );
+}

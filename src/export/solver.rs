@@ -578,7 +578,10 @@ mod tests {
             assert_eq!(r.kind, m.kind, "{ext}");
             assert_eq!(r.connectivity, m.connectivity, "{ext}");
             for (a, b) in r.nodes.iter().zip(&m.nodes) {
-                assert!((0..D).all(|d| (a[d] - b[d]).abs() <= tol * (1.0 + b[d].abs())), "{ext}");
+                assert!(
+                    (0..D).all(|d| (a[d] - b[d]).abs() <= tol * (1.0 + b[d].abs())),
+                    "{ext}"
+                );
             }
             assert_eq!(r.sets.node_sets, m.sets.node_sets, "{ext} node sets");
             assert_eq!(

@@ -182,6 +182,34 @@ mod tests {
     }
 
     #[test]
+    fn regular_simplices_have_scaled_jacobian_one() {
+        let h = 3f64.sqrt() / 2.0;
+        let tri = FeMesh::<2> {
+            nodes: vec![[0.0, 0.0], [1.0, 0.0], [0.5, h]],
+            kind: super::super::ElementKind::Tri3,
+            connectivity: vec![0, 1, 2],
+            sets: Default::default(),
+        };
+        let q = element_quality(&tri, 0);
+        assert!((q.scaled_jacobian_min - 1.0).abs() < 1e-12, "{q:?}");
+        let c = 1.0 / 3f64.sqrt();
+        let tet = FeMesh::<3> {
+            nodes: vec![[c, c, c], [c, -c, -c], [-c, c, -c], [-c, -c, c]],
+            kind: super::super::ElementKind::Tet4,
+            connectivity: vec![0, 2, 1, 3],
+            sets: Default::default(),
+        };
+        let q = element_quality(&tet, 0);
+        assert!(q.jacobian_min > 0.0, "{q:?}");
+        assert!((q.scaled_jacobian_min - 1.0).abs() < 1e-12, "{q:?}");
+        let flipped = FeMesh::<3> {
+            connectivity: vec![0, 1, 2, 3],
+            ..tet
+        };
+        assert!(element_quality(&flipped, 0).jacobian_min < 0.0);
+    }
+
+    #[test]
     fn a_clockwise_quad_is_inverted() {
         let m = FeMesh::<2> {
             nodes: vec![[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]],

@@ -11,8 +11,8 @@
 //! name = "FIXED"
 //! box = { min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 0.05] }
 //!
-//! [[node_set]]            # nodes on one side of a plane across an axis
-//! name = "LOAD"
+//! [[node_set]]            # nodes on one side of a plane across an axis ("x", "y", "z",
+//! name = "LOAD"           # or "longest": the bounding box's longest side)
 //! half_space = { axis = "z", above = 0.95 }
 //!
 //! [[node_set]]            # nodes within a radius of an atlas landmark
@@ -169,13 +169,13 @@ impl SetsConfig {
             }
             if let Some(h) = &s.half_space
                 && (h.below.is_none() && h.above.is_none()
-                    || !matches!(h.axis.as_str(), "x" | "y" | "z"))
+                    || !matches!(h.axis.as_str(), "x" | "y" | "z" | "longest"))
             {
                 return Err(Error::parse(
                     path,
                     0,
                     format!(
-                        "{kind} {}: half_space needs axis = \"x\", \"y\" or \"z\" and below and/or above",
+                        "{kind} {}: half_space needs axis = \"x\", \"y\", \"z\" or \"longest\" and below and/or above",
                         s.name
                     ),
                 ));
@@ -221,7 +221,9 @@ impl SetsConfig {
                 let a = match h.axis.as_str() {
                     "x" => 0,
                     "y" => 1,
-                    _ => 2,
+                    "z" => 2,
+                    // The longest side of the bounding box.
+                    _ => (0..D).fold(0, |b, d| if ext[d] > ext[b] { d } else { b }),
                 };
                 if a >= D {
                     return Err(bad(format!("{}: axis {} in a {D}D mesh", s.name, h.axis)));

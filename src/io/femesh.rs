@@ -93,6 +93,13 @@ fn check_mesh<const D: usize>(
         .map_err(|m| Error::parse(path, 0, m))
 }
 
+/// A set as read: display name, its items (line, id or set name), and whether `GENERATE`.
+type RawSet = (String, Vec<(usize, String)>, bool);
+/// A surface as read: display name and its items (line, element or element set, face).
+type RawSurface = (String, Vec<(usize, String, String)>);
+/// A Gmsh element as read: dimension, type, node tags, physical tags, element tag.
+type MshElement = (usize, u32, Vec<i64>, Vec<i64>, i64);
+
 /// An `.inp` deck: the mesh, and the 1-based node ids in file order (node `k` of the mesh has
 /// id `node_ids[k]`).
 #[derive(Clone, Debug)]
@@ -128,9 +135,9 @@ pub fn read_inp(path: &Path) -> Result<InpDeck> {
     let mut elem_index: HashMap<u64, usize> = HashMap::new();
     let mut conn: Vec<usize> = Vec::new();
     // Sets by upper-case name, as raw ids until all nodes and elements are known.
-    let mut nsets: BTreeMap<String, (String, Vec<(usize, String)>, bool)> = BTreeMap::new();
-    let mut elsets: BTreeMap<String, (String, Vec<(usize, String)>, bool)> = BTreeMap::new();
-    let mut surfaces: BTreeMap<String, (String, Vec<(usize, String, String)>)> = BTreeMap::new();
+    let mut nsets: BTreeMap<String, RawSet> = BTreeMap::new();
+    let mut elsets: BTreeMap<String, RawSet> = BTreeMap::new();
+    let mut surfaces: BTreeMap<String, RawSurface> = BTreeMap::new();
     enum Block {
         None,
         Node(Option<String>),
@@ -374,7 +381,7 @@ pub fn read_inp(path: &Path) -> Result<InpDeck> {
     fn resolve(
         path: &Path,
         what: &str,
-        raw: &BTreeMap<String, (String, Vec<(usize, String)>, bool)>,
+        raw: &BTreeMap<String, RawSet>,
         index: &HashMap<u64, usize>,
     ) -> Result<BTreeMap<String, Vec<usize>>> {
         let mut out: BTreeMap<String, Vec<usize>> = BTreeMap::new();
@@ -630,7 +637,7 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
     let mut node_index: HashMap<i64, usize> = HashMap::new();
     let mut nodes: Vec<Point<3>> = Vec::new();
     // (dim, gmsh type, node tags, physical tags, element tag)
-    let mut elements: Vec<(usize, u32, Vec<i64>, Vec<i64>, i64)> = Vec::new();
+    let mut elements: Vec<MshElement> = Vec::new();
     let (nl, nbody) = section("Nodes").unwrap_or_default();
     let (el, ebody) = section("Elements").unwrap_or_default();
     let too_many = |ln: usize, n: i64| -> Result<usize> {

@@ -114,3 +114,63 @@ pub fn raw_femurs(
         })
         .unzip()
 }
+
+/// Whether `program` runs; a failure when the tools are required.
+pub fn tool(program: &str, what: &str) -> bool {
+    let ok = std::process::Command::new(program)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success() || !o.stdout.is_empty() || !o.stderr.is_empty());
+    if !ok {
+        assert!(
+            std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
+            "{program} is required ({what}) but not found"
+        );
+        eprintln!("{what}: skipped ({program} not found)");
+    }
+    ok
+}
+
+/// A CalculiX step around a mesh deck: bone-like elasticity, `FIXED` clamped, a unit force
+/// along -z on every node of `LOAD`, displacements of `LOAD` printed to the `.dat` file.
+pub const CCX_STEP: &str = "*MATERIAL, NAME=TISSUE
+*ELASTIC
+17000., 0.3
+*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE
+*STEP
+*STATIC
+*BOUNDARY
+FIXED, 1, 3, 0.
+*CLOAD
+LOAD, 3, -1.
+*NODE PRINT, NSET=LOAD
+U
+*END STEP
+";
+
+/// Runs ccx on `deck` (a `.inp` path) in its folder; returns the displacements it printed.
+pub fn solve(deck: &std::path::Path) -> Vec<[f64; 3]> {
+    let dir = deck.parent().unwrap();
+    let stem = deck.file_stem().unwrap().to_string_lossy().to_string();
+    let o = std::process::Command::new("ccx")
+        .arg("-i")
+        .arg(&stem)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "ccx on {stem}: {log}");
+    assert!(!log.contains("*ERROR"), "ccx on {stem}: {log}");
+    let dat = std::fs::read_to_string(dir.join(format!("{stem}.dat"))).unwrap();
+    let body = dat
+        .split("displacements (vx,vy,vz)")
+        .nth(1)
+        .expect("displacements in the .dat file");
+    body.lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            (f.len() == 4).then(|| std::array::from_fn(|d| f[d + 1].parse::<f64>().unwrap()))
+        })
+        .collect()
+}

@@ -36,12 +36,15 @@ fn array(path: &Path, text: &str, section: &str, name: Option<&str>) -> Result<V
         {
             continue;
         }
+        if tag.contains("format=\"binary\"") {
+            return binary_values(path, text, section, tag, &body[tag_end + 1..close]);
+        }
         if !tag.contains("format=\"ascii\"") {
             return Err(Error::parse(
                 path,
                 0,
                 format!(
-                    "the {section} data are binary or appended; only ASCII VTK XML is read (save as ASCII)"
+                    "the {section} data are appended; ASCII and inline binary VTK XML are read"
                 ),
             ));
         }
@@ -62,6 +65,80 @@ fn array(path: &Path, text: &str, section: &str, name: Option<&str>) -> Result<V
             name.map(|n| format!(" '{n}'")).unwrap_or_default()
         ),
     ))
+}
+
+/// The values of an inline binary `DataArray` (base64 of a byte-count header, `UInt32` or
+/// `UInt64` per the file's `header_type`, then the little-endian values; uncompressed).
+fn binary_values(
+    path: &Path,
+    text: &str,
+    section: &str,
+    tag: &str,
+    content: &str,
+) -> Result<Vec<f64>> {
+    use base64::Engine as _;
+    let bad = |m: String| Error::parse(path, 0, format!("<{section}>: {m}"));
+    if text.contains("compressor=") {
+        return Err(bad("compressed data are not read; save uncompressed".into()));
+    }
+    if text.contains("byte_order=\"BigEndian\"") {
+        return Err(bad("big-endian binary data are not read".into()));
+    }
+    let clean: String = content.chars().filter(|c| !c.is_whitespace()).collect();
+    let raw = base64::engine::general_purpose::STANDARD
+        .decode(clean.as_bytes())
+        .map_err(|e| bad(format!("bad base64 ({e})")))?;
+    let header = if text.contains("header_type=\"UInt64\"") {
+        8
+    } else {
+        4
+    };
+    if raw.len() < header {
+        return Err(bad("a binary array is truncated".into()));
+    }
+    let n = if header == 8 {
+        u64::from_le_bytes(raw[..8].try_into().unwrap_or([0; 8])) as usize
+    } else {
+        u32::from_le_bytes(raw[..4].try_into().unwrap_or([0; 4])) as usize
+    };
+    let data = raw.get(header..header.saturating_add(n)).ok_or_else(|| {
+        bad(format!(
+            "a binary array announces {n} bytes but holds {}",
+            raw.len() - header
+        ))
+    })?;
+    let ty = tag
+        .split("type=\"")
+        .nth(1)
+        .and_then(|t| t.split('"').next())
+        .unwrap_or("");
+    let width = match ty {
+        "Float64" | "Int64" | "UInt64" => 8,
+        "Float32" | "Int32" | "UInt32" => 4,
+        "Int16" | "UInt16" => 2,
+        "Int8" | "UInt8" => 1,
+        _ => return Err(bad(format!("data type {ty:?} is not read"))),
+    };
+    if data.len() % width != 0 {
+        return Err(bad(
+            "a binary array's size is not a whole number of values".into()
+        ));
+    }
+    Ok(data
+        .chunks_exact(width)
+        .map(|c| match ty {
+            "Float64" => f64::from_le_bytes(c.try_into().unwrap_or([0; 8])),
+            "Int64" => i64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f64,
+            "UInt64" => u64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f64,
+            "Float32" => f32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as f64,
+            "Int32" => i32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as f64,
+            "UInt32" => u32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as f64,
+            "Int16" => i16::from_le_bytes(c.try_into().unwrap_or([0; 2])) as f64,
+            "UInt16" => u16::from_le_bytes(c.try_into().unwrap_or([0; 2])) as f64,
+            "Int8" => c[0] as i8 as f64,
+            _ => c[0] as f64,
+        })
+        .collect())
 }
 
 fn points(path: &Path, text: &str) -> Result<Vec<Point<3>>> {

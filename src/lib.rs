@@ -31,4 +31,5 @@ pub mod resample;
 
 pub use error::{Error, Result};
 pub mod pipeline;
+pub mod repair;
 pub mod report;

@@ -51,6 +51,8 @@ pub struct RunParams {
     /// with its node coordinates (`NAME_deck.inp`).
     #[serde(skip)]
     pub deck: Option<std::sync::Arc<crate::io::femesh::InpDeck>>,
+    /// Repair of every morphed mesh (untangling and quality; `None`: off).
+    pub repair: Option<crate::repair::RepairParams>,
 }
 
 impl Default for RunParams {
@@ -60,6 +62,7 @@ impl Default for RunParams {
             formats: vec![crate::export::MeshFormat::Vtu],
             sets: None,
             deck: None,
+            repair: Some(crate::repair::RepairParams::default()),
             atlas: AtlasParams::default(),
             fit: FitParams::default(),
             morph: FfdParams::default(),
@@ -348,8 +351,15 @@ pub fn process_subject<const D: usize>(
     let fit = fitter.fit(subject, &index, &params.fit)?;
     let fit_seconds = t0.elapsed().as_secs_f64();
     let morph = morpher.morph(&fit)?;
-    let mesh = morph.mesh;
-    let per_element = morph.quality;
+    let mut mesh = morph.mesh;
+    let mut per_element = morph.quality;
+    let unrepaired = summarize(&per_element);
+    let mut surface_distance_change = 0.0;
+    if let Some(rp) = &params.repair {
+        let (r, q) = crate::repair::repair_with_quality(&mut mesh, Some(&index), rp, &per_element)?;
+        per_element = q;
+        surface_distance_change = r.surface_distance_change;
+    }
     let q = summarize(&per_element);
     let dist = crate::fe::quality::distribution(mesh.kind, &per_element);
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
@@ -443,6 +453,9 @@ pub fn process_subject<const D: usize>(
         jacobian_min: q.jacobian_min,
         scaled_jacobian_min: q.scaled_jacobian_min,
         inverted_elements: q.inverted_elements,
+        inverted_before_repair: unrepaired.inverted_elements,
+        scaled_jacobian_min_before_repair: unrepaired.scaled_jacobian_min,
+        surface_distance_change,
         morph_alpha: morph.alpha,
         scaled_jacobian_histogram: jacobian_histogram(
             per_element.iter().map(|e| e.scaled_jacobian_min),

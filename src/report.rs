@@ -37,6 +37,12 @@ pub struct SubjectReport {
     pub jacobian_min: f64,
     pub scaled_jacobian_min: f64,
     pub inverted_elements: usize,
+    /// Before the repair (`repair`): inverted elements and the smallest scaled Jacobian.
+    pub inverted_before_repair: usize,
+    pub scaled_jacobian_min_before_repair: f64,
+    /// How far the repair moved boundary nodes off the subject's surface: the largest
+    /// increase of a node's distance to it (subject units; 0 without repair).
+    pub surface_distance_change: f64,
     /// The `alpha` of eq. 9 the morph used (the requested one unless that inverted an
     /// element; see `Morpher::morph`).
     pub morph_alpha: f64,

@@ -40,22 +40,35 @@ pub fn element_quality_at<const D: usize>(
 ) -> ElementQuality {
     let mut jmin = f64::INFINITY;
     let mut smin = f64::INFINITY;
+    for_each_corner(kind, el, nodes, |j, sj| {
+        jmin = jmin.min(j);
+        smin = smin.min(sj);
+    });
+    ElementQuality {
+        jacobian_min: jmin,
+        scaled_jacobian_min: smin,
+    }
+}
+
+/// Calls `f(jacobian, scaled_jacobian)` for every corner of an element.
+#[inline]
+pub fn for_each_corner<const D: usize>(
+    kind: super::ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+    mut f: impl FnMut(f64, f64),
+) {
     for (c, frame) in kind.corner_frames().iter().enumerate() {
         let x = nodes[el[c]];
         let v: [Point<D>; D] = std::array::from_fn(|k| sub(nodes[el[frame[k]]], x));
         let j = det(&v);
         let l: f64 = v.iter().map(|e| norm(*e)).product();
-        jmin = jmin.min(j);
         let sj = if l > 0.0 {
             (j / l * kind.scaled_jacobian_factor()).min(1.0)
         } else {
             -1.0
         };
-        smin = smin.min(sj);
-    }
-    ElementQuality {
-        jacobian_min: jmin,
-        scaled_jacobian_min: smin,
+        f(j, sj);
     }
 }
 

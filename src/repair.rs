@@ -82,7 +82,7 @@ pub struct RepairReport {
 const KAPPA: f64 = 20.0;
 
 /// The objective of a node's elements: (worst scaled Jacobian, soft-min penalty
-/// `Σ_corners exp(-KAPPA (sj - bound))`). The penalty is smooth in the node's position and
+/// `Σ_corners exp(-KAPPA (sj - bound))`, inverted corners). The penalty is smooth in the node's position and
 /// lets the corners around a node share the gain, where the worst alone gets stuck.
 fn score<const D: usize>(
     kind: ElementKind,
@@ -90,24 +90,28 @@ fn score<const D: usize>(
     elements: &[usize],
     nodes: &[Point<D>],
     bound: f64,
-) -> (f64, f64) {
+) -> (f64, f64, usize) {
     let k = kind.nodes();
     let mut worst = f64::INFINITY;
     let mut penalty = 0.0;
+    let mut inverted = 0;
     for &e in elements {
-        for_each_corner(kind, &conn[e * k..(e + 1) * k], nodes, |_, sj| {
+        for_each_corner(kind, &conn[e * k..(e + 1) * k], nodes, |j, sj| {
             worst = worst.min(sj);
             penalty += (-KAPPA * (sj - bound)).exp();
+            if j <= 0.0 {
+                inverted += 1;
+            }
         });
     }
-    (worst, penalty)
+    (worst, penalty, inverted)
 }
 
 /// Whether `a` improves on `b`: a lower penalty (the sum over all corners of the mesh falls
 /// with it), by a meaningful amount (smaller gains are rounding, or a node creeping along a
-/// curved surface), never inverting a corner that was not.
-fn better(a: (f64, f64), b: (f64, f64), _bound: f64) -> bool {
-    (a.0 > 0.0 || a.0 >= b.0) && a.1 < b.1 * (1.0 - 1e-6)
+/// curved surface), with no more inverted corners and never inverting one where none was.
+fn better(a: (f64, f64, usize), b: (f64, f64, usize)) -> bool {
+    a.2 <= b.2 && (a.0 > 0.0 || a.0 >= b.0) && a.1 < b.1 * (1.0 - 1e-6)
 }
 
 /// Trial positions per node and sweep at most.
@@ -283,20 +287,22 @@ pub fn repair_with_quality<const D: usize>(
             let c: Point<D> = std::array::from_fn(|d| {
                 nb.iter().map(|&m| mesh.nodes[m][d]).sum::<f64>() / nb.len().max(1) as f64
             });
-            let trial =
-                |p: Point<D>, nodes: &mut [Point<D>], best: &mut (f64, f64), bx: &mut Point<D>| {
-                    let p = place(p);
-                    nodes[n] = p;
-                    let s = score(kind, &conn, &incident[n], nodes, bound);
-                    if better(s, *best, bound) {
-                        *best = s;
-                        *bx = p;
-                        true
-                    } else {
-                        nodes[n] = *bx;
-                        false
-                    }
-                };
+            let trial = |p: Point<D>,
+                         nodes: &mut [Point<D>],
+                         best: &mut (f64, f64, usize),
+                         bx: &mut Point<D>| {
+                let p = place(p);
+                nodes[n] = p;
+                let s = score(kind, &conn, &incident[n], nodes, bound);
+                if better(s, *best) {
+                    *best = s;
+                    *bx = p;
+                    true
+                } else {
+                    nodes[n] = *bx;
+                    false
+                }
+            };
             trial(c, &mut mesh.nodes, &mut best, &mut bx);
             let mut h = h0;
             let mut trials = 0;

@@ -634,6 +634,9 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
         s.parse::<i64>()
             .map_err(|_| Error::parse(path, ln, format!("{s:?} is not an integer")))
     };
+    let ints = |ln: usize, l: &str| -> Result<Vec<i64>> {
+        l.split_whitespace().map(|s| int(ln, s)).collect()
+    };
     let mut node_index: HashMap<i64, usize> = HashMap::new();
     let mut nodes: Vec<Point<3>> = Vec::new();
     // (dim, gmsh type, node tags, physical tags, element tag)
@@ -740,24 +743,14 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
                 }
             }
         }
-        let head: Vec<i64> = nbody
-            .first()
-            .map(|l| {
-                l.split_whitespace()
-                    .map(|s| int(nl, s))
-                    .collect::<Result<_>>()
-            })
-            .transpose()?
-            .unwrap_or_default();
+        let head = ints(nl, nbody.first().copied().unwrap_or(""))?;
         let blocks = too_many(nl, *head.first().unwrap_or(&-1))?;
         let mut row = 1;
         for _ in 0..blocks {
-            let b: Vec<i64> = nbody
+            let line = nbody
                 .get(row)
-                .ok_or_else(|| Error::parse(path, nl + row, "$Nodes is short (truncated?)"))?
-                .split_whitespace()
-                .map(|s| int(nl + row, s))
-                .collect::<Result<_>>()?;
+                .ok_or_else(|| Error::parse(path, nl + row, "$Nodes is short (truncated?)"))?;
+            let b = ints(nl + row, line)?;
             if b.len() != 4 {
                 return Err(Error::parse(
                     path,
@@ -791,24 +784,14 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
             }
             row += 1 + 2 * n;
         }
-        let head: Vec<i64> = ebody
-            .first()
-            .map(|l| {
-                l.split_whitespace()
-                    .map(|s| int(el, s))
-                    .collect::<Result<_>>()
-            })
-            .transpose()?
-            .unwrap_or_default();
+        let head = ints(el, ebody.first().copied().unwrap_or(""))?;
         let blocks = too_many(el, *head.first().unwrap_or(&-1))?;
         let mut row = 1;
         for _ in 0..blocks {
-            let b: Vec<i64> = ebody
+            let line = ebody
                 .get(row)
-                .ok_or_else(|| Error::parse(path, el + row, "$Elements is short (truncated?)"))?
-                .split_whitespace()
-                .map(|s| int(el + row, s))
-                .collect::<Result<_>>()?;
+                .ok_or_else(|| Error::parse(path, el + row, "$Elements is short (truncated?)"))?;
+            let b = ints(el + row, line)?;
             if b.len() != 4 {
                 return Err(Error::parse(
                     path,

@@ -16,9 +16,7 @@
 //! Units: positions in the mesh's units; the bound is on the scaled Jacobian (unitless).
 
 use crate::error::Result;
-use crate::fe::quality::{
-    ElementQuality, element_quality_at, for_each_corner, mesh_quality, summarize,
-};
+use crate::fe::quality::{ElementQuality, corner, element_quality_at, mesh_quality, summarize};
 use crate::fe::sets::boundary_faces;
 use crate::fe::{ElementKind, FeMesh};
 use crate::geometry::{ClosestPointIndex, Point, dist2};
@@ -82,27 +80,26 @@ pub struct RepairReport {
 const KAPPA: f64 = 20.0;
 
 /// The objective of a node's elements: (worst scaled Jacobian, soft-min penalty
-/// `Σ_corners exp(-KAPPA (sj - bound))`, inverted corners). The penalty is smooth in the node's position and
-/// lets the corners around a node share the gain, where the worst alone gets stuck.
+/// `Σ_corners exp(-KAPPA (sj - bound))`, inverted corners) over the corners that depend on
+/// the node (`corners`: element and corner), plus `fixed`, the same over the corners of its
+/// elements that do not.
 fn score<const D: usize>(
     kind: ElementKind,
     conn: &[usize],
-    elements: &[usize],
+    corners: &[(usize, usize)],
     nodes: &[Point<D>],
     bound: f64,
+    fixed: (f64, f64, usize),
 ) -> (f64, f64, usize) {
     let k = kind.nodes();
-    let mut worst = f64::INFINITY;
-    let mut penalty = 0.0;
-    let mut inverted = 0;
-    for &e in elements {
-        for_each_corner(kind, &conn[e * k..(e + 1) * k], nodes, |j, sj| {
-            worst = worst.min(sj);
-            penalty += (-KAPPA * (sj - bound)).exp();
-            if j <= 0.0 {
-                inverted += 1;
-            }
-        });
+    let (mut worst, mut penalty, mut inverted) = fixed;
+    for &(e, c) in corners {
+        let (j, sj) = corner(kind, &conn[e * k..(e + 1) * k], nodes, c);
+        worst = worst.min(sj);
+        penalty += (-KAPPA * (sj - bound)).exp();
+        if j <= 0.0 {
+            inverted += 1;
+        }
     }
     (worst, penalty, inverted)
 }
@@ -267,7 +264,23 @@ pub fn repair_with_quality<const D: usize>(
         let mut gained = false;
         for &n in &active {
             let x0 = mesh.nodes[n];
-            let mut best = score(kind, &conn, &incident[n], &mesh.nodes, bound);
+            // The corners that move with node n, and the rest of its elements' corners.
+            let mut moving = Vec::new();
+            let mut fixed = (f64::INFINITY, 0.0, 0usize);
+            for &e in &incident[n] {
+                let el = &conn[e * k..(e + 1) * k];
+                for (c, frame) in kind.corner_frames().iter().enumerate() {
+                    if el[c] == n || frame.iter().any(|&m| el[m] == n) {
+                        moving.push((e, c));
+                    } else {
+                        let (j, sj) = corner(kind, el, &mesh.nodes, c);
+                        fixed.0 = f64::min(fixed.0, sj);
+                        fixed.1 += (-KAPPA * (sj - bound)).exp();
+                        fixed.2 += usize::from(j <= 0.0);
+                    }
+                }
+            }
+            let mut best = score(kind, &conn, &moving, &mesh.nodes, bound, fixed);
             let mut bx = x0;
             let place = |p: Point<D>| -> Point<D> {
                 match (role[n], surface) {
@@ -293,7 +306,7 @@ pub fn repair_with_quality<const D: usize>(
                          bx: &mut Point<D>| {
                 let p = place(p);
                 nodes[n] = p;
-                let s = score(kind, &conn, &incident[n], nodes, bound);
+                let s = score(kind, &conn, &moving, nodes, bound, fixed);
                 if better(s, *best) {
                     *best = s;
                     *bx = p;
@@ -306,7 +319,7 @@ pub fn repair_with_quality<const D: usize>(
             trial(c, &mut mesh.nodes, &mut best, &mut bx);
             let mut h = h0;
             let mut trials = 0;
-            while h > 1e-3 * h0 && h > 0.0 && trials < MAX_TRIALS {
+            while h > 1e-2 * h0 && h > 0.0 && trials < MAX_TRIALS {
                 trials += 3usize.pow(D as u32) - 1;
                 let mut improved = false;
                 // The axes and the diagonals (3^D - 1 directions), normalized to length h.

@@ -58,18 +58,31 @@ pub fn for_each_corner<const D: usize>(
     nodes: &[Point<D>],
     mut f: impl FnMut(f64, f64),
 ) {
-    for (c, frame) in kind.corner_frames().iter().enumerate() {
-        let x = nodes[el[c]];
-        let v: [Point<D>; D] = std::array::from_fn(|k| sub(nodes[el[frame[k]]], x));
-        let j = det(&v);
-        let l: f64 = v.iter().map(|e| norm(*e)).product();
-        let sj = if l > 0.0 {
-            (j / l * kind.scaled_jacobian_factor()).min(1.0)
-        } else {
-            -1.0
-        };
+    for c in 0..kind.corner_frames().len() {
+        let (j, sj) = corner(kind, el, nodes, c);
         f(j, sj);
     }
+}
+
+/// The Jacobian and scaled Jacobian at corner `c` of an element.
+#[inline]
+pub fn corner<const D: usize>(
+    kind: super::ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+    c: usize,
+) -> (f64, f64) {
+    let frame = kind.corner_frames()[c];
+    let x = nodes[el[c]];
+    let v: [Point<D>; D] = std::array::from_fn(|k| sub(nodes[el[frame[k]]], x));
+    let j = det(&v);
+    let l: f64 = v.iter().map(|e| norm(*e)).product();
+    let sj = if l > 0.0 {
+        (j / l * kind.scaled_jacobian_factor()).min(1.0)
+    } else {
+        -1.0
+    };
+    (j, sj)
 }
 
 /// Per-element corner measures of a whole mesh.

@@ -174,3 +174,96 @@ pub fn solve(deck: &std::path::Path) -> Vec<[f64; 3]> {
         })
         .collect()
 }
+
+/// Morphs and repairs the mean mesh of `atlas` to the instances at ±3σ along the first 5
+/// modes; returns per instance (mode, sign, min scaled Jacobian before, after, inverted
+/// after, boundary distance change / median edge).
+pub fn stress<const D: usize>(
+    atlas: &atlasmesh::model::Atlas<D>,
+) -> Vec<(usize, f64, f64, f64, usize, f64)> {
+    let morpher =
+        atlasmesh::morph::Morpher::new(atlas, &atlasmesh::ffd::FfdParams::default()).unwrap();
+    let edge = atlas.mean_shape().median_edge_length();
+    let mut rows = Vec::new();
+    for m in 0..5.min(atlas.num_modes()) {
+        for sign in [-3.0, 3.0] {
+            let mut w = vec![0.0; atlas.num_modes()];
+            w[m] = sign * atlas.eigenvalues[m].sqrt();
+            let instance = atlas.instance(&w);
+            let shape = atlasmesh::geometry::Shape {
+                name: format!("mode{m}{sign:+}"),
+                points: instance.clone(),
+                facets: atlas.facets.clone(),
+                landmarks: Vec::new(),
+            };
+            let index = atlasmesh::geometry::ClosestPointIndex::from_shape(&shape);
+            let fit = atlasmesh::fit::FitResult {
+                weights: w,
+                similarity: atlasmesh::geometry::Similarity::identity(),
+                instance: instance.clone(),
+                projected: instance
+                    .iter()
+                    .map(|p| atlasmesh::geometry::SurfacePoint {
+                        point: *p,
+                        facet: 0,
+                        weights: [0.0; D],
+                        dist2: 0.0,
+                    })
+                    .collect(),
+                corresponded: vec![true; instance.len()],
+                e_d_history: Vec::new(),
+                locus: Vec::new(),
+                iterations: 0,
+                converged: true,
+            };
+            let morph = morpher.morph(&fit).unwrap();
+            let mut mesh = morph.mesh;
+            let (r, _) = atlasmesh::repair::repair_with_quality(
+                &mut mesh,
+                Some(&index),
+                &atlasmesh::repair::RepairParams::default(),
+                &morph.quality,
+            )
+            .unwrap();
+            rows.push((
+                m,
+                sign,
+                r.scaled_jacobian_min_before,
+                r.scaled_jacobian_min,
+                r.inverted_after,
+                r.surface_distance_change / edge,
+            ));
+        }
+    }
+    rows
+}
+
+pub fn check(name: &str, rows: &[(usize, f64, f64, f64, usize, f64)], bound: f64) {
+    let needed = rows.iter().filter(|r| r.2 < bound).count();
+    for r in rows {
+        eprintln!(
+            "{name} mode {} at {:+}σ: min scaled Jacobian {:.3} -> {:.3}, inverted {}, boundary change {:.2e} edges",
+            r.0 + 1,
+            r.1,
+            r.2,
+            r.3,
+            r.4,
+            r.5
+        );
+    }
+    eprintln!("{name}: {needed} of {} meshes needed repair", rows.len());
+    for r in rows {
+        assert_eq!(
+            r.4,
+            0,
+            "{name} mode {} {:+}: inverted elements",
+            r.0 + 1,
+            r.1
+        );
+        assert!(
+            r.3 >= r.2.min(bound) - 1e-12,
+            "{name}: the repair made it worse"
+        );
+        assert!(r.5 <= 0.01, "{name}: boundary moved {} edges off", r.5);
+    }
+}

@@ -51,15 +51,7 @@ impl<const D: usize> Lattice<D> {
     /// `points` enlarged by `margin` (a fraction of its extent) on every side.
     #[track_caller]
     pub fn around(points: &[Point<D>], grid: usize, margin: f64) -> Self {
-        assert!(
-            grid >= 4,
-            "a cubic B-spline lattice needs at least 4 control points per axis"
-        );
-        let (lo, hi) = bounding_box(points);
-        let ext = (0..D)
-            .map(|d| hi[d] - lo[d])
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
+        let (lo, hi, ext) = Self::bounds(points, grid);
         let mut origin = [0.0; D];
         let mut spacing = [0.0; D];
         for d in 0..D {
@@ -81,15 +73,7 @@ impl<const D: usize> Lattice<D> {
     /// flat shape gets square cells and far fewer control points than `grid^D`.
     #[track_caller]
     pub fn around_isotropic(points: &[Point<D>], grid: usize, margin: f64) -> Self {
-        assert!(
-            grid >= 4,
-            "a cubic B-spline lattice needs at least 4 control points per axis"
-        );
-        let (lo, hi) = bounding_box(points);
-        let ext = (0..D)
-            .map(|d| hi[d] - lo[d])
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
+        let (lo, hi, ext) = Self::bounds(points, grid);
         let h = ext * (1.0 + 2.0 * margin) / (grid - 3) as f64;
         let mut origin = [0.0; D];
         let mut size = [grid; D];
@@ -104,6 +88,21 @@ impl<const D: usize> Lattice<D> {
             spacing: [h; D],
             size,
         }
+    }
+
+    /// The bounding box of `points` and its largest side (checked: `grid >= 4`).
+    #[track_caller]
+    fn bounds(points: &[Point<D>], grid: usize) -> (Point<D>, Point<D>, f64) {
+        assert!(
+            grid >= 4,
+            "a cubic B-spline lattice needs at least 4 control points per axis"
+        );
+        let (lo, hi) = bounding_box(points);
+        let ext = (0..D)
+            .map(|d| hi[d] - lo[d])
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        (lo, hi, ext)
     }
 
     /// Total number of control points.

@@ -304,32 +304,34 @@ fn surfaces(paths: &[PathBuf]) -> anyhow::Result<bool> {
     Ok(n > 0)
 }
 
-/// The dimension of a mesh or atlas file: an atlas says so; a mesh is 2D when its elements
-/// are.
-fn mesh_dimension(path: &std::path::Path) -> anyhow::Result<usize> {
-    if path
-        .extension()
+/// An FE mesh file read once, in the dimension of its elements.
+enum AnyMesh {
+    Two(atlasmesh::fe::FeMesh<2>),
+    Three(atlasmesh::fe::FeMesh<3>),
+}
+
+fn read_any_mesh(path: &std::path::Path) -> anyhow::Result<AnyMesh> {
+    use atlasmesh::io::femesh::{read_fe_mesh_raw, to_dimension};
+    let m = read_fe_mesh_raw(path)?;
+    Ok(if m.kind.dimension() == 2 {
+        AnyMesh::Two(to_dimension(path, m)?)
+    } else {
+        AnyMesh::Three(to_dimension(path, m)?)
+    })
+}
+
+fn is_atlas(path: &std::path::Path) -> bool {
+    path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"))
-    {
-        return Ok(if Atlas::<2>::load(path).is_ok() { 2 } else { 3 });
-    }
-    match atlasmesh::io::femesh::read_fe_mesh::<3>(path) {
-        Ok(_) => Ok(3),
-        Err(e3) => match atlasmesh::io::femesh::read_fe_mesh::<2>(path) {
-            Ok(_) => Ok(2),
-            Err(_) => Err(e3.into()),
-        },
-    }
 }
 
 /// `atlasmesh repair` of a mesh file of dimension `D`.
 fn repair_file<const D: usize>(
-    path: &std::path::Path,
+    mut m: atlasmesh::fe::FeMesh<D>,
     surface: Option<&atlasmesh::geometry::Shape<D>>,
     params: &atlasmesh::repair::RepairParams,
     out: &std::path::Path,
 ) -> anyhow::Result<atlasmesh::repair::RepairReport> {
-    let mut m = atlasmesh::io::femesh::read_fe_mesh::<D>(path)?;
     let index = surface.map(atlasmesh::geometry::ClosestPointIndex::from_shape);
     let before = atlasmesh::fe::quality::mesh_quality(&m);
     let (r, q) = atlasmesh::repair::repair_with_quality(&mut m, index.as_ref(), params, &before)?;
@@ -339,35 +341,22 @@ fn repair_file<const D: usize>(
 
 /// `atlasmesh quality` of a mesh of dimension `D`.
 fn quality_of<const D: usize>(
-    path: &std::path::Path,
-) -> anyhow::Result<atlasmesh::fe::quality::QualityDistribution> {
-    let m = atlasmesh::io::femesh::read_fe_mesh::<D>(path)?;
-    let q = atlasmesh::fe::quality::mesh_quality(&m);
-    Ok(atlasmesh::fe::quality::distribution(m.kind, &q))
+    m: &atlasmesh::fe::FeMesh<D>,
+) -> atlasmesh::fe::quality::QualityDistribution {
+    let q = atlasmesh::fe::quality::mesh_quality(m);
+    atlasmesh::fe::quality::distribution(m.kind, &q)
 }
 
-/// `atlasmesh convert` of a mesh (or an atlas's mean mesh) of dimension `D`.
+/// `atlasmesh convert` of a mesh (or an atlas's mean mesh, with the atlas's landmarks) of
+/// dimension `D`.
 fn convert<const D: usize>(
-    input: &std::path::Path,
+    mut mesh: atlasmesh::fe::FeMesh<D>,
+    landmarks: &[atlasmesh::geometry::Point<D>],
     output: &std::path::Path,
     sets: Option<&atlasmesh::fe::sets::SetsConfig>,
 ) -> anyhow::Result<()> {
-    let atlas_in = input
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"));
-    let (mut mesh, landmarks) = if atlas_in {
-        let a = Atlas::<D>::load(input)?;
-        let l: Vec<atlasmesh::geometry::Point<D>> =
-            a.landmarks.iter().map(|&i| a.mean[i]).collect();
-        (a.mesh, l)
-    } else {
-        (atlasmesh::io::femesh::read_fe_mesh::<D>(input)?, Vec::new())
-    };
     if let Some(c) = sets {
-        let s = c.evaluate(&mesh, &landmarks)?;
-        mesh.sets.node_sets.extend(s.node_sets);
-        mesh.sets.element_sets.extend(s.element_sets);
-        mesh.sets.surfaces.extend(s.surfaces);
+        mesh.sets.merge(c.evaluate(&mesh, landmarks)?);
     }
     let q = atlasmesh::fe::quality::mesh_quality(&mesh);
     atlasmesh::export::write_mesh(output, &mesh, None, &q)?;
@@ -718,11 +707,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Quality { mesh, json } => {
-            let dim = mesh_dimension(&mesh)?;
-            let d = if dim == 2 {
-                quality_of::<2>(&mesh)?
-            } else {
-                quality_of::<3>(&mesh)?
+            let d = match read_any_mesh(&mesh)? {
+                AnyMesh::Two(m) => quality_of(&m),
+                AnyMesh::Three(m) => quality_of(&m),
             };
             if json {
                 println!("{}", serde_json::to_string_pretty(&d)?);
@@ -759,10 +746,28 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let sets = sets
                 .map(|f| atlasmesh::fe::sets::SetsConfig::read(&f))
                 .transpose()?;
-            if mesh_dimension(&input)? == 2 {
-                convert::<2>(&input, &output, sets.as_ref())?;
+            fn mean_mesh<const D: usize>(
+                path: &std::path::Path,
+            ) -> anyhow::Result<(atlasmesh::fe::FeMesh<D>, Vec<atlasmesh::geometry::Point<D>>)>
+            {
+                let a = Atlas::<D>::load(path)?;
+                let l = a.landmarks.iter().map(|&i| a.mean[i]).collect();
+                Ok((a.mesh, l))
+            }
+            let sets = sets.as_ref();
+            if is_atlas(&input) {
+                if atlasmesh::model::atlas_dimension(&input)? == 2 {
+                    let (m, l) = mean_mesh::<2>(&input)?;
+                    convert(m, &l, &output, sets)?;
+                } else {
+                    let (m, l) = mean_mesh::<3>(&input)?;
+                    convert(m, &l, &output, sets)?;
+                }
             } else {
-                convert::<3>(&input, &output, sets.as_ref())?;
+                match read_any_mesh(&input)? {
+                    AnyMesh::Two(m) => convert(m, &[], &output, sets)?,
+                    AnyMesh::Three(m) => convert(m, &[], &output, sets)?,
+                }
             }
             println!("{} -> {}", input.display(), output.display());
         }
@@ -776,23 +781,26 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 bound,
                 ..Default::default()
             };
-            let r = if mesh_dimension(&mesh)? == 2 {
-                let s = match &surface {
-                    Some(p) => {
-                        let v = atlasmesh::io::read_outlines(p, true)?;
-                        Some(v.into_iter().next().ok_or_else(|| {
-                            atlasmesh::Error::parse(p, 0, "no outline in the file")
-                        })?)
-                    }
-                    None => None,
-                };
-                repair_file::<2>(&mesh, s.as_ref(), &params, &out)?
-            } else {
-                let s = surface
-                    .as_ref()
-                    .map(|p| atlasmesh::io::surface::read_surface(p))
-                    .transpose()?;
-                repair_file::<3>(&mesh, s.as_ref(), &params, &out)?
+            let r = match read_any_mesh(&mesh)? {
+                AnyMesh::Two(m) => {
+                    let s = match &surface {
+                        Some(p) => {
+                            let v = atlasmesh::io::read_outlines(p, true)?;
+                            Some(v.into_iter().next().ok_or_else(|| {
+                                atlasmesh::Error::parse(p, 0, "no outline in the file")
+                            })?)
+                        }
+                        None => None,
+                    };
+                    repair_file(m, s.as_ref(), &params, &out)?
+                }
+                AnyMesh::Three(m) => {
+                    let s = surface
+                        .as_ref()
+                        .map(|p| atlasmesh::io::surface::read_surface(p))
+                        .transpose()?;
+                    repair_file(m, s.as_ref(), &params, &out)?
+                }
             };
             println!(
                 "{}: {} inverted and {} below {} before; {} inverted, {} below after (min scaled Jacobian {:.3} -> {:.3}); {} nodes moved, surface distance change {:.2e}; {}",

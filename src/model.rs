@@ -131,6 +131,36 @@ pub fn mesh_mean_shape<const D: usize>(
     }
 }
 
+/// The dimension an atlas file declares, read from its header only (the safetensors header:
+/// an 8-byte length, then JSON with the `__metadata__` that [`Atlas::save`] writes).
+pub fn atlas_dimension(path: &Path) -> Result<usize> {
+    use std::io::Read as _;
+    let bad = |m: String| Error::Atlas {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut len = [0u8; 8];
+    f.read_exact(&mut len)
+        .map_err(|_| bad("not a safetensors file (too short)".into()))?;
+    let n = u64::from_le_bytes(len);
+    if n > 100_000_000 {
+        return Err(bad(format!("a header of {n} bytes: not an atlas")));
+    }
+    let mut header = vec![0u8; n as usize];
+    f.read_exact(&mut header)
+        .map_err(|_| bad("the header is truncated".into()))?;
+    let json: serde_json::Value = serde_json::from_slice(&header)
+        .map_err(|e| bad(format!("the header is not JSON ({e})")))?;
+    json["__metadata__"]["dimension"]
+        .as_str()
+        .and_then(|d| d.parse().ok())
+        .filter(|d| *d == 2 || *d == 3)
+        .ok_or_else(|| {
+            bad("no dimension in the metadata; write atlases with `atlasmesh build`".into())
+        })
+}
+
 impl<const D: usize> Atlas<D> {
     /// Builds the atlas from shapes in point correspondence (same count, same facets): GPA
     /// with tangent projection, PCA, mode selection, and the FE mesh of the mean.

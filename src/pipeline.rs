@@ -650,9 +650,7 @@ pub fn apply_sets<const D: usize>(
 ) -> Result<()> {
     let landmarks: Vec<Point<D>> = atlas.landmarks.iter().map(|&i| atlas.mean[i]).collect();
     let s = config.evaluate(&atlas.mesh, &landmarks)?;
-    atlas.mesh.sets.node_sets.extend(s.node_sets);
-    atlas.mesh.sets.element_sets.extend(s.element_sets);
-    atlas.mesh.sets.surfaces.extend(s.surfaces);
+    atlas.mesh.sets.merge(s);
     Ok(())
 }
 

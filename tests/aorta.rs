@@ -82,6 +82,17 @@ impl Aortas {
         }
     }
 
+    /// The atlas of `cases` (walls as shapes, the mean of their hex meshes as FE mesh).
+    fn atlas(&self, cases: std::ops::RangeInclusive<usize>, modes: ModeSelection) -> Atlas<3> {
+        let shapes: Vec<Shape<3>> = cases.clone().map(|c| self.wall(c)).collect();
+        let meshes: Vec<FeMesh<3>> = cases.map(|c| self.mesh(c)).collect();
+        let params = AtlasParams {
+            modes,
+            ..AtlasParams::default()
+        };
+        Atlas::build_with_meshes(&shapes, &params, &meshes).unwrap()
+    }
+
     fn wall(&self, case: usize) -> Shape<3> {
         let nodes = self.nodes(case);
         prepare_surface(Shape {
@@ -129,26 +140,12 @@ fn aorta_template_mesh_morphed_to_held_out_cases() {
     };
     let data = Aortas::load(&d.join("synthaorta-3d/ref2"));
     // The paper's setting: 4 aortas.
-    let train: Vec<usize> = (1..=4).collect();
-    let shapes: Vec<Shape<3>> = train.iter().map(|&c| data.wall(c)).collect();
-    let meshes: Vec<FeMesh<3>> = train.iter().map(|&c| data.mesh(c)).collect();
-    let params = AtlasParams {
-        modes: ModeSelection::Count(3),
-        ..AtlasParams::default()
-    };
-    let atlas = Atlas::build_with_meshes(&shapes, &params, &meshes).unwrap();
+    let atlas = data.atlas(1..=4, ModeSelection::Count(3));
     let (mean, max, valid) = held_out(&atlas, &data, 5);
     eprintln!("4-case atlas, case 005: node error mean {mean:.3} mm, max {max:.3} mm");
     assert!(valid, "case 005: morphed mesh valid");
     // 80 aortas.
-    let train: Vec<usize> = (1..=80).collect();
-    let shapes: Vec<Shape<3>> = train.iter().map(|&c| data.wall(c)).collect();
-    let meshes: Vec<FeMesh<3>> = train.iter().map(|&c| data.mesh(c)).collect();
-    let params = AtlasParams {
-        modes: ModeSelection::Variance(0.99),
-        ..AtlasParams::default()
-    };
-    let atlas = Atlas::build_with_meshes(&shapes, &params, &meshes).unwrap();
+    let atlas = data.atlas(1..=80, ModeSelection::Variance(0.99));
     let mut means = Vec::new();
     for case in 81..=100 {
         let (mean, max, valid) = held_out(&atlas, &data, case);
@@ -173,14 +170,7 @@ fn aorta_at_three_sigma_is_repaired() {
         return;
     };
     let data = Aortas::load(&d.join("synthaorta-3d/ref2"));
-    let train: Vec<usize> = (1..=80).collect();
-    let shapes: Vec<Shape<3>> = train.iter().map(|&c| data.wall(c)).collect();
-    let meshes: Vec<FeMesh<3>> = train.iter().map(|&c| data.mesh(c)).collect();
-    let params = AtlasParams {
-        modes: ModeSelection::Variance(0.99),
-        ..AtlasParams::default()
-    };
-    let atlas = Atlas::build_with_meshes(&shapes, &params, &meshes).unwrap();
+    let atlas = data.atlas(1..=80, ModeSelection::Variance(0.99));
     let rows = common::stress(&atlas);
     common::check("aortas", &rows, 0.2);
     let below = rows.iter().filter(|r| r.3 < 0.2).count();

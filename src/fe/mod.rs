@@ -224,6 +224,13 @@ pub struct MeshSets {
 }
 
 impl MeshSets {
+    /// Adds the sets of `other`; a set of the same name is replaced.
+    pub fn merge(&mut self, other: MeshSets) {
+        self.node_sets.extend(other.node_sets);
+        self.element_sets.extend(other.element_sets);
+        self.surfaces.extend(other.surfaces);
+    }
+
     /// Whether there is no set at all.
     pub fn is_empty(&self) -> bool {
         self.node_sets.is_empty() && self.element_sets.is_empty() && self.surfaces.is_empty()

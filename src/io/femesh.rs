@@ -16,24 +16,27 @@ use std::path::Path;
 
 /// Reads an FE mesh of dimension `D` (format from the extension).
 pub fn read_fe_mesh<const D: usize>(path: &Path) -> Result<FeMesh<D>> {
+    to_dimension(path, read_fe_mesh_raw(path)?)
+}
+
+/// Reads an FE mesh with 3D node coordinates, whatever its elements' dimension
+/// (`mesh.kind.dimension()` tells; [`to_dimension`] converts).
+pub fn read_fe_mesh_raw(path: &Path) -> Result<FeMesh<3>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    let m3 = match ext.as_str() {
-        "inp" => read_inp(path)?.mesh,
-        "msh" => read_msh(path)?,
-        "vtu" => super::vtkxml::read_vtu(path)?,
-        "vtk" => read_vtk_unstructured(path)?,
-        _ => {
-            return Err(Error::parse(
-                path,
-                0,
-                "unknown FE mesh format; use .inp, .msh, .vtu or .vtk",
-            ));
-        }
-    };
-    to_dimension(path, m3)
+    match ext.as_str() {
+        "inp" => Ok(read_inp(path)?.mesh),
+        "msh" => read_msh(path),
+        "vtu" => super::vtkxml::read_vtu(path),
+        "vtk" => read_vtk_unstructured(path),
+        _ => Err(Error::parse(
+            path,
+            0,
+            "unknown FE mesh format; use .inp, .msh, .vtu or .vtk",
+        )),
+    }
 }
 
 /// A 3D-coordinate mesh as a mesh of dimension `D` (2D: elements must be 2D and `z` zero).
@@ -594,18 +597,18 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
             "binary .msh files are not read; save as ASCII",
         ));
     }
-    for s in ["Nodes", "Elements"] {
-        if !text.contains(&format!("${s}")) {
-            return Err(Error::parse(path, 0, format!("no ${s} section")));
-        }
-        if section(s).is_none() {
-            return Err(Error::parse(
-                path,
-                0,
-                format!("${s} is not closed by $End{s} (truncated?)"),
-            ));
-        }
-    }
+    let needed = |name: &str| {
+        section(name).ok_or_else(|| {
+            let m = if text.contains(&format!("${name}")) {
+                format!("${name} is not closed by $End{name} (truncated?)")
+            } else {
+                format!("no ${name} section")
+            };
+            Error::parse(path, 0, m)
+        })
+    };
+    let (nl, nbody) = needed("Nodes")?;
+    let (el, ebody) = needed("Elements")?;
     let mut names: HashMap<(usize, i64), String> = HashMap::new();
     if let Some((ln, body)) = section("PhysicalNames") {
         for (k, l) in body.iter().enumerate().skip(1) {
@@ -637,12 +640,25 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
     let ints = |ln: usize, l: &str| -> Result<Vec<i64>> {
         l.split_whitespace().map(|s| int(ln, s)).collect()
     };
+    // A 4.1 block header: four integers on line `row` of a section starting at line `ln`.
+    let block_header = |body: &[&str], ln: usize, row: usize, what: &str| -> Result<Vec<i64>> {
+        let line = body
+            .get(row)
+            .ok_or_else(|| Error::parse(path, ln + row, format!("{what} is short (truncated?)")))?;
+        let b = ints(ln + row, line)?;
+        if b.len() != 4 {
+            return Err(Error::parse(
+                path,
+                ln + row,
+                format!("a {what} block header needs 4 numbers"),
+            ));
+        }
+        Ok(b)
+    };
     let mut node_index: HashMap<i64, usize> = HashMap::new();
     let mut nodes: Vec<Point<3>> = Vec::new();
     // (dim, gmsh type, node tags, physical tags, element tag)
     let mut elements: Vec<MshElement> = Vec::new();
-    let (nl, nbody) = section("Nodes").unwrap_or_default();
-    let (el, ebody) = section("Elements").unwrap_or_default();
     let too_many = |ln: usize, n: i64| -> Result<usize> {
         if n < 0 || n as usize > crate::io::MAX_COUNT {
             Err(Error::parse(path, ln, format!("count {n} is out of range")))
@@ -747,17 +763,7 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
         let blocks = too_many(nl, *head.first().unwrap_or(&-1))?;
         let mut row = 1;
         for _ in 0..blocks {
-            let line = nbody
-                .get(row)
-                .ok_or_else(|| Error::parse(path, nl + row, "$Nodes is short (truncated?)"))?;
-            let b = ints(nl + row, line)?;
-            if b.len() != 4 {
-                return Err(Error::parse(
-                    path,
-                    nl + row,
-                    "a node block header needs 4 numbers",
-                ));
-            }
+            let b = block_header(&nbody, nl, row, "$Nodes")?;
             if b[2] != 0 {
                 return Err(Error::parse(
                     path,
@@ -788,17 +794,7 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
         let blocks = too_many(el, *head.first().unwrap_or(&-1))?;
         let mut row = 1;
         for _ in 0..blocks {
-            let line = ebody
-                .get(row)
-                .ok_or_else(|| Error::parse(path, el + row, "$Elements is short (truncated?)"))?;
-            let b = ints(el + row, line)?;
-            if b.len() != 4 {
-                return Err(Error::parse(
-                    path,
-                    el + row,
-                    "an element block header needs 4 numbers",
-                ));
-            }
+            let b = block_header(&ebody, el, row, "$Elements")?;
             let dim = b[0].max(0) as usize;
             let phys = phys_of.get(&(dim, b[1])).cloned().unwrap_or_default();
             let n = too_many(el + row, b[3])?;

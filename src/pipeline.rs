@@ -354,12 +354,13 @@ pub fn process_subject<const D: usize>(
     let mut mesh = morph.mesh;
     let mut per_element = morph.quality;
     let unrepaired = summarize(&per_element);
-    let mut surface_distance_change = 0.0;
+    let mut repair = None;
     if let Some(rp) = &params.repair {
         let (r, q) = crate::repair::repair_with_quality(&mut mesh, Some(&index), rp, &per_element)?;
         per_element = q;
-        surface_distance_change = r.surface_distance_change;
+        repair = Some(r);
     }
+    let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
     let q = summarize(&per_element);
     let dist = crate::fe::quality::distribution(mesh.kind, &per_element);
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
@@ -456,6 +457,11 @@ pub fn process_subject<const D: usize>(
         inverted_before_repair: unrepaired.inverted_elements,
         scaled_jacobian_min_before_repair: unrepaired.scaled_jacobian_min,
         surface_distance_change,
+        surface_distance_change_edges: repair.map_or(0.0, |r| {
+            r.surface_distance_change / r.median_edge.max(f64::MIN_POSITIVE)
+        }),
+        repair_bound: repair.map_or(0.0, |r| r.bound),
+        repaired: repair.is_some_and(|r| r.below_bound_before > 0),
         morph_alpha: morph.alpha,
         scaled_jacobian_histogram: jacobian_histogram(
             per_element.iter().map(|e| e.scaled_jacobian_min),

@@ -74,10 +74,41 @@ pub struct RepairReport {
     pub surface_distance_change: f64,
     /// Sweeps run.
     pub sweeps: usize,
+    /// The median edge length of the mesh (mesh units), the scale of the steps and of
+    /// `surface_distance_change`.
+    pub median_edge: f64,
 }
 
 /// Sharpness of the soft minimum: a corner 0.1 below another weighs `e^2` times more.
 const KAPPA: f64 = 20.0;
+
+/// Mean ratio of a corner below which a collapsing edge is penalized.
+const MEAN_RATIO_BOUND: f64 = 0.05;
+
+/// The penalty of one corner: `exp(-KAPPA (sj - bound))` on the scaled Jacobian `sj`, plus
+/// the same on its mean ratio `D j^(2/D) / Σ|e_k|²` (`j` the corner Jacobian, `e_k` its
+/// edges) against [`MEAN_RATIO_BOUND`]: the scaled Jacobian of a corner whose edge collapses
+/// stays fine (it sees only the angles), and a repair that traded angles for a collapsed edge
+/// would leave an element of near-zero volume.
+fn corner_penalty<const D: usize>(
+    kind: ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+    c: usize,
+    j: f64,
+    sj: f64,
+    bound: f64,
+) -> f64 {
+    let frame = kind.corner_frames()[c];
+    let x = nodes[el[c]];
+    let edges: f64 = frame.iter().map(|&m| dist2(nodes[el[m]], x)).sum();
+    let mean_ratio = if j > 0.0 && edges > 0.0 {
+        D as f64 * j.powf(2.0 / D as f64) / edges
+    } else {
+        0.0
+    };
+    (-KAPPA * (sj - bound)).exp() + (-KAPPA * (mean_ratio - MEAN_RATIO_BOUND)).exp()
+}
 
 /// The objective of a node's elements: (worst scaled Jacobian, soft-min penalty
 /// `Σ_corners exp(-KAPPA (sj - bound))`, inverted corners) over the corners that depend on
@@ -94,9 +125,10 @@ fn score<const D: usize>(
     let k = kind.nodes();
     let (mut worst, mut penalty, mut inverted) = fixed;
     for &(e, c) in corners {
-        let (j, sj) = corner(kind, &conn[e * k..(e + 1) * k], nodes, c);
+        let el = &conn[e * k..(e + 1) * k];
+        let (j, sj) = corner(kind, el, nodes, c);
         worst = worst.min(sj);
-        penalty += (-KAPPA * (sj - bound)).exp();
+        penalty += corner_penalty(kind, el, nodes, c, j, sj, bound);
         if j <= 0.0 {
             inverted += 1;
         }
@@ -188,6 +220,7 @@ pub fn repair_with_quality<const D: usize>(
         l.sort_by(f64::total_cmp);
         l.get(l.len() / 2).copied().unwrap_or(1.0)
     };
+    report.median_edge = median_edge;
     let mut distance_before = vec![0.0; nn];
     for f in &faces {
         for &n in &f.nodes {
@@ -275,7 +308,7 @@ pub fn repair_with_quality<const D: usize>(
                     } else {
                         let (j, sj) = corner(kind, el, &mesh.nodes, c);
                         fixed.0 = f64::min(fixed.0, sj);
-                        fixed.1 += (-KAPPA * (sj - bound)).exp();
+                        fixed.1 += corner_penalty(kind, el, &mesh.nodes, c, j, sj, bound);
                         fixed.2 += usize::from(j <= 0.0);
                     }
                 }
@@ -290,12 +323,20 @@ pub fn repair_with_quality<const D: usize>(
                 }
             };
             let nb = neighbours(n, &conn);
-            let h0 = nb
-                .iter()
-                .map(|&m| dist2(mesh.nodes[m], x0).sqrt())
-                .fold(f64::INFINITY, f64::min)
-                .min(median_edge)
-                * 0.3;
+            // The first step: a third of the median distance to the neighbours (not the
+            // least: a node next to a collapsed edge must be able to move far).
+            let h0 = {
+                let mut d: Vec<f64> = nb
+                    .iter()
+                    .map(|&m| dist2(mesh.nodes[m], x0).sqrt())
+                    .collect();
+                d.sort_by(f64::total_cmp);
+                d.get(d.len() / 2)
+                    .copied()
+                    .unwrap_or(median_edge)
+                    .min(median_edge)
+                    * 0.3
+            };
             // The centroid of the neighbours first (untangles folded stars).
             let c: Point<D> = std::array::from_fn(|d| {
                 nb.iter().map(|&m| mesh.nodes[m][d]).sum::<f64>() / nb.len().max(1) as f64

@@ -43,6 +43,15 @@ pub struct SubjectReport {
     /// How far the repair moved boundary nodes off the subject's surface: the largest
     /// increase of a node's distance to it (subject units; 0 without repair).
     pub surface_distance_change: f64,
+    /// `surface_distance_change` over the mesh's median edge length.
+    #[serde(default)]
+    pub surface_distance_change_edges: f64,
+    /// The scaled Jacobian bound of the repair (0 without repair); `repaired`: whether any
+    /// element was below it before the repair (then nodes were moved).
+    #[serde(default)]
+    pub repair_bound: f64,
+    #[serde(default)]
+    pub repaired: bool,
     /// The `alpha` of eq. 9 the morph used (the requested one unless that inverted an
     /// element; see `Morpher::morph`).
     pub morph_alpha: f64,
@@ -72,6 +81,11 @@ pub struct Summary {
     pub subjects: usize,
     pub succeeded: usize,
     pub meshes_valid: usize,
+    /// Subjects whose mesh needed repair, and those still below the repair bound after it.
+    #[serde(default)]
+    pub repaired: usize,
+    #[serde(default)]
+    pub below_repair_bound: usize,
     pub median_fit_seconds: f64,
     pub median_rms_distance_relative: f64,
     pub median_normal_correlation: f64,
@@ -124,6 +138,11 @@ impl Summary {
             subjects: subjects.len(),
             succeeded: subjects.iter().filter(|s| s.success).count(),
             meshes_valid: subjects.iter().filter(|s| s.inverted_elements == 0).count(),
+            repaired: subjects.iter().filter(|s| s.repaired).count(),
+            below_repair_bound: subjects
+                .iter()
+                .filter(|s| s.scaled_jacobian_min < s.repair_bound)
+                .count(),
             median_fit_seconds: median(subjects.iter().map(|s| s.fit_seconds).collect()),
             median_rms_distance_relative: median(
                 subjects.iter().map(|s| s.rms_distance_relative).collect(),

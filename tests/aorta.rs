@@ -224,6 +224,8 @@ fn aorta_loo_through_the_cli_with_template_meshes() {
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["dimension"], 3);
     assert_eq!(r["summary"]["meshes_valid"], 8);
+    let report: atlasmesh::report::Report = serde_json::from_value(r.clone()).unwrap();
+    common::assert_repaired("aortas", &report);
     assert_eq!(r["mean_mesh"]["elements"], 1792);
     // The morphed mesh of case 001 against its own nodes.
     let m = atlasmesh::io::vtkxml::read_vtu(&out.join("wall_001_mesh.vtu")).unwrap();

@@ -30,6 +30,7 @@ fn femur_leave_one_out_with_15_and_5_modes() {
         let r = leave_one_out(&shapes, "femur", &params, &out, 0, true).unwrap();
         assert_eq!(r.dimension, 3);
         assert_eq!(r.summary.subjects, 30);
+        common::assert_repaired(&format!("femurs, {modes} modes"), &r);
         assert_eq!(
             r.summary.meshes_valid, 30,
             "{modes} modes: every morphed hex mesh valid"

@@ -72,6 +72,7 @@ fn hands_leave_one_out() {
     let out = common::temp_dir("hands-loo");
     let r = leave_one_out(&shapes, "imm-hands-2d", &params, &out, 0, true).unwrap();
     assert_eq!(r.summary.subjects, 40);
+    common::assert_repaired("hands", &r);
     assert_eq!(
         r.summary.meshes_valid, 40,
         "every morphed mesh has positive corner Jacobians"

@@ -92,6 +92,7 @@ fn hands_without_correspondence_register_and_fit() {
     );
     assert_eq!(r.summary.succeeded, 40);
     assert_eq!(r.summary.meshes_valid, 40);
+    common::assert_repaired("raw hands", &r);
     assert!(
         r.summary.median_normal_correlation >= g.summary.median_normal_correlation - 0.02,
         "normal correlation {} vs {}",
@@ -143,6 +144,7 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
     .unwrap();
     assert_eq!(r.summary.succeeded, 12);
     assert_eq!(r.summary.meshes_valid, 12);
+    common::assert_repaired("dense hands", &r);
     let registered: Vec<_> = (0..12)
         .map(|k| dir.join(format!("registered/mesh/hand-{k}.vtk")))
         .collect();
@@ -178,6 +180,7 @@ fn baselines_on_the_hands() {
     params.atlas.modes = ModeSelection::Count(11);
     let out = common::temp_dir("baselines");
     let r = leave_one_out(&shapes, "hands", &params, &out, 0, true).unwrap();
+    common::assert_repaired("hands (baselines run)", &r);
     let mean = |f: &dyn Fn(&atlasmesh::report::SubjectReport) -> f64| {
         r.subjects.iter().map(f).sum::<f64>() / r.subjects.len() as f64
     };
@@ -307,6 +310,7 @@ fn femurs_without_correspondence() {
     );
     assert_eq!(r.summary.succeeded, 30);
     assert_eq!(r.summary.meshes_valid, 30);
+    common::assert_repaired("raw femurs", &r);
     // The paper's comparison (fig. 20): SSM fit vs FFD registration (3 landmarks) vs ICP.
     let mean = |f: &dyn Fn(&atlasmesh::report::SubjectReport) -> f64| {
         r.subjects.iter().map(f).sum::<f64>() / r.subjects.len() as f64

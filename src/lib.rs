@@ -14,6 +14,7 @@
 // Index loops over small fixed dimensions read like the equations they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod batch;
 pub mod error;
 pub mod eval;
 pub mod export;

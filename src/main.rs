@@ -52,8 +52,10 @@ enum Command {
         /// Atlas file written by `atlasmesh build`.
         #[arg(long)]
         atlas: PathBuf,
-        /// Subject outline file(s) (CSV, text, VTK).
-        #[arg(long, num_args = 1.., required = true)]
+        /// Subject files (surfaces: PLY, STL, OBJ, VTK, VTP; outlines: CSV, text, VTK), folders
+        /// of them, or `.list` files naming one path per line. Each subject gets its own
+        /// folder OUT/NAME with its outputs and its record subject.json.
+        #[arg(long, visible_alias = "subjects", num_args = 1.., required = true)]
         subject: Vec<PathBuf>,
         /// Outlines in CSV/text files are open.
         #[arg(long)]
@@ -61,6 +63,27 @@ enum Command {
         #[command(flatten)]
         run: RunArgs,
         /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Worker threads (0 = all cores).
+        #[arg(long, default_value_t = 0)]
+        jobs: usize,
+        /// Only the I-th of N parts of the subject list (sorted by path, subject k to part
+        /// k mod N), e.g. `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`; join the
+        /// parts' reports with `atlasmesh merge-reports`.
+        #[arg(long, value_name = "I/N")]
+        shard: Option<String>,
+        /// Fit every subject again, even those whose outputs are complete.
+        #[arg(long)]
+        no_resume: bool,
+    },
+    /// Joins the report.json files of several `fit --shard` runs (or batches of one atlas)
+    /// into one.
+    MergeReports {
+        /// The reports to join.
+        #[arg(num_args = 1.., required = true)]
+        reports: Vec<PathBuf>,
+        /// The joined report to write.
         #[arg(long)]
         out: PathBuf,
     },
@@ -509,15 +532,23 @@ fn build<const D: usize>(
 }
 
 /// `atlasmesh fit` on subjects of either dimension.
+/// `atlasmesh fit`: the batch of `files` (see `atlasmesh::batch`).
+#[allow(clippy::too_many_arguments)]
 fn fit<const D: usize>(
     atlas: &std::path::Path,
     files: &[PathBuf],
-    subjects: &[atlasmesh::geometry::Shape<D>],
+    load: &(
+         dyn Fn(&std::path::Path) -> atlasmesh::Result<Vec<atlasmesh::geometry::Shape<D>>> + Sync
+     ),
     run: &RunArgs,
     out: &std::path::Path,
+    jobs: usize,
+    shard: Option<(usize, usize)>,
+    resume: bool,
     quiet: bool,
 ) -> anyhow::Result<()> {
     let mut a = Atlas::<D>::load(atlas)?;
+    let atlas_crc = atlasmesh::batch::file_crc32(atlas)?;
     let mut params = run.params()?;
     params.atlas = a.params;
     if let Some(c) = &params.sets {
@@ -526,10 +557,63 @@ fn fit<const D: usize>(
     if let (Some(deck), Some(path)) = (&params.deck, &run.deck) {
         pipeline::check_deck(&a, deck, path)?;
     }
-    let r = pipeline::fit_subjects(&a, subjects, &dataset_name(files), &params, out, quiet)?;
+    let files = match shard {
+        Some((i, n)) => atlasmesh::batch::shard(files, i, n),
+        None => files.to_vec(),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
+    let opts = atlasmesh::batch::BatchOptions {
+        resume,
+        quiet,
+        shard: shard.map(|(i, n)| format!("{i}/{n}")),
+    };
+    let r = pool.install(|| {
+        atlasmesh::batch::fit_batch(
+            &a,
+            &files,
+            load,
+            &dataset_name(&files),
+            &params,
+            atlas_crc,
+            out,
+            &opts,
+        )
+    })?;
     print_summary(&r, out);
+    if !r.failed.is_empty() {
+        for f in &r.failed {
+            eprintln!("failed: {} ({}): {}", f.name, f.input, f.error);
+        }
+        return Err(BatchFailed {
+            failed: r.failed.len(),
+            total: r.summary.subjects,
+        }
+        .into());
+    }
     Ok(())
 }
+
+/// Some subjects of a batch failed (the others were written): exit code 5.
+#[derive(Debug)]
+struct BatchFailed {
+    failed: usize,
+    total: usize,
+}
+
+impl std::fmt::Display for BatchFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} of {} subjects failed (see `failed` in report.json); the others were written",
+            self.failed, self.total
+        )
+    }
+}
+
+impl std::error::Error for BatchFailed {}
 
 /// The shapes in correspondence: registered to a template with `--register`, else as given.
 fn corresponded<const D: usize>(
@@ -661,21 +745,44 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             open,
             run,
             out,
+            jobs,
+            shard,
+            no_resume,
         } => {
-            if surfaces(&subject)? {
-                let subjects = pipeline::load_surfaces(&subject)?;
-                fit(&atlas, &subject, &subjects, &run, &out, cli.quiet)?;
+            let files = atlasmesh::batch::subject_files(&subject)?;
+            let shard = shard
+                .as_deref()
+                .map(atlasmesh::batch::parse_shard)
+                .transpose()?;
+            let resume = !no_resume;
+            let q = cli.quiet;
+            if atlasmesh::model::atlas_dimension(&atlas)? == 3 {
+                let load = |p: &std::path::Path| -> atlasmesh::Result<Vec<_>> {
+                    Ok(vec![atlasmesh::io::surface::read_surface(p)?])
+                };
+                fit::<3>(&atlas, &files, &load, &run, &out, jobs, shard, resume, q)?;
             } else {
-                let mut subjects = Vec::new();
-                for p in &subject {
-                    for s in atlasmesh::io::read_outlines(p, !open)? {
+                let load = |p: &std::path::Path| -> atlasmesh::Result<Vec<_>> {
+                    let shapes = atlasmesh::io::read_outlines(p, !open)?;
+                    for s in &shapes {
                         s.validate()
                             .map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;
-                        subjects.push(s);
                     }
-                }
-                fit(&atlas, &subject, &subjects, &run, &out, cli.quiet)?;
+                    Ok(shapes)
+                };
+                fit::<2>(&atlas, &files, &load, &run, &out, jobs, shard, resume, q)?;
             }
+        }
+        Command::MergeReports { reports, out } => {
+            let r = atlasmesh::batch::merge_reports(&reports)?;
+            r.write(&out)?;
+            println!(
+                "{} subjects ({} failed) from {} reports: {}",
+                r.summary.subjects,
+                r.summary.failed,
+                reports.len(),
+                out.display()
+            );
         }
         Command::Register {
             template,
@@ -847,7 +954,9 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             let code = e
                 .downcast_ref::<atlasmesh::Error>()
-                .map_or(1, |e| e.exit_code());
+                .map(|e| e.exit_code())
+                .or_else(|| e.downcast_ref::<BatchFailed>().map(|_| 5))
+                .unwrap_or(1);
             ExitCode::from(code)
         }
     }

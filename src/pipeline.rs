@@ -324,7 +324,7 @@ pub fn load_population(paths: &[PathBuf], opts: &PopulationOptions) -> Result<Ve
     }
 }
 
-fn file_name(name: &str) -> String {
+pub(crate) fn file_name(name: &str) -> String {
     name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
@@ -508,7 +508,7 @@ pub fn baseline_correlations<const D: usize>(
     Ok((nc_icp, nc_ffd))
 }
 
-fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshReport {
+pub(crate) fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshReport {
     let q = summarize(&mesh_quality(&atlas.mesh));
     MeanMeshReport {
         nodes: atlas.mesh.nodes.len(),
@@ -573,13 +573,14 @@ impl Progress {
 }
 
 /// Writes the population-level plots and the report.
-fn finish_report<const D: usize>(
+pub(crate) fn finish_report<const D: usize>(
     out: &Path,
     dataset: &str,
     atlas_for_variance: &Atlas<D>,
     subjects: Vec<SubjectReport>,
     params: &RunParams,
     mean_mesh: Option<MeanMeshReport>,
+    batch: crate::batch::BatchFacts,
 ) -> Result<Report> {
     let m = atlas_for_variance.num_modes();
     if params.plots {
@@ -608,7 +609,12 @@ fn finish_report<const D: usize>(
         variance_explained: atlas_for_variance.cumulative_variance[..m].to_vec(),
         parameters: serde_json::to_value(params).unwrap_or_default(),
         mean_mesh,
-        summary: Summary::of(&subjects),
+        summary: Summary {
+            resumed: batch.resumed,
+            ..Summary::of(&subjects, batch.failed.len())
+        },
+        failed: batch.failed,
+        shard: batch.shard,
         subjects,
         atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
     };
@@ -768,6 +774,7 @@ pub fn leave_one_out_of<const D: usize>(
         subjects,
         params,
         Some(mean_mesh_report(&full)),
+        Default::default(),
     )
 }
 
@@ -835,6 +842,7 @@ pub fn fit_subjects<const D: usize>(
         reports,
         params,
         Some(mean_mesh_report(atlas)),
+        Default::default(),
     )
 }
 

@@ -81,6 +81,12 @@ pub struct Summary {
     pub subjects: usize,
     pub succeeded: usize,
     pub meshes_valid: usize,
+    /// Subjects that failed (batch fit: see `failed` in the report), and subjects skipped
+    /// because their outputs were complete (resume).
+    #[serde(default)]
+    pub failed: usize,
+    #[serde(default)]
+    pub resumed: usize,
     /// Subjects whose mesh needed repair, and those still below the repair bound after it.
     #[serde(default)]
     pub repaired: usize,
@@ -114,6 +120,12 @@ pub struct Report {
     pub mean_mesh: Option<MeanMeshReport>,
     pub subjects: Vec<SubjectReport>,
     pub summary: Summary,
+    /// Batch fit: the subjects that failed, with the reason.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub failed: Vec<crate::batch::FailedSubject>,
+    /// Batch fit: the shard (`I/N`) this report covers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<String>,
     pub atlasmesh_version: String,
 }
 
@@ -132,10 +144,12 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 impl Summary {
-    /// Summary of the subjects' figures.
-    pub fn of(subjects: &[SubjectReport]) -> Self {
+    /// Summary of the subjects' figures; `failed` subjects that have no report.
+    pub fn of(subjects: &[SubjectReport], failed: usize) -> Self {
         Summary {
-            subjects: subjects.len(),
+            subjects: subjects.len() + failed,
+            failed,
+            resumed: 0,
             succeeded: subjects.iter().filter(|s| s.success).count(),
             meshes_valid: subjects.iter().filter(|s| s.inverted_elements == 0).count(),
             repaired: subjects.iter().filter(|s| s.repaired).count(),
@@ -188,6 +202,24 @@ fn font_available() -> bool {
     })
 }
 
+/// The temporary name a plot is drawn to before [`rename_png`] gives it its name (an
+/// interrupted run leaves no half-written picture).
+fn tmp_png(path: &Path) -> std::path::PathBuf {
+    let name = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp-{}.png", std::process::id()))
+}
+
+fn rename_png(path: &Path) -> Result<()> {
+    let tmp = tmp_png(path);
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        Error::io(path, e)
+    })
+}
+
 fn perr<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> Error + '_ {
     move |e| Error::io(path, std::io::Error::other(format!("plot: {e:?}")))
 }
@@ -195,7 +227,8 @@ fn perr<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> Error + '_ {
 /// Plots the cumulative variance share against the number of modes (fig. 5).
 pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) -> Result<()> {
     let text = font_available();
-    let root = BitMapBackend::new(path, (640, 420)).into_drawing_area();
+    let tmp = tmp_png(path);
+    let root = BitMapBackend::new(&tmp, (640, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
     let n = cumulative.len().max(1);
     let lo = cumulative.first().copied().unwrap_or(0.0).min(0.9) - 0.02;
@@ -239,7 +272,8 @@ pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) ->
         }))
         .map_err(perr(path))?;
     root.present().map_err(perr(path))?;
-    Ok(())
+    drop(root);
+    rename_png(path)
 }
 
 /// Plots compactness, generalization and specificity against the number of modes, side by
@@ -250,7 +284,8 @@ pub fn plot_shape_model_measures(
     units: &str,
 ) -> Result<()> {
     let text = font_available();
-    let root = BitMapBackend::new(path, (1200, 400)).into_drawing_area();
+    let tmp = tmp_png(path);
+    let root = BitMapBackend::new(&tmp, (1200, 400)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
     let panels = root.split_evenly((1, 3));
     let series = [
@@ -333,13 +368,15 @@ pub fn plot_shape_model_measures(
             .map_err(perr(path))?;
     }
     root.present().map_err(perr(path))?;
-    Ok(())
+    drop(root);
+    rename_png(path)
 }
 
 /// Plots `E_d` against the iteration for every subject (fig. 11), log scale.
 pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
     let text = font_available();
-    let root = BitMapBackend::new(path, (720, 460)).into_drawing_area();
+    let tmp = tmp_png(path);
+    let root = BitMapBackend::new(&tmp, (720, 460)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
     let maxit = histories
         .iter()
@@ -389,7 +426,8 @@ pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
             .map_err(perr(path))?;
     }
     root.present().map_err(perr(path))?;
-    Ok(())
+    drop(root);
+    rename_png(path)
 }
 
 /// Bins of [`SubjectReport::scaled_jacobian_histogram`].
@@ -411,7 +449,8 @@ pub fn jacobian_histogram(values: impl IntoIterator<Item = f64>) -> Vec<u32> {
 /// Histogram of the scaled Jacobians of all subjects' elements (counts summed over subjects).
 pub fn plot_jacobian_histogram(path: &Path, counts: &[u32]) -> Result<()> {
     let text = font_available();
-    let root = BitMapBackend::new(path, (720, 460)).into_drawing_area();
+    let tmp = tmp_png(path);
+    let root = BitMapBackend::new(&tmp, (720, 460)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
     let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
     let mut b = ChartBuilder::on(&root);
@@ -443,7 +482,8 @@ pub fn plot_jacobian_histogram(path: &Path, counts: &[u32]) -> Result<()> {
         }))
         .map_err(perr(path))?;
     root.present().map_err(perr(path))?;
-    Ok(())
+    drop(root);
+    rename_png(path)
 }
 
 /// Colour of a scaled Jacobian in [-1, 1]: red (≤ 0) through yellow to green (1).
@@ -473,7 +513,8 @@ pub fn plot_subject(
     closed: bool,
 ) -> Result<()> {
     let text = font_available();
-    let root = BitMapBackend::new(path, (1100, 540)).into_drawing_area();
+    let tmp = tmp_png(path);
+    let root = BitMapBackend::new(&tmp, (1100, 540)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
     let (left, right) = root.split_horizontally(550);
     let mut all: Vec<Point<2>> = subject.to_vec();
@@ -548,5 +589,6 @@ pub fn plot_subject(
         .map_err(perr(path))?;
     }
     root.present().map_err(perr(path))?;
-    Ok(())
+    drop(root);
+    rename_png(path)
 }

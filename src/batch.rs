@@ -242,6 +242,18 @@ fn stem(p: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// Removes the temporary files (`.NAME.tmp-PID...`) an interrupted run left in `dir`.
+fn remove_temporaries(dir: &Path) {
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') && name.contains(".tmp-") {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
 /// One file of a batch: its subjects' reports and failures.
 #[allow(clippy::too_many_arguments)]
 fn fit_file<const D: usize>(
@@ -306,7 +318,10 @@ fn fit_file<const D: usize>(
         let done = std::fs::create_dir_all(&dir)
             .map_err(|e| Error::io(&dir, e))
             .and_then(|_| {
+                // The record goes first (the subject is incomplete until it is back), and
+                // the temporary files of an interrupted run with it.
                 let _ = std::fs::remove_file(dir.join(RECORD));
+                remove_temporaries(&dir);
                 process_subject(atlas, fitter, morpher, &shape, &dir, params)
             })
             .and_then(|mut r| {

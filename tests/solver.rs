@@ -157,7 +157,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
         let base = out.join(format!("S{k:03}_Femur"));
         for ext in ["inp", "msh", "vtu", "vtk"] {
             let m: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(
-                &base.with_file_name(format!("S{k:03}_Femur_mesh.{ext}")),
+                &base.join(format!("S{k:03}_Femur_mesh.{ext}")),
             )
             .unwrap();
             assert_eq!(m.connectivity, reference.connectivity, "{ext}");
@@ -167,7 +167,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
                 assert_eq!(m.sets.surfaces, reference.sets.surfaces, "{ext}");
             }
         }
-        let f = feb_sets(&base.with_file_name(format!("S{k:03}_Femur_mesh.feb")));
+        let f = feb_sets(&base.join(format!("S{k:03}_Femur_mesh.feb")));
         assert_eq!(f.node_sets, reference.sets.node_sets, "feb");
         assert_eq!(f.element_sets, reference.sets.element_sets, "feb");
         assert_eq!(
@@ -178,7 +178,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
     // 3. CalculiX solves every subject's deck.
     if common::tool("ccx", "CalculiX solves") {
         for k in 1..=3 {
-            let u = common::solve(&out.join(format!("S{k:03}_Femur_deck.inp")));
+            let u = common::solve(&out.join(format!("S{k:03}_Femur/S{k:03}_Femur_deck.inp")));
             assert_eq!(u.len(), reference.sets.node_sets["LOAD"].len());
             assert!(u.iter().flatten().all(|v| v.is_finite()));
             let mean_uz = u.iter().map(|v| v[2]).sum::<f64>() / u.len() as f64;
@@ -189,7 +189,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
     // 4. Gmsh loads every .msh; meshio reads back every format with the same counts and sets.
     if common::tool("gmsh", "gmsh -check") {
         for k in 1..=3 {
-            let p = out.join(format!("S{k:03}_Femur_mesh.msh"));
+            let p = out.join(format!("S{k:03}_Femur/S{k:03}_Femur_mesh.msh"));
             let o = Command::new("gmsh").arg("-check").arg(&p).output().unwrap();
             let log = String::from_utf8_lossy(&o.stdout).to_string()
                 + &String::from_utf8_lossy(&o.stderr);
@@ -197,7 +197,12 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
         }
     }
     if let Some(py) = python() {
-        meshio_check(&py, &out.join("S001_Femur_mesh"), &reference, true);
+        meshio_check(
+            &py,
+            &out.join("S001_Femur/S001_Femur_mesh"),
+            &reference,
+            true,
+        );
         // And a quadrilateral mesh (the 2D demo's atlas, its mean mesh with sets).
         let quad_dir = dir.join("quad");
         let demo = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
@@ -362,7 +367,7 @@ fn template_inp_with_sets_morphed_to_three_femurs() {
         "--out",
         &s(&t),
     ]);
-    let template = t.join("S001_Femur_mesh.inp");
+    let template = t.join("S001_Femur/S001_Femur_mesh.inp");
     let tm: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(&template).unwrap();
     assert!(!tm.sets.node_sets.is_empty() && !tm.sets.surfaces.is_empty());
     // The atlas with that template mesh (S001 first), then three other femurs.
@@ -390,9 +395,10 @@ fn template_inp_with_sets_morphed_to_three_femurs() {
     ]);
     for k in 26..=28 {
         for ext in ["inp", "msh", "vtu"] {
-            let m: FeMesh<3> =
-                atlasmesh::io::femesh::read_fe_mesh(&out.join(format!("S{k:03}_Femur_mesh.{ext}")))
-                    .unwrap();
+            let m: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(
+                &out.join(format!("S{k:03}_Femur/S{k:03}_Femur_mesh.{ext}")),
+            )
+            .unwrap();
             assert_eq!(m.connectivity, tm.connectivity, "{ext}");
             assert_eq!(m.sets.node_sets, tm.sets.node_sets, "S{k:03} {ext}");
             assert_eq!(m.sets.element_sets, tm.sets.element_sets, "S{k:03} {ext}");
@@ -400,7 +406,7 @@ fn template_inp_with_sets_morphed_to_three_femurs() {
                 assert_eq!(m.sets.surfaces, tm.sets.surfaces, "S{k:03} {ext}");
             }
         }
-        let f = feb_sets(&out.join(format!("S{k:03}_Femur_mesh.feb")));
+        let f = feb_sets(&out.join(format!("S{k:03}_Femur/S{k:03}_Femur_mesh.feb")));
         assert_eq!(f.node_sets, tm.sets.node_sets);
         assert_eq!(f.element_sets, tm.sets.element_sets);
     }

@@ -59,6 +59,15 @@ const COARSE_TOLERANCE_FACTOR: f64 = 100.0;
 /// fit in a local minimum.
 const COMPATIBLE_NORMALS_COS: f64 = 0.5;
 
+/// The angle of the rotation `a^T b` (radians; 2D and 3D).
+fn rotation_angle<const D: usize>(a: &[[f64; D]; D], b: &[[f64; D]; D]) -> f64 {
+    let tr: f64 = (0..D)
+        .map(|i| (0..D).map(|k| a[k][i] * b[k][i]).sum::<f64>())
+        .sum();
+    let c = if D == 2 { tr / 2.0 } else { (tr - 1.0) / 2.0 };
+    c.clamp(-1.0, 1.0).acos()
+}
+
 /// After each `gamma`, starts whose two-way mean squared distance exceeds the best one's
 /// by this factor are dropped.
 const PRUNE_FACTOR: f64 = 4.0;
@@ -414,12 +423,15 @@ impl<'a, const D: usize> Fitter<'a, D> {
             (p.iter().map(|q| dist2(*q, c)).sum::<f64>() / p.len() as f64).sqrt()
         };
         let s0 = rms(pts, cs) / rms(&self.atlas.mean, cm).max(f64::MIN_POSITIVE);
-        let starts = if D == 2 { params.starts.max(1) } else { 1 };
-        let mut pre: Vec<(f64, f64, State<D>)> = Vec::with_capacity(starts);
-        for k in 0..starts {
-            let angle = std::f64::consts::TAU * k as f64 / starts as f64;
-            let mut sim = Similarity::<D>::planar_rotation(angle);
-            sim.s = s0;
+        let rotations =
+            crate::register::start_rotations(&self.atlas.mean, cm, pts, cs, params.starts);
+        let mut pre: Vec<(f64, State<D>)> = Vec::with_capacity(rotations.len());
+        for r in rotations {
+            let mut sim = Similarity::<D> {
+                s: s0,
+                r,
+                t: [0.0; D],
+            };
             sim.t = sub(cs, sim.apply(&cm));
             let mut st = State {
                 sim,
@@ -435,20 +447,16 @@ impl<'a, const D: usize> Fitter<'a, D> {
                     break;
                 }
             }
-            let a = st.sim.r[1][0].atan2(st.sim.r[0][0]);
-            pre.push((score, a, st));
+            pre.push((score, st));
         }
         pre.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut chosen: Vec<State<D>> = Vec::new();
-        let mut angles: Vec<f64> = Vec::new();
-        for (_, a, st) in pre {
-            let distinct = angles.iter().all(|b| {
-                let d = (a - b).rem_euclid(std::f64::consts::TAU);
-                d.min(std::f64::consts::TAU - d) > 20f64.to_radians()
-            });
+        for (_, st) in pre {
+            let distinct = chosen
+                .iter()
+                .all(|c| rotation_angle(&c.sim.r, &st.sim.r) > 20f64.to_radians());
             if distinct {
                 chosen.push(st);
-                angles.push(a);
             }
             if chosen.len() >= params.full_starts.max(1) {
                 break;

@@ -154,33 +154,7 @@ fn pre_align_scored<const D: usize>(
         }
     }
     let s0 = rms(&target.points, cs) / rms(&template.points, ct).max(f64::MIN_POSITIVE);
-    let rotations: Vec<[[f64; D]; D]> = if D == 2 {
-        (0..starts.max(1))
-            .map(|k| {
-                Similarity::<D>::planar_rotation(
-                    std::f64::consts::TAU * k as f64 / starts.max(1) as f64,
-                )
-                .r
-            })
-            .collect()
-    } else {
-        let a = principal_axes(&template.points, ct);
-        let b = principal_axes(&target.points, cs);
-        [
-            [1.0, 1.0, 1.0],
-            [1.0, -1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-            [-1.0, -1.0, 1.0],
-        ]
-        .iter()
-        .map(|sg| {
-            // R maps template axis k to sign_k × target axis k: R = B diag(sg) A^T.
-            std::array::from_fn(|i| {
-                std::array::from_fn(|j| (0..D).map(|k| b[k][i] * sg[k] * a[k][j]).sum())
-            })
-        })
-        .collect()
-    };
+    let rotations = start_rotations(&template.points, ct, &target.points, cs, starts);
     let sample = |n: usize| -> Vec<usize> {
         let step = (n / 400).max(1);
         (0..n).step_by(step).collect()
@@ -238,6 +212,47 @@ fn pre_align_scored<const D: usize>(
     let radius = rms(&target.points, cs);
     best.map(|(score, sim)| (sim, score.sqrt() / radius.max(f64::MIN_POSITIVE)))
         .ok_or_else(|| Error::Numerical(format!("{}: no pre-alignment start", target.name)))
+}
+
+/// Starting rotations of a pre-alignment of `template` (centroid `ct`) to `target` (centroid
+/// `cs`): in 2D `starts` angles evenly round the circle; in 3D the four proper rotations that
+/// map the template's principal axes onto the target's (the signs of the axes are unknown),
+/// and the identity.
+pub(crate) fn start_rotations<const D: usize>(
+    template: &[Point<D>],
+    ct: Point<D>,
+    target: &[Point<D>],
+    cs: Point<D>,
+    starts: usize,
+) -> Vec<[[f64; D]; D]> {
+    if D == 2 {
+        return (0..starts.max(1))
+            .map(|k| {
+                Similarity::<D>::planar_rotation(
+                    std::f64::consts::TAU * k as f64 / starts.max(1) as f64,
+                )
+                .r
+            })
+            .collect();
+    }
+    let a = principal_axes(template, ct);
+    let b = principal_axes(target, cs);
+    let mut r: Vec<[[f64; D]; D]> = [
+        [1.0, 1.0, 1.0],
+        [1.0, -1.0, -1.0],
+        [-1.0, 1.0, -1.0],
+        [-1.0, -1.0, 1.0],
+    ]
+    .iter()
+    .map(|sg| {
+        // R maps template axis k to sign_k × target axis k: R = B diag(sg) A^T.
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..D).map(|k| b[k][i] * sg[k] * a[k][j]).sum())
+        })
+    })
+    .collect();
+    r.push(Similarity::<D>::identity().r);
+    r
 }
 
 /// Principal axes (rows, unit, right-handed) of a point set about `c`, by Jacobi sweeps on

@@ -28,7 +28,8 @@ pub struct FitParams {
     pub max_iterations: usize,
     /// Add the subject-to-instance closest points to `E_d` (see [`Fitter::fit`]).
     pub symmetric: bool,
-    /// Starting rotations tried by the pre-alignment (2D; evenly spaced). 1 = identity only.
+    /// Starting rotations tried by the pre-alignment in 2D (evenly spaced; 1 = identity
+    /// only). In 3D the starts are the principal-axes rotations and the identity.
     pub starts: usize,
     /// Coarse fits run from the best distinct pre-alignments; the least two-way distance wins.
     pub full_starts: usize,
@@ -389,7 +390,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
     ///   a one-way distance is blind to a part of the subject that the instance leaves
     ///   uncovered. Test `symmetric_fit_recovers_a_far_instance`.
     /// - Algorithm 1 starts from `R = I, T = 0, s = 1`. We start from the centroid and
-    ///   RMS-radius match, try `params.starts` rotations with a pose-only fit (`w = 0`) on
+    ///   RMS-radius match, try start rotations (2D: `params.starts` angles; 3D: the four
+    ///   that map the mean's principal axes onto the subject's, and the identity, so that a
+    ///   subject in any orientation is found) with a pose-only fit (`w = 0`) on
     ///   `coarse_points / 4` points, and run Algorithm 1 from the `params.full_starts` best
     ///   distinct ones (more than 20° apart) together on `params.coarse_points` evenly spread
     ///   points, dropping after each `gamma` the starts whose two-way distance is 4 times the

@@ -732,12 +732,18 @@ impl<const D: usize> ClosestPointIndex<D> {
         if box_dist2(p, &r.lo, &r.hi) >= best.dist2 {
             return;
         }
-        let mut stack = [0u32; 64];
-        stack[0] = root as u32;
+        // Nodes to visit with their box distance: a node pushed before `best` improved is
+        // skipped when it comes off the stack.
+        let mut stack = [(0u32, 0.0f64); 64];
+        stack[0] = (root as u32, 0.0);
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let node = &self.nodes[stack[top] as usize];
+            let (ni, d2) = stack[top];
+            if d2 >= best.dist2 {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
             if node.child == 0 {
                 let s = node.start as usize;
                 for &fi in &self.order[s..s + node.count as usize] {
@@ -762,11 +768,11 @@ impl<const D: usize> ClosestPointIndex<D> {
                 (a + 1, db, a, da)
             };
             if df < best.dist2 && top < stack.len() {
-                stack[top] = far as u32;
+                stack[top] = (far as u32, df);
                 top += 1;
             }
             if dn < best.dist2 && top < stack.len() {
-                stack[top] = near as u32;
+                stack[top] = (near as u32, dn);
                 top += 1;
             }
         }

@@ -179,7 +179,7 @@ impl Report {
 
 /// Registers a font for plot labels from the usual system locations; `false` when none is
 /// found (plots are then drawn without text).
-fn font_available() -> bool {
+pub fn font_available() -> bool {
     static FONT: OnceLock<bool> = OnceLock::new();
     *FONT.get_or_init(|| {
         let candidates = [

@@ -265,3 +265,60 @@ fn a_failing_subject_is_reported_and_the_batch_goes_on() {
     assert!(r.subjects.iter().all(|s| s.inverted_elements == 0));
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The shipped Slurm array script (`scripts/atlasmesh-array.sbatch`) through a real cluster
+/// (`scripts/slurm-single-node.sh` starts one; `.ci/run` does): three array tasks, one shard
+/// each, then `merge-reports`.
+#[test]
+fn a_slurm_array_job_fits_the_shards() {
+    let up = Command::new("sinfo")
+        .args(["-h", "-o", "%T"])
+        .output()
+        .is_ok_and(|o| o.status.success() && !o.stdout.is_empty());
+    if !up {
+        assert!(
+            std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
+            "a Slurm cluster is required (sinfo does not answer; see scripts/slurm-single-node.sh)"
+        );
+        eprintln!("Slurm array job: skipped (no cluster; scripts/slurm-single-node.sh starts one)");
+        return;
+    }
+    let (d, atlas, subjects) = setup("batch-slurm", 7);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/atlasmesh-array.sbatch");
+    let out = d.join("out");
+    let o = Command::new("sbatch")
+        .args(["--wait", "--array=0-2", "--mem=500M"])
+        .arg(format!("--chdir={}", d.display()))
+        .arg(&script)
+        .arg(&atlas)
+        .arg(subjects[0].parent().unwrap())
+        .arg(&out)
+        .env("ATLASMESH", env!("CARGO_BIN_EXE_atlasmesh"))
+        .output()
+        .unwrap();
+    let logs: String = std::fs::read_dir(&d)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".log"))
+        .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
+        .collect();
+    assert!(
+        o.status.success(),
+        "sbatch: {}{}\n{logs}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let mut args = vec!["merge-reports".to_string()];
+    for i in 0..3 {
+        let r = out.join(format!("shard-{i}/report.json"));
+        assert!(r.is_file(), "task {i} wrote no report: {logs}");
+        args.push(s(&r));
+    }
+    args.extend(["--out".into(), s(&out.join("report.json"))]);
+    let o = atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&out);
+    assert_eq!(r.summary.subjects, 7);
+    assert_eq!(r.summary.meshes_valid, 7);
+    std::fs::remove_dir_all(&d).ok();
+}

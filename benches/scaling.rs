@@ -160,9 +160,9 @@ fn plot(sizes: &[(&str, usize)], mode_family: &str, modes: &[usize]) {
         if pts.len() >= 2 {
             // Least-squares slope of log t against log n.
             let k = pts.len() as f64;
-            let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| {
-                (a.0 + p.0.ln(), a.1 + p.1.ln())
-            });
+            let (sx, sy) = pts
+                .iter()
+                .fold((0.0, 0.0), |a, p| (a.0 + p.0.ln(), a.1 + p.1.ln()));
             let (mx, my) = (sx / k, sy / k);
             let (sxy, sxx) = pts.iter().fold((0.0, 0.0), |a, p| {
                 (
@@ -281,8 +281,7 @@ fn plot(sizes: &[(&str, usize)], mode_family: &str, modes: &[usize]) {
                 by_modes.iter().copied(),
                 BLUE.stroke_width(2),
             ));
-            let _ =
-                chart.draw_series(by_modes.iter().map(|&p| Circle::new(p, 4, BLUE.filled())));
+            let _ = chart.draw_series(by_modes.iter().map(|&p| Circle::new(p, 4, BLUE.filled())));
         }
     }
     let _ = root.present();

@@ -44,6 +44,11 @@ pub enum Error {
     /// degenerate: identical shapes, collinear points.
     #[error("numerics: {0}")]
     Numerical(String),
+    /// The fit of a subject did not converge to a shape near it: the subject is far outside
+    /// the model (another anatomy, a segmentation error, a part missing: try `--partial`),
+    /// so no mesh was written for it. The message gives the misfit and the bound.
+    #[error("subject {name}: the fit did not converge: {message}")]
+    NotConverged { name: String, message: String },
 }
 
 /// Short for `Result<T, atlasmesh::Error>`.
@@ -51,7 +56,8 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
     /// Exit code of the command-line tool for this class of error: 2 bad input, 3 I/O,
-    /// 4 numerical failure or invalid mesh.
+    /// 4 invalid mesh, 5 did not converge (a fit, or a numerical step on degenerate data).
+    /// (6: a batch in which some subjects failed; see the CLI.)
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Io { .. } => 3,
@@ -60,7 +66,8 @@ impl Error {
             | Error::Population(_)
             | Error::Parameter(_)
             | Error::Atlas { .. } => 2,
-            Error::Mesh(_) | Error::Numerical(_) => 4,
+            Error::Mesh(_) => 4,
+            Error::Numerical(_) | Error::NotConverged { .. } => 5,
         }
     }
 

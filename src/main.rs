@@ -250,6 +250,10 @@ struct RunArgs {
     /// mean.inp`): every subject gets a copy with its node coordinates, NAME_deck.inp.
     #[arg(long, value_name = "INP")]
     deck: Option<PathBuf>,
+    /// A subject whose fit stays farther from it than this share of its bounding-box
+    /// diagonal (two-way RMS) did not converge: refused, no mesh written (exit 5).
+    #[arg(long, value_name = "SHARE", default_value_t = 0.05)]
+    max_misfit: f64,
 }
 
 impl RunArgs {
@@ -282,6 +286,14 @@ impl RunArgs {
         p.fit.partial = self.partial;
         p.plots = !self.no_plots;
         p.baselines = self.baselines;
+        if self.max_misfit.is_nan() || self.max_misfit <= 0.0 {
+            return Err(atlasmesh::Error::Parameter(format!(
+                "--max-misfit {}: a positive share of the diagonal, e.g. 0.05",
+                self.max_misfit
+            ))
+            .into());
+        }
+        p.max_misfit = self.max_misfit;
         p.repair = (self.repair == "on").then_some(atlasmesh::repair::RepairParams {
             bound: self.repair_bound,
             ..Default::default()
@@ -596,7 +608,7 @@ fn fit<const D: usize>(
     Ok(())
 }
 
-/// Some subjects of a batch failed (the others were written): exit code 5.
+/// Some subjects of a batch failed (the others were written): exit code 6.
 #[derive(Debug)]
 struct BatchFailed {
     failed: usize,
@@ -955,7 +967,7 @@ fn main() -> ExitCode {
             let code = e
                 .downcast_ref::<atlasmesh::Error>()
                 .map(|e| e.exit_code())
-                .or_else(|| e.downcast_ref::<BatchFailed>().map(|_| 5))
+                .or_else(|| e.downcast_ref::<BatchFailed>().map(|_| 6))
                 .unwrap_or(1);
             ExitCode::from(code)
         }

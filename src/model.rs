@@ -17,7 +17,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// Version of the atlas file format written by this build.
-pub const ATLAS_FORMAT_VERSION: &str = "1";
+pub const ATLAS_FORMAT_VERSION: &str = "2";
 
 /// How many modes the model keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -129,6 +129,29 @@ pub fn mesh_mean_shape<const D: usize>(
             })
         }
     }
+}
+
+/// The data section of a safetensors file (after the 8-byte header length and the header).
+fn data_section(bytes: &[u8]) -> Option<&[u8]> {
+    let n = u64::from_le_bytes(bytes.get(..8)?.try_into().ok()?);
+    let start = usize::try_from(n).ok()?.checked_add(8)?;
+    bytes.get(start..)
+}
+
+/// CRC-32 of an atlas: its tensors' bytes, then every metadata entry but the checksum, in
+/// key order (`key=value;`).
+fn atlas_checksum(data: &[u8], meta: &HashMap<String, String>) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    h.update(data);
+    let mut keys: Vec<&String> = meta.keys().filter(|k| *k != "checksum_crc32").collect();
+    keys.sort();
+    for k in keys {
+        h.update(k.as_bytes());
+        h.update(b"=");
+        h.update(meta[k].as_bytes());
+        h.update(b";");
+    }
+    h.finalize()
 }
 
 /// The dimension an atlas file declares, read from its header only (the safetensors header:
@@ -453,6 +476,12 @@ impl<const D: usize> Atlas<D> {
             "mesh_sets".to_string(),
             serde_json::to_string(&self.mesh.sets).unwrap_or_default(),
         );
+        // The checksum covers the tensors' bytes and the other metadata: serialize once to
+        // learn the data section, then again with the checksum in the header.
+        let first = safetensors::serialize(views.clone(), Some(meta.clone()))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
+        let crc = atlas_checksum(data_section(&first).unwrap_or_default(), &meta);
+        meta.insert("checksum_crc32".to_string(), format!("{crc:08x}"));
         let bytes = safetensors::serialize(views, Some(meta))
             .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
         crate::io::write_atomic(path, &bytes)
@@ -479,6 +508,16 @@ impl<const D: usize> Atlas<D> {
         if version != ATLAS_FORMAT_VERSION {
             return Err(bad(format!(
                 "format version {version:?}, this build reads version {ATLAS_FORMAT_VERSION}; rebuild the atlas"
+            )));
+        }
+        let stored = meta.get("checksum_crc32").cloned().unwrap_or_default();
+        let mut rest = meta.clone();
+        rest.remove("checksum_crc32");
+        let crc = atlas_checksum(data_section(&bytes).unwrap_or_default(), &rest);
+        if stored != format!("{crc:08x}") {
+            return Err(bad(format!(
+                "checksum mismatch (stored {stored:?}, computed {crc:08x}): the file is corrupted \
+                 or was changed after it was written; rebuild the atlas or copy it again"
             )));
         }
         let dim: usize = meta

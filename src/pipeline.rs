@@ -53,6 +53,15 @@ pub struct RunParams {
     pub deck: Option<std::sync::Arc<crate::io::femesh::InpDeck>>,
     /// Repair of every morphed mesh (untangling and quality; `None`: off).
     pub repair: Option<crate::repair::RepairParams>,
+    /// A fit whose two-way RMS distance to its subject (eq. 6 both ways) exceeds this share
+    /// of the subject's bounding-box diagonal did not converge: the subject is refused
+    /// ([`Error::NotConverged`]) and no mesh is written for it. A good fit is below 0.01.
+    #[serde(default = "default_max_misfit")]
+    pub max_misfit: f64,
+}
+
+fn default_max_misfit() -> f64 {
+    0.05
 }
 
 impl Default for RunParams {
@@ -63,6 +72,7 @@ impl Default for RunParams {
             sets: None,
             deck: None,
             repair: Some(crate::repair::RepairParams::default()),
+            max_misfit: default_max_misfit(),
             atlas: AtlasParams::default(),
             fit: FitParams::default(),
             morph: FfdParams::default(),
@@ -350,6 +360,20 @@ pub fn process_subject<const D: usize>(
     let t0 = Instant::now();
     let fit = fitter.fit(subject, &index, &params.fit)?;
     let fit_seconds = t0.elapsed().as_secs_f64();
+    let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
+    let rel = rms / subject.bbox_diagonal();
+    if rel.is_nan() || rel > params.max_misfit {
+        return Err(Error::NotConverged {
+            name: subject.name.clone(),
+            message: format!(
+                "the fitted model instance stays {rms:.4} (two-way RMS; {:.1} % of the subject's \
+                 bounding-box diagonal) from the subject, above the bound of {:.1} % \
+                 (--max-misfit): the subject lies outside what the model can represent",
+                100.0 * rel,
+                100.0 * params.max_misfit
+            ),
+        });
+    }
     let morph = morpher.morph(&fit)?;
     let mut mesh = morph.mesh;
     let mut per_element = morph.quality;
@@ -363,8 +387,6 @@ pub fn process_subject<const D: usize>(
     let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
     let q = summarize(&per_element);
     let dist = crate::fe::quality::distribution(mesh.kind, &per_element);
-    let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
-    let rel = rms / subject.bbox_diagonal();
     let mean_normals = atlas.mean_shape().vertex_normals();
     let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
     let baselines = if params.baselines {

@@ -253,7 +253,7 @@ fn a_failing_subject_is_reported_and_the_batch_goes_on() {
     let out = d.join("out");
     let o = atlasmesh(&fit_args(&atlas, subjects[0].parent().unwrap(), &out));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(5), "some subjects failed: {err}");
+    assert_eq!(o.status.code(), Some(6), "some subjects failed: {err}");
     assert!(err.contains("truncated"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     let r = report(&out);

@@ -1,0 +1,8 @@
+#![no_main]
+// The sets config (TOML), read and evaluated on a small hexahedral block.
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    let p = atlasmesh_fuzz::file(data, "toml");
+    if let Ok(c) = atlasmesh::fe::sets::SetsConfig::read(&p) {
+        let _ = c.evaluate(&atlasmesh_fuzz::block(), &[[0.0, 0.0, 0.0]]);
+    }
+});

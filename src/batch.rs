@@ -182,7 +182,7 @@ pub fn fit_batch<const D: usize>(
     out: &Path,
     opts: &BatchOptions,
 ) -> Result<Report> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    crate::io::create_dir(out)?;
     // Two files with the same stem would share a folder.
     let mut stems: Vec<(String, &PathBuf)> = files.iter().map(|f| (stem(f), f)).collect::<Vec<_>>();
     stems.sort();

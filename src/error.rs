@@ -6,13 +6,11 @@ use std::path::PathBuf;
 /// and (in its doc) how to fix it.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// A file could not be read or written. Check the path and its permissions.
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    /// A file could not be read or written. Check the path, its permissions and the free
+    /// space. (The I/O error is in the message, not a separate source, so that it is printed
+    /// once.)
+    #[error("{path}: {error}")]
+    Io { path: PathBuf, error: std::io::Error },
     /// A file is malformed: its content does not follow its format. Fix the file at the given
     /// line (1-based; 0 when the position is not a line, as in binary files).
     #[error("{path}:{line}: {message}")]
@@ -71,10 +69,10 @@ impl Error {
         }
     }
 
-    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub fn io(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            error,
         }
     }
 

@@ -417,10 +417,7 @@ fn register_pair<const D: usize>(
             ..atlasmesh::register::RegisterParams::for_dimension(D)
         },
     )?;
-    std::fs::create_dir_all(out).map_err(|e| atlasmesh::Error::Io {
-        path: out.to_path_buf(),
-        source: e,
-    })?;
+    atlasmesh::io::create_dir(out)?;
     let deformed = atlasmesh::geometry::Shape {
         name: template.name.clone(),
         points: r.deformed.clone(),
@@ -768,13 +765,27 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 .transpose()?;
             let resume = !no_resume;
             let q = cli.quiet;
+            // A subject of the other dimension than the atlas is named as such.
+            let other = |p: &std::path::Path, it: &str, dim: usize| {
+                atlasmesh::Error::Population(format!(
+                    "{}: {it}, but the atlas {} is {dim}D",
+                    p.display(),
+                    atlas.display()
+                ))
+            };
             if atlasmesh::model::atlas_dimension(&atlas)? == 3 {
                 let load = |p: &std::path::Path| -> atlasmesh::Result<Vec<_>> {
+                    if !pipeline::is_surface_file(p) {
+                        return Err(other(p, "a 2D outline", 3));
+                    }
                     Ok(vec![atlasmesh::io::surface::read_surface(p)?])
                 };
                 fit::<3>(&atlas, &files, &load, &run, &out, jobs, shard, resume, q)?;
             } else {
                 let load = |p: &std::path::Path| -> atlasmesh::Result<Vec<_>> {
+                    if pipeline::is_surface_file(p) {
+                        return Err(other(p, "a 3D surface", 2));
+                    }
                     let shapes = atlasmesh::io::read_outlines(p, !open)?;
                     for s in &shapes {
                         s.validate()

@@ -286,6 +286,16 @@ impl<const D: usize> Atlas<D> {
             .map(|s| s.iter().map(|p| scale(*p, c)).collect())
             .collect();
         let p = pca(&aligned, &mean)?;
+        // Identical shapes (after alignment): nothing to model. In the reference frame (largest
+        // side 1) the total variance of real populations is far above rounding (hands ~1e-3).
+        let total: f64 = p.eigenvalues.iter().sum();
+        if total.is_nan() || total <= 1e-20 * mean.len() as f64 {
+            return Err(Error::Population(format!(
+                "the {} shapes are identical after alignment (total variance {total:.1e}): there \
+                 is no variance to model; give shapes that differ",
+                shapes.len()
+            )));
+        }
         let m = match params.modes {
             ModeSelection::Count(m) => {
                 if m == 0 || m > p.eigenvalues.len() {

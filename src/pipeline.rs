@@ -542,7 +542,7 @@ pub(crate) fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshRepo
 }
 
 fn create_dir(out: &Path) -> Result<()> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))
+    crate::io::create_dir(out)
 }
 
 /// A progress bar on a terminal, plain log lines otherwise.

@@ -18,14 +18,19 @@ pub struct SubjectReport {
     /// Correspondence updates of Algorithm 1.
     pub iterations: usize,
     /// Wall time of the fit (seconds).
+    #[serde(deserialize_with = "f64_or_nan")]
     pub fit_seconds: f64,
     /// `E_d` (eq. 6) at the end of the fit, subject units squared.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub e_d: f64,
     /// Two-way RMS distance between the fitted instance and the subject (subject units).
+    #[serde(deserialize_with = "f64_or_nan")]
     pub rms_distance: f64,
     /// `rms_distance` / the subject's bounding-box diagonal.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub rms_distance_relative: f64,
     /// Correlation of normals between mean and subject at corresponding points (eq. 13).
+    #[serde(deserialize_with = "f64_or_nan")]
     pub normal_correlation: f64,
     /// Baseline (with `--baselines`): normal correlation of the similarity-ICP correspondence.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -34,33 +39,42 @@ pub struct SubjectReport {
     /// correspondence.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal_correlation_ffd: Option<f64>,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub jacobian_min: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_min: f64,
     pub inverted_elements: usize,
     /// Before the repair (`repair`): inverted elements and the smallest scaled Jacobian.
     pub inverted_before_repair: usize,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_min_before_repair: f64,
     /// How far the repair moved boundary nodes off the subject's surface: the largest
     /// increase of a node's distance to it (subject units; 0 without repair).
+    #[serde(deserialize_with = "f64_or_nan")]
     pub surface_distance_change: f64,
     /// `surface_distance_change` over the mesh's median edge length.
     #[serde(default)]
+    #[serde(deserialize_with = "f64_or_nan")]
     pub surface_distance_change_edges: f64,
     /// The scaled Jacobian bound of the repair (0 without repair); `repaired`: whether any
     /// element was below it before the repair (then nodes were moved).
     #[serde(default)]
+    #[serde(deserialize_with = "f64_or_nan")]
     pub repair_bound: f64,
     #[serde(default)]
     pub repaired: bool,
     /// The `alpha` of eq. 9 the morph used (the requested one unless that inverted an
     /// element; see `Morpher::morph`).
+    #[serde(deserialize_with = "f64_or_nan")]
     pub morph_alpha: f64,
     /// Counts of the elements' smallest corner scaled Jacobians in 40 bins of width 0.05
     /// from -1 to 1 (bin `k` covers `[-1 + 0.05 k, -1 + 0.05 (k + 1))`, the last includes 1).
     #[serde(default)]
     pub scaled_jacobian_histogram: Vec<u32>,
     /// 1st and 5th percentiles of the elements' scaled Jacobians.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_p01: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_p05: f64,
     /// Elements below the usual acceptance bound of their kind (hexahedra 0.5,
     /// quadrilaterals 0.3, simplices 0.2).
@@ -92,8 +106,11 @@ pub struct Summary {
     pub repaired: usize,
     #[serde(default)]
     pub below_repair_bound: usize,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub median_fit_seconds: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub median_rms_distance_relative: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub median_normal_correlation: f64,
 }
 
@@ -127,6 +144,12 @@ pub struct Report {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<String>,
     pub atlasmesh_version: String,
+}
+
+/// JSON has no NaN: serde_json writes it as `null`; read `null` back as NaN (a median of no
+/// subjects, a measure that could not be taken).
+fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

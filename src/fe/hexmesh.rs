@@ -81,7 +81,7 @@ fn hex_mesh_once(
     if !crate::io::surface::is_closed_surface(surface) {
         return Err(Error::Mesh(format!(
             "{}: the surface is open; automatic hexahedral meshing needs a closed surface \
-             (bring a template mesh instead)",
+             (bring a template volume mesh instead: --template-mesh)",
             surface.name
         )));
     }

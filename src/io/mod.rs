@@ -21,6 +21,17 @@ use std::path::Path;
 /// Upper bound on counts read from file headers (guards against absurd allocations).
 pub(crate) const MAX_COUNT: usize = 50_000_000;
 
+/// Creates the output folder `dir` (and its parents); a clear error when a file is in the way.
+pub fn create_dir(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::io(
+            dir,
+            std::io::Error::other("exists and is a file, not a folder; choose another --out"),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+}
+
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so that
 /// an interrupted run never leaves a half-written file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {

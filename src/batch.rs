@@ -40,12 +40,15 @@ pub struct BatchOptions {
     pub shard: Option<String>,
 }
 
-/// What a batch adds to a report: its failures, its shard, the subjects it skipped.
+/// What a run adds to a report beside the subjects: a batch's failures, its shard and the
+/// subjects it skipped; the shape-model measures of the population (the HTML report plots
+/// them).
 #[derive(Clone, Debug, Default)]
 pub struct BatchFacts {
     pub failed: Vec<FailedSubject>,
     pub shard: Option<String>,
     pub resumed: usize,
+    pub measures: Option<crate::eval::ShapeModelMeasures>,
 }
 
 /// A subject that failed: its name, its input file and why.
@@ -232,6 +235,7 @@ pub fn fit_batch<const D: usize>(
             failed,
             shard: opts.shard.clone(),
             resumed: skipped.into_inner(),
+            measures: None,
         },
     )
 }

@@ -10,7 +10,10 @@ pub enum Error {
     /// space. (The I/O error is in the message, not a separate source, so that it is printed
     /// once.)
     #[error("{path}: {error}")]
-    Io { path: PathBuf, error: std::io::Error },
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
     /// A file is malformed: its content does not follow its format. Fix the file at the given
     /// line (1-based; 0 when the position is not a line, as in binary files).
     #[error("{path}:{line}: {message}")]

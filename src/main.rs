@@ -698,6 +698,9 @@ fn print_summary(r: &atlasmesh::report::Report, out: &std::path::Path) {
         s.median_normal_correlation
     );
     println!("report: {}", out.join("report.json").display());
+    if out.join("report.html").is_file() {
+        println!("report: {}", out.join("report.html").display());
+    }
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -964,6 +967,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             println!("3D (surfaces, hexahedra):");
             print_summary(&r3, &out3);
             println!("meshes (VTU) and plots (PNG) in {}", out.display());
+            println!("2D report: {}", out.join("report.html").display());
+            println!("3D report: {}", out3.join("report.html").display());
         }
     }
     Ok(())

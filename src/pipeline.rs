@@ -436,6 +436,59 @@ pub fn process_subject<const D: usize>(
     let outline_file = format!("{base}_fit.vtp");
     write_vtp(&out.join(&outline_file), &fitted)?;
     files.push(outline_file);
+    if params.plots && D == 3 {
+        // Figs. 23 and 27: the fitted surface coloured by its distance to the subject, and the
+        // morphed mesh's surface coloured by scaled Jacobian, seen alike.
+        use crate::report::render;
+        let to3 = |v: &[Point<D>]| -> Vec<Point<3>> { v.iter().map(same_dim::<D, 3>).collect() };
+        let instance = to3(&fit.instance);
+        let distance: Vec<f64> = fit
+            .instance
+            .iter()
+            .map(|p| index.closest(p).dist2.sqrt())
+            .collect();
+        let tris: Vec<[usize; 3]> = atlas
+            .facets
+            .iter()
+            .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
+            .collect();
+        let view = render::View::fitting(&to3(&subject.points));
+        let far = 0.01 * subject.bbox_diagonal();
+        let img = render::render(
+            &instance,
+            &tris,
+            Some(&distance),
+            None,
+            &render::distance_color(far),
+            &view,
+            480,
+            360,
+        );
+        let name = format!("{base}_distance.png");
+        crate::io::write_atomic(&out.join(&name), &img.png()?)?;
+        files.push(name);
+        let mesh3 = FeMesh {
+            nodes: to3(&mesh.nodes),
+            kind: mesh.kind,
+            connectivity: mesh.connectivity.clone(),
+            sets: Default::default(),
+        };
+        let sj: Vec<f64> = per_element.iter().map(|e| e.scaled_jacobian_min).collect();
+        let (btris, bvals) = render::boundary_triangles(&mesh3, &sj);
+        let img = render::render(
+            &mesh3.nodes,
+            &btris,
+            None,
+            Some(&bvals),
+            &render::jacobian_color,
+            &view,
+            480,
+            360,
+        );
+        let name = format!("{base}_quality.png");
+        crate::io::write_atomic(&out.join(&name), &img.png()?)?;
+        files.push(name);
+    }
     if params.plots && D == 2 {
         let png = format!("{base}.png");
         let to2 = |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
@@ -635,12 +688,31 @@ pub(crate) fn finish_report<const D: usize>(
             resumed: batch.resumed,
             ..Summary::of(&subjects, batch.failed.len())
         },
-        failed: batch.failed,
-        shard: batch.shard,
+        failed: batch.failed.clone(),
+        shard: batch.shard.clone(),
         subjects,
         atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
     };
     report.write(&out.join("report.json"))?;
+    if params.plots {
+        let mut pictures = crate::report::html::Pictures::default();
+        if let Some(m) = &batch.measures {
+            crate::report::plot_shape_model_measures(&out.join("measures.png"), m, "")?;
+            pictures.measures = Some("measures.png".into());
+        }
+        if report
+            .subjects
+            .iter()
+            .any(|s| s.normal_correlation_icp.is_some())
+        {
+            crate::report::plot_baselines(&out.join("baselines.png"), &report.subjects)?;
+        }
+        if atlas_for_variance.num_modes() > 0 {
+            crate::report::plot_modes(&out.join("modes.png"), atlas_for_variance)?;
+            pictures.modes = Some("modes.png".into());
+        }
+        crate::report::html::write(&out.join("report.html"), &report, out, &pictures)?;
+    }
     Ok(report)
 }
 
@@ -789,6 +861,13 @@ pub fn leave_one_out_of<const D: usize>(
     });
     progress.finish();
     let subjects = results.into_iter().collect::<Result<Vec<_>>>()?;
+    // Compactness, generalization and specificity of the population's model, for the HTML
+    // report (up to 10 modes, 200 random instances).
+    let measures = if params.plots {
+        crate::eval::shape_model_measures(shapes, 10, 200, 0).ok()
+    } else {
+        None
+    };
     finish_report(
         out,
         dataset,
@@ -796,7 +875,10 @@ pub fn leave_one_out_of<const D: usize>(
         subjects,
         params,
         Some(mean_mesh_report(&full)),
-        Default::default(),
+        crate::batch::BatchFacts {
+            measures,
+            ..Default::default()
+        },
     )
 }
 

@@ -309,6 +309,12 @@ fn principal_axes<const D: usize>(points: &[Point<D>], c: Point<D>) -> [[f64; D]
     axes
 }
 
+/// Principal axes of `points` about their centroid (rows, decreasing variance, right-handed
+/// in 3D).
+pub(crate) fn principal_axes_of<const D: usize>(points: &[Point<D>]) -> [[f64; D]; D] {
+    principal_axes(points, centroid(points))
+}
+
 /// Registers `template` to `target` (section 2.1, eq. 2): pre-alignment ([`pre_align`]),
 /// then, with the template's points `p_j` fixed as the FFD's sources, for each `alpha` of the
 /// schedule `iterations_per_alpha` times: the closest point `c_j` on the target of every

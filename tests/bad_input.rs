@@ -299,7 +299,10 @@ fn a_landmark_index_out_of_range() {
     let lm = d.join("lm.csv");
     let mut text = String::from("shape,landmark,index\n");
     for k in 0..5 {
-        text.push_str(&format!("s{k},0,3\ns{k},1,{}\n", if k == 2 { 400 } else { 20 }));
+        text.push_str(&format!(
+            "s{k},0,3\ns{k},1,{}\n",
+            if k == 2 { 400 } else { 20 }
+        ));
     }
     std::fs::write(&lm, text).unwrap();
     fails(
@@ -458,7 +461,11 @@ fn a_subject_in_another_unit_fits() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let r: atlasmesh::report::Report =
         serde_json::from_slice(&std::fs::read(d.join("fit/report.json")).unwrap()).unwrap();
-    assert!(r.subjects[0].success, "{:?}", r.subjects[0].rms_distance_relative);
+    assert!(
+        r.subjects[0].success,
+        "{:?}",
+        r.subjects[0].rms_distance_relative
+    );
     assert_eq!(r.subjects[0].inverted_elements, 0);
 }
 

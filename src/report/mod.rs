@@ -2,6 +2,9 @@
 //! cumulative variance (fig. 5), `E_d` per iteration (fig. 11), and per subject the mean,
 //! the subject, the fit's locus and the morphed mesh coloured by scaled Jacobian (fig. 9).
 
+pub mod html;
+pub mod render;
+
 use crate::error::{Error, Result};
 use crate::fe::FeMesh;
 use crate::fe::quality::mesh_quality;
@@ -610,6 +613,171 @@ pub fn plot_subject(
             BLUE.mix(0.7).stroke_width(1),
         ))
         .map_err(perr(path))?;
+    }
+    root.present().map_err(perr(path))?;
+    drop(root);
+    rename_png(path)
+}
+
+/// The mean shape and the instances at -2σ and +2σ along each of the first 3 modes (figs. 4
+/// and 15), in the reference frame. 2D: one panel per mode, the mean black, -2σ blue, +2σ
+/// red. 3D: a row per mode (-2σ, mean, +2σ), shaded renders coloured by the distance of each
+/// point from its place on the mean (white 0, red the row's largest).
+pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -> Result<()> {
+    let modes = atlas.num_modes().min(3);
+    let at = |m: usize, k: f64| -> Vec<Point<D>> {
+        let mut w = vec![0.0; atlas.num_modes()];
+        w[m] = k * atlas.eigenvalues[m].max(0.0).sqrt();
+        atlas.instance(&w)
+    };
+    if D == 3 {
+        use render::{Image, View, distance_color, render};
+        let to3 = |v: &[Point<D>]| -> Vec<Point<3>> {
+            v.iter().map(|p| std::array::from_fn(|d| p[d])).collect()
+        };
+        let tris: Vec<[usize; 3]> = atlas
+            .facets
+            .iter()
+            .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
+            .collect();
+        let mean = to3(&atlas.mean);
+        let view = View::fitting(&mean);
+        let (w, h) = (320, 240);
+        let mut img = Image::new(3 * w, modes * h);
+        for m in 0..modes {
+            let shapes = [to3(&at(m, -2.0)), mean.clone(), to3(&at(m, 2.0))];
+            let moved: Vec<Vec<f64>> = shapes
+                .iter()
+                .map(|s| {
+                    s.iter()
+                        .zip(&mean)
+                        .map(|(a, b)| crate::geometry::dist2(*a, *b).sqrt())
+                        .collect()
+                })
+                .collect();
+            let max = moved.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
+            for (c, (s, d)) in shapes.iter().zip(&moved).enumerate() {
+                let tile = render(s, &tris, Some(d), None, &distance_color(max), &view, w, h);
+                img.paste(&tile, c * w, m * h);
+            }
+        }
+        return crate::io::write_atomic(path, &img.png()?);
+    }
+    let text = font_available();
+    let tmp = tmp_png(path);
+    let root = BitMapBackend::new(&tmp, (360 * modes as u32, 380)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let (lo, hi) = bounding_box(&atlas.mean);
+    let pad = 0.25 * (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+    let (cx, cy) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
+    let half = 0.5 * (hi[0] - lo[0]).max(hi[1] - lo[1]) + pad;
+    for (m, area) in root.split_evenly((1, modes)).iter().enumerate() {
+        let mut b = ChartBuilder::on(area);
+        b.margin(8);
+        if text {
+            b.caption(
+                format!("mode {}: -2σ, mean, +2σ", m + 1),
+                ("sans-serif", 16),
+            );
+        }
+        let mut chart = b
+            .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
+            .map_err(perr(path))?;
+        for (shape, color) in [
+            (at(m, -2.0), BLUE.to_rgba()),
+            (atlas.mean.clone(), BLACK.to_rgba()),
+            (at(m, 2.0), RED.to_rgba()),
+        ] {
+            chart
+                .draw_series(atlas.facets.iter().map(|f| {
+                    PathElement::new(
+                        f.iter()
+                            .map(|&i| (shape[i][0], shape[i][1]))
+                            .collect::<Vec<_>>(),
+                        color.stroke_width(2),
+                    )
+                }))
+                .map_err(perr(path))?;
+        }
+    }
+    root.present().map_err(perr(path))?;
+    drop(root);
+    rename_png(path)
+}
+
+/// The paper's comparison (fig. 12/20): per subject (sorted by the SSM fit's value) the
+/// normal correlation (eq. 13) of the SSM fit's correspondence, of the FFD registration's and
+/// of the similarity ICP's.
+pub fn plot_baselines(path: &Path, subjects: &[SubjectReport]) -> Result<()> {
+    let text = font_available();
+    let mut rows: Vec<(f64, f64, f64)> = subjects
+        .iter()
+        .map(|s| {
+            (
+                s.normal_correlation,
+                s.normal_correlation_ffd.unwrap_or(f64::NAN),
+                s.normal_correlation_icp.unwrap_or(f64::NAN),
+            )
+        })
+        .collect();
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let lo = rows
+        .iter()
+        .flat_map(|r| [r.0, r.1, r.2])
+        .filter(|v| v.is_finite())
+        .fold(1.0f64, f64::min)
+        .min(0.99)
+        - 0.01;
+    let tmp = tmp_png(path);
+    let root = BitMapBackend::new(&tmp, (720, 420)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let mut b = ChartBuilder::on(&root);
+    b.margin(12)
+        .x_label_area_size(if text { 36 } else { 5 })
+        .y_label_area_size(if text { 56 } else { 5 });
+    if text {
+        b.caption("normal correlation per subject", ("sans-serif", 20));
+    }
+    let mut chart = b
+        .build_cartesian_2d(0.0..rows.len().max(1) as f64, lo..1.0)
+        .map_err(perr(path))?;
+    if text {
+        chart
+            .configure_mesh()
+            .x_desc("subjects (sorted by the SSM fit)")
+            .y_desc("normal correlation")
+            .draw()
+            .map_err(perr(path))?;
+    }
+    let series: [(&str, RGBColor, fn(&(f64, f64, f64)) -> f64); 3] = [
+        ("SSM fit", RGBColor(200, 30, 30), |r| r.0),
+        ("FFD registration", RGBColor(30, 90, 200), |r| r.1),
+        ("similarity ICP", RGBColor(90, 90, 90), |r| r.2),
+    ];
+    for (name, color, get) in series {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (i as f64 + 0.5, get(r)))
+            .filter(|p| p.1.is_finite())
+            .collect();
+        let s = chart
+            .draw_series(LineSeries::new(pts, color.stroke_width(2)))
+            .map_err(perr(path))?;
+        if text {
+            s.label(name).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+            });
+        }
+    }
+    if text {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()
+            .map_err(perr(path))?;
     }
     root.present().map_err(perr(path))?;
     drop(root);

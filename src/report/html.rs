@@ -1,0 +1,347 @@
+//! `report.html`: one self-contained page beside `report.json` (every picture embedded as a
+//! PNG data URI, no network, no external script) with the run's parameters, the population's
+//! plots (cumulative variance, compactness/generalization/specificity, the modes at ±2σ,
+//! `E_d` per iteration, the histogram of scaled Jacobians, the baselines' normal
+//! correlations) and a sortable table with a row per subject: its measures, its `E_d` against
+//! the iterations, and its pictures (2D: fig. 9; 3D: the fitted surface coloured by distance
+//! to the subject, the morphed mesh coloured by scaled Jacobian).
+//!
+//! When the page has loaded, a small script checks that every image decoded and records it
+//! on `<body>` (`data-images`, `data-broken`), and records script errors (`data-errors`): the
+//! test opens the page in headless Chromium and reads them back.
+
+use super::{Report, SubjectReport};
+use crate::error::Result;
+use base64::Engine as _;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Pictures of the population beside the standard ones (file names in the output folder).
+#[derive(Clone, Debug, Default)]
+pub struct Pictures {
+    /// Compactness, generalization, specificity.
+    pub measures: Option<String>,
+    /// The modes at ±2σ.
+    pub modes: Option<String>,
+}
+
+/// Subjects whose pictures are embedded (the table lists every subject).
+pub const MAX_SUBJECT_PICTURES: usize = 100;
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// `<img>` of a PNG file in `dir`, embedded; empty when the file is not there.
+fn img(dir: &Path, file: &str, alt: &str, class: &str) -> String {
+    match std::fs::read(dir.join(file)) {
+        Ok(bytes) if bytes.starts_with(b"\x89PNG") => format!(
+            "<img class=\"{class}\" alt=\"{}\" src=\"data:image/png;base64,{}\">",
+            escape(alt),
+            base64::engine::general_purpose::STANDARD.encode(bytes)
+        ),
+        _ => String::new(),
+    }
+}
+
+/// A small inline SVG line of `E_d` against the iterations (log scale).
+fn sparkline(v: &[f64]) -> String {
+    let pts: Vec<f64> = v
+        .iter()
+        .filter(|x| x.is_finite() && **x > 0.0)
+        .map(|x| x.ln())
+        .collect();
+    if pts.len() < 2 {
+        return String::new();
+    }
+    let (lo, hi) = pts
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    let span = (hi - lo).max(1e-12);
+    let (w, h) = (140.0, 36.0);
+    let coords: Vec<String> = pts
+        .iter()
+        .enumerate()
+        .map(|(i, &y)| {
+            format!(
+                "{:.1},{:.1}",
+                i as f64 / (pts.len() - 1) as f64 * w,
+                h - 2.0 - (y - lo) / span * (h - 4.0)
+            )
+        })
+        .collect();
+    format!(
+        "<svg class=\"spark\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" role=\"img\" aria-label=\"E_d per iteration\"><polyline fill=\"none\" stroke=\"#1f5fa8\" stroke-width=\"1.5\" points=\"{}\"/></svg>",
+        coords.join(" ")
+    )
+}
+
+fn num(x: f64, digits: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.digits$}")
+    } else {
+        "–".into()
+    }
+}
+
+/// Writes `report.html` for `report`, embedding the pictures found in `dir` (the run's output
+/// folder).
+pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> Result<()> {
+    let mut h = String::with_capacity(1 << 20);
+    let title = format!("atlasmesh report: {}", report.dataset);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>{STYLE}</style></head>\n<body>\n<h1>{}</h1>\n",
+        escape(&title),
+        escape(&title)
+    );
+    let s = &report.summary;
+    let _ = write!(
+        h,
+        "<p class=\"meta\">{}D, {} modes (variance explained {}), atlasmesh {}{}</p>\n",
+        report.dimension,
+        report.modes,
+        report
+            .variance_explained
+            .last()
+            .map_or("–".into(), |v| format!("{:.1} %", 100.0 * v)),
+        escape(&report.atlasmesh_version),
+        report
+            .shard
+            .as_ref()
+            .map_or(String::new(), |s| format!(", shard {}", escape(s)))
+    );
+    let _ = write!(
+        h,
+        "<table class=\"summary\"><tr><th>subjects</th><th>succeeded</th><th>meshes valid</th><th>failed</th><th>needed repair</th><th>below the repair bound</th><th>median fit</th><th>median relative RMS distance</th><th>median normal correlation</th></tr>\n<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} ms</td><td>{}</td><td>{}</td></tr></table>\n",
+        s.subjects,
+        s.succeeded,
+        s.meshes_valid,
+        s.failed,
+        s.repaired,
+        s.below_repair_bound,
+        num(s.median_fit_seconds * 1e3, 1),
+        num(s.median_rms_distance_relative, 4),
+        num(s.median_normal_correlation, 3)
+    );
+    if let Some(mm) = &report.mean_mesh {
+        let _ = write!(
+            h,
+            "<p>Mean mesh: {} nodes, {} {} elements, min scaled Jacobian {}.</p>\n",
+            mm.nodes,
+            mm.elements,
+            escape(&mm.element_kind),
+            num(mm.scaled_jacobian_min, 3)
+        );
+    }
+    let params = serde_json::to_string_pretty(&report.parameters).unwrap_or_default();
+    let _ = write!(
+        h,
+        "<details><summary>Parameters (everything needed to repeat the run)</summary><pre>{}</pre></details>\n",
+        escape(&params)
+    );
+    // The population's figures.
+    h.push_str("<h2>Population</h2>\n<div class=\"figs\">\n");
+    let mut figs: Vec<(String, &str)> = vec![
+        (
+            "cumulative_variance.png".into(),
+            "Cumulative variance against the number of modes (fig. 5)",
+        ),
+        (
+            "e_d.png".into(),
+            "E_d per iteration, every subject (fig. 11/19)",
+        ),
+        (
+            "scaled_jacobians.png".into(),
+            "Scaled Jacobians of every element of every subject",
+        ),
+    ];
+    if let Some(m) = &pictures.measures {
+        figs.insert(
+            1,
+            (
+                m.clone(),
+                "Compactness, generalization and specificity of the model",
+            ),
+        );
+    }
+    if let Some(m) = &pictures.modes {
+        figs.insert(
+            1,
+            (
+                m.clone(),
+                "The mean and ±2σ along the first modes (figs. 4, 15)",
+            ),
+        );
+    }
+    if report
+        .subjects
+        .iter()
+        .any(|s| s.normal_correlation_icp.is_some())
+    {
+        figs.push((
+            "baselines.png".into(),
+            "Normal correlation: SSM fit against the FFD and ICP baselines (fig. 12/20)",
+        ));
+    }
+    for (file, caption) in &figs {
+        let i = img(dir, file, caption, "fig");
+        if !i.is_empty() {
+            let _ = write!(
+                h,
+                "<figure>{i}<figcaption>{}</figcaption></figure>\n",
+                escape(caption)
+            );
+        }
+    }
+    h.push_str("</div>\n");
+    if !report.failed.is_empty() {
+        h.push_str("<h2>Failed subjects</h2>\n<table><tr><th>subject</th><th>input</th><th>reason</th></tr>\n");
+        for f in &report.failed {
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                escape(&f.name),
+                escape(&f.input),
+                escape(&f.error)
+            );
+        }
+        h.push_str("</table>\n");
+    }
+    // The subjects.
+    let baselines = report
+        .subjects
+        .iter()
+        .any(|s| s.normal_correlation_icp.is_some());
+    h.push_str("<h2>Subjects</h2>\n<p class=\"hint\">Click a column's title to sort.</p>\n<table id=\"subjects\" class=\"sortable\"><thead><tr>");
+    let mut cols = vec![
+        "subject",
+        "success",
+        "iterations",
+        "fit (ms)",
+        "relative RMS distance",
+        "normal correlation",
+    ];
+    if baselines {
+        cols.extend(["FFD baseline", "ICP baseline"]);
+    }
+    cols.extend([
+        "min scaled Jacobian",
+        "before repair",
+        "inverted",
+        "E_d per iteration",
+        "pictures",
+    ]);
+    for c in &cols {
+        let _ = write!(h, "<th>{}</th>", escape(c));
+    }
+    h.push_str("</tr></thead><tbody>\n");
+    for (k, s) in report.subjects.iter().enumerate() {
+        subject_row(&mut h, s, dir, baselines, k < MAX_SUBJECT_PICTURES);
+    }
+    h.push_str("</tbody></table>\n");
+    if report.subjects.len() > MAX_SUBJECT_PICTURES {
+        let _ = write!(
+            h,
+            "<p class=\"hint\">Pictures of the first {MAX_SUBJECT_PICTURES} subjects only; every subject's files are in its folder.</p>\n"
+        );
+    }
+    let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");
+    crate::io::write_atomic(path, h.as_bytes())
+}
+
+fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, pictures: bool) {
+    let _ = write!(
+        h,
+        "<tr><td>{}</td><td data-v=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        escape(&s.name),
+        u8::from(s.success),
+        if s.success { "yes" } else { "<b>no</b>" },
+        s.iterations,
+        num(s.fit_seconds * 1e3, 1),
+        num(s.rms_distance_relative, 4),
+        num(s.normal_correlation, 3)
+    );
+    if baselines {
+        let _ = write!(
+            h,
+            "<td>{}</td><td>{}</td>",
+            num(s.normal_correlation_ffd.unwrap_or(f64::NAN), 3),
+            num(s.normal_correlation_icp.unwrap_or(f64::NAN), 3)
+        );
+    }
+    let _ = write!(
+        h,
+        "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"pics\">",
+        num(s.scaled_jacobian_min, 3),
+        num(s.scaled_jacobian_min_before_repair, 3),
+        s.inverted_elements,
+        sparkline(&s.e_d_history)
+    );
+    if pictures {
+        for f in s.files.iter().filter(|f| f.ends_with(".png")) {
+            let what = if f.ends_with("_distance.png") {
+                "fitted surface, distance to the subject (blue 0, red 1 % of the diagonal)"
+            } else if f.ends_with("_quality.png") {
+                "morphed mesh, scaled Jacobian (red 0, yellow 0.5, green 1)"
+            } else {
+                "mean (red), subject (blue), locus (green); morphed mesh by scaled Jacobian"
+            };
+            let i = img(dir, f, &format!("{}: {what}", s.name), "thumb");
+            if !i.is_empty() {
+                let _ = write!(h, "<a title=\"{}\">{i}</a>", escape(what));
+            }
+        }
+    }
+    h.push_str("</td></tr>\n");
+}
+
+const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:1.5em;color:#222}\
+h1{font-size:1.4em}h2{font-size:1.15em;margin-top:1.6em}\
+table{border-collapse:collapse;font-size:0.9em}th,td{border:1px solid #ccc;padding:3px 6px;text-align:right}\
+th{background:#f0f0f0;cursor:pointer}td:first-child{text-align:left}\
+.figs{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figcaption{font-size:0.85em;color:#555;max-width:640px}\
+img.fig{max-width:640px;border:1px solid #ddd}img.thumb{height:120px;margin:1px;border:1px solid #ddd}\
+img.thumb:hover{height:300px}td.pics{white-space:nowrap}.meta,.hint{color:#555}pre{font-size:0.8em}";
+
+const SCRIPT: &str = r#"
+(function () {
+  var errors = [];
+  window.addEventListener('error', function (e) {
+    errors.push(String(e.message || e));
+    document.body.setAttribute('data-errors', errors.join(' | '));
+  });
+  function key(td) {
+    var v = td.getAttribute('data-v');
+    if (v === null) v = td.textContent.trim();
+    var x = parseFloat(v);
+    return isNaN(x) ? v.toLowerCase() : x;
+  }
+  document.querySelectorAll('table.sortable th').forEach(function (th, col) {
+    th.addEventListener('click', function () {
+      var body = th.closest('table').tBodies[0];
+      var rows = Array.prototype.slice.call(body.rows);
+      var up = th.getAttribute('data-dir') !== 'up';
+      th.setAttribute('data-dir', up ? 'up' : 'down');
+      rows.sort(function (a, b) {
+        var x = key(a.cells[col]), y = key(b.cells[col]);
+        if (x === y) return 0;
+        return (x < y ? -1 : 1) * (up ? 1 : -1);
+      });
+      rows.forEach(function (r) { body.appendChild(r); });
+    });
+  });
+  window.addEventListener('load', function () {
+    var imgs = Array.prototype.slice.call(document.images);
+    var broken = imgs.filter(function (i) { return !(i.complete && i.naturalWidth > 0); });
+    document.body.setAttribute('data-images', String(imgs.length));
+    document.body.setAttribute('data-broken', String(broken.length));
+    document.body.setAttribute('data-errors', errors.join(' | '));
+  });
+})();
+"#;

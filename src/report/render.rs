@@ -1,0 +1,269 @@
+//! A small software rasterizer for the report's 3D pictures (figs. 23 and 27 of the paper):
+//! triangle surfaces drawn with a z-buffer under an orthographic camera, each triangle
+//! coloured by a value (per vertex, interpolated; or per triangle) and shaded by the angle of
+//! its normal to the viewer. No display or GPU is needed; the result is a PNG in memory.
+//!
+//! Frames: the camera looks along the smallest principal axis of the points (the largest
+//! extent across the picture, horizontal); units do not matter (the picture is fitted).
+
+use crate::error::{Error, Result};
+use crate::geometry::Point;
+
+/// An RGB picture.
+#[derive(Clone, Debug)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    /// Row-major RGB bytes, top row first.
+    pub rgb: Vec<u8>,
+}
+
+impl Image {
+    /// A white picture.
+    pub fn new(width: usize, height: usize) -> Self {
+        Image {
+            width,
+            height,
+            rgb: vec![255; width * height * 3],
+        }
+    }
+
+    /// The picture as PNG bytes.
+    pub fn png(&self) -> Result<Vec<u8>> {
+        let mut out = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut out, self.width as u32, self.height as u32);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let err = |e: png::EncodingError| Error::Numerical(format!("PNG encoding: {e}"));
+            let mut w = enc.write_header().map_err(err)?;
+            w.write_image_data(&self.rgb).map_err(err)?;
+        }
+        Ok(out)
+    }
+
+    /// Copies `other` into this picture with its top-left corner at `(x, y)`.
+    pub fn paste(&mut self, other: &Image, x: usize, y: usize) {
+        for r in 0..other.height.min(self.height.saturating_sub(y)) {
+            let w = other.width.min(self.width.saturating_sub(x));
+            let src = &other.rgb[r * other.width * 3..(r * other.width + w) * 3];
+            let at = ((y + r) * self.width + x) * 3;
+            self.rgb[at..at + w * 3].copy_from_slice(src);
+        }
+    }
+}
+
+/// A view: the rotation taking world coordinates to camera coordinates (rows: right, up,
+/// towards the viewer), and the window (centre and half-size) it shows.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub rotation: [[f64; 3]; 3],
+    pub center: Point<3>,
+    pub half: f64,
+}
+
+impl View {
+    /// The view of `points` along their smallest principal axis, the largest horizontal,
+    /// tilted by 20° about the horizontal so the relief shows.
+    pub fn fitting(points: &[Point<3>]) -> Self {
+        let axes = crate::register::principal_axes_of(points);
+        let c = crate::geometry::centroid(points);
+        let tilt = 20f64.to_radians();
+        let (s, co) = tilt.sin_cos();
+        // right = axis 0; up = axis 1 tilted towards axis 2; out = axis 2 tilted back.
+        let up: [f64; 3] = std::array::from_fn(|d| co * axes[1][d] + s * axes[2][d]);
+        let out: [f64; 3] = std::array::from_fn(|d| -s * axes[1][d] + co * axes[2][d]);
+        let rotation = [axes[0], up, out];
+        let mut half = 0.0f64;
+        for p in points {
+            let q = sub(*p, c);
+            for row in rotation.iter().take(2) {
+                half = half.max(dot(row, &q).abs());
+            }
+        }
+        View {
+            rotation,
+            center: c,
+            half: half.max(f64::MIN_POSITIVE) * 1.05,
+        }
+    }
+
+    fn project(&self, p: &Point<3>, w: usize, h: usize) -> [f64; 3] {
+        let q = sub(*p, self.center);
+        let x = dot(&self.rotation[0], &q);
+        let y = dot(&self.rotation[1], &q);
+        let z = dot(&self.rotation[2], &q);
+        let scale = 0.5 * w.min(h) as f64 / self.half;
+        [0.5 * w as f64 + x * scale, 0.5 * h as f64 - y * scale, z]
+    }
+}
+
+fn sub(a: Point<3>, b: Point<3>) -> Point<3> {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Colours of the pictures: values mapped through `color` (e.g. [`distance_color`]).
+pub type ColorMap<'a> = &'a dyn Fn(f64) -> [u8; 3];
+
+/// Draws the triangles `facets` of `points` into a `w × h` picture under `view`. `vertex`
+/// gives a value per point (interpolated across each triangle) or `face` one per triangle;
+/// `color` maps a value to a colour. Both sides of a triangle are lit alike (open surfaces
+/// show their inside).
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    points: &[Point<3>],
+    facets: &[[usize; 3]],
+    vertex: Option<&[f64]>,
+    face: Option<&[f64]>,
+    color: ColorMap,
+    view: &View,
+    w: usize,
+    h: usize,
+) -> Image {
+    let mut img = Image::new(w, h);
+    let mut depth = vec![f64::NEG_INFINITY; w * h];
+    let proj: Vec<[f64; 3]> = points.iter().map(|p| view.project(p, w, h)).collect();
+    for (t, f) in facets.iter().enumerate() {
+        let [a, b, c] = [proj[f[0]], proj[f[1]], proj[f[2]]];
+        // Shade by the normal's angle to the viewer (camera frame: z towards the viewer).
+        let e1 = sub(points[f[1]], points[f[0]]);
+        let e2 = sub(points[f[2]], points[f[0]]);
+        let n = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        let nl = dot(&n, &n).sqrt();
+        if nl == 0.0 || !nl.is_finite() {
+            continue;
+        }
+        let facing = (dot(&view.rotation[2], &n) / nl).abs();
+        let shade = 0.35 + 0.65 * facing;
+        let area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let x0 = a[0].min(b[0]).min(c[0]).floor().max(0.0) as usize;
+        let x1 = (a[0].max(b[0]).max(c[0]).ceil() as usize).min(w.saturating_sub(1));
+        let y0 = a[1].min(b[1]).min(c[1]).floor().max(0.0) as usize;
+        let y1 = (a[1].max(b[1]).max(c[1]).ceil() as usize).min(h.saturating_sub(1));
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
+                let w0 = ((b[0] - px) * (c[1] - py) - (b[1] - py) * (c[0] - px)) / area;
+                let w1 = ((c[0] - px) * (a[1] - py) - (c[1] - py) * (a[0] - px)) / area;
+                let w2 = 1.0 - w0 - w1;
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let z = w0 * a[2] + w1 * b[2] + w2 * c[2];
+                let k = y * w + x;
+                if z <= depth[k] {
+                    continue;
+                }
+                depth[k] = z;
+                let v = match (vertex, face) {
+                    (Some(v), _) => w0 * v[f[0]] + w1 * v[f[1]] + w2 * v[f[2]],
+                    (None, Some(fv)) => fv[t],
+                    (None, None) => f64::NAN,
+                };
+                let rgb = if v.is_nan() {
+                    [200, 200, 205]
+                } else {
+                    color(v)
+                };
+                for (ch, val) in rgb.iter().enumerate() {
+                    img.rgb[3 * k + ch] = (f64::from(*val) * shade) as u8;
+                }
+            }
+        }
+    }
+    img
+}
+
+/// Blue (0) through white to red (`max`): a distance.
+pub fn distance_color(max: f64) -> impl Fn(f64) -> [u8; 3] {
+    move |v: f64| {
+        let t = (v / max.max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+        if t < 0.5 {
+            let s = 2.0 * t;
+            [(60.0 + 195.0 * s) as u8, (110.0 + 145.0 * s) as u8, 255]
+        } else {
+            let s = 2.0 * (t - 0.5);
+            [255, (255.0 - 200.0 * s) as u8, (255.0 - 215.0 * s) as u8]
+        }
+    }
+}
+
+/// Red (inverted, ≤ 0) through yellow to green (1): a scaled Jacobian.
+pub fn jacobian_color(s: f64) -> [u8; 3] {
+    if s <= 0.0 {
+        return [200, 0, 0];
+    }
+    let t = s.clamp(0.0, 1.0);
+    let (r, g) = if t < 0.5 {
+        (255.0, 510.0 * t)
+    } else {
+        (510.0 * (1.0 - t), 255.0)
+    };
+    [r as u8, g as u8, 60]
+}
+
+/// The boundary of a volume mesh as triangles (each quadrilateral face split in two), with
+/// the scaled Jacobian of the element each face belongs to.
+pub fn boundary_triangles(
+    mesh: &crate::fe::FeMesh<3>,
+    element_value: &[f64],
+) -> (Vec<[usize; 3]>, Vec<f64>) {
+    let mut tris = Vec::new();
+    let mut values = Vec::new();
+    for f in crate::fe::sets::boundary_faces(mesh) {
+        let v = element_value.get(f.element).copied().unwrap_or(f64::NAN);
+        for t in 1..f.nodes.len().saturating_sub(1) {
+            tris.push([f.nodes[0], f.nodes[t], f.nodes[t + 1]]);
+            values.push(v);
+        }
+    }
+    (tris, values)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tetrahedron_is_drawn_in_its_colour() {
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let f = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let view = View::fitting(&p);
+        let img = render(
+            &p,
+            &f,
+            None,
+            Some(&[1.0; 4]),
+            &jacobian_color,
+            &view,
+            64,
+            48,
+        );
+        // Some pixels are green-ish (scaled Jacobian 1), the corners stay white.
+        let green = img
+            .rgb
+            .chunks(3)
+            .filter(|c| c[1] > c[0] && c[1] > 60)
+            .count();
+        assert!(green > 200, "{green} green pixels");
+        assert_eq!(&img.rgb[..3], &[255, 255, 255]);
+        let png = img.png().unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
+}

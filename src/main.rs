@@ -302,12 +302,22 @@ impl RunArgs {
     }
 }
 
+/// The data set's name in reports: the files, or for more than three their folder and count.
 fn dataset_name(paths: &[PathBuf]) -> String {
-    paths
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect::<Vec<_>>()
-        .join(" ")
+    if paths.len() <= 3 {
+        return paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" ");
+    }
+    let parent = |p: &PathBuf| p.parent().map(|d| d.to_path_buf()).unwrap_or_default();
+    let first = parent(&paths[0]);
+    if paths.iter().all(|p| parent(p) == first) {
+        format!("{} ({} files)", first.display(), paths.len())
+    } else {
+        format!("{} files ({} ...)", paths.len(), paths[0].display())
+    }
 }
 
 fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
@@ -366,10 +376,13 @@ fn repair_file<const D: usize>(
     surface: Option<&atlasmesh::geometry::Shape<D>>,
     params: &atlasmesh::repair::RepairParams,
     out: &std::path::Path,
+    quiet: bool,
 ) -> anyhow::Result<atlasmesh::repair::RepairReport> {
     let index = surface.map(atlasmesh::geometry::ClosestPointIndex::from_shape);
     let before = atlasmesh::fe::quality::mesh_quality(&m);
+    let spin = pipeline::Spinner::new("repair", quiet);
     let (r, q) = atlasmesh::repair::repair_with_quality(&mut m, index.as_ref(), params, &before)?;
+    spin.finish();
     atlasmesh::export::write_mesh(out, &m, None, &q)?;
     Ok(r)
 }
@@ -504,9 +517,16 @@ fn build<const D: usize>(
     quiet: bool,
 ) -> anyhow::Result<()> {
     let shapes = corresponded(pop, shapes, 0, quiet)?;
+    let spin = pipeline::Spinner::new("atlas (GPA, PCA, mesh of the mean)", quiet);
     let a = pipeline::build_with_meshes(&shapes, meshes, params, out)?;
+    spin.finish();
     if measures {
+        let spin = pipeline::Spinner::new(
+            "compactness, generalization, specificity (1000 instances per mode count)",
+            quiet,
+        );
         let m = atlasmesh::eval::shape_model_measures(&shapes, 30, 1000, 0)?;
+        spin.finish();
         let json = out.with_extension("measures.json");
         m.write(&json)?;
         if params.plots {
@@ -925,14 +945,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                         }
                         None => None,
                     };
-                    repair_file(m, s.as_ref(), &params, &out)?
+                    repair_file(m, s.as_ref(), &params, &out, cli.quiet)?
                 }
                 AnyMesh::Three(m) => {
                     let s = surface
                         .as_ref()
                         .map(|p| atlasmesh::io::surface::read_surface(p))
                         .transpose()?;
-                    repair_file(m, s.as_ref(), &params, &out)?
+                    repair_file(m, s.as_ref(), &params, &out, cli.quiet)?
                 }
             };
             println!(

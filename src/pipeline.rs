@@ -647,6 +647,53 @@ impl Progress {
     }
 }
 
+/// A step of unknown length (building an atlas, meshing the mean, a repair): a spinner with
+/// the elapsed time on a terminal, a line at its start and its end otherwise.
+pub struct Spinner {
+    bar: Option<indicatif::ProgressBar>,
+    label: String,
+    start: Instant,
+}
+
+impl Spinner {
+    pub fn new(label: &str, quiet: bool) -> Self {
+        use std::io::IsTerminal;
+        let bar = if quiet {
+            None
+        } else if std::io::stderr().is_terminal() {
+            let b = indicatif::ProgressBar::new_spinner();
+            if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            {
+                b.set_style(style);
+            }
+            b.set_message(label.to_string());
+            b.enable_steady_tick(std::time::Duration::from_millis(120));
+            Some(b)
+        } else {
+            eprintln!("{label} ...");
+            None
+        };
+        Spinner {
+            bar,
+            label: if quiet { String::new() } else { label.into() },
+            start: Instant::now(),
+        }
+    }
+
+    pub fn finish(self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+        if !self.label.is_empty() {
+            eprintln!(
+                "{}: done in {:.1} s",
+                self.label,
+                self.start.elapsed().as_secs_f64()
+            );
+        }
+    }
+}
+
 /// Writes the population-level plots and the report.
 pub(crate) fn finish_report<const D: usize>(
     out: &Path,
@@ -827,7 +874,9 @@ pub fn leave_one_out_of<const D: usize>(
     }
     create_dir(out)?;
     // The full atlas, for the variance figures and to check the population once.
+    let spin = Spinner::new("atlas of all shapes (GPA, PCA, mesh of the mean)", quiet);
     let full = atlas_of(shapes, meshes, params)?;
+    spin.finish();
     let progress = Progress::new("leave-one-out", shapes.len(), quiet);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)

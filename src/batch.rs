@@ -175,6 +175,7 @@ fn complete(out: &Path, folder: &str, input_crc: u32, run_crc: u32) -> Option<Su
 /// of the atlas file (part of a subject's completeness). Errors only where the batch as a
 /// whole cannot run (unwritable output folder, duplicate subject names); a subject's failure
 /// is in the report's `failed`.
+#[allow(clippy::too_many_arguments)]
 pub fn fit_batch<const D: usize>(
     atlas: &Atlas<D>,
     files: &[PathBuf],

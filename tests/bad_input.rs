@@ -223,20 +223,6 @@ fn a_surface_that_cannot_be_oriented() {
     fails(&loo(&d, &[&s(&p)]), 2, &["moebius.obj", "orient"]);
 }
 
-/// Writes `n` demo surfaces as PLY files.
-fn surfaces(d: &Path, n: usize, rings: usize) -> Vec<String> {
-    atlasmesh::pipeline::demo_population_3d(n, rings, 3)
-        .unwrap()
-        .iter()
-        .enumerate()
-        .map(|(k, sh)| {
-            let p = d.join(format!("s{k}.ply"));
-            atlasmesh::io::surface::write_ply(&p, sh).unwrap();
-            s(&p)
-        })
-        .collect()
-}
-
 #[test]
 fn an_open_surface_where_a_closed_one_is_needed() {
     let d = common::temp_dir("bad-open");

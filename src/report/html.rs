@@ -94,16 +94,16 @@ fn num(x: f64, digits: usize) -> String {
 pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> Result<()> {
     let mut h = String::with_capacity(1 << 20);
     let title = format!("atlasmesh report: {}", report.dataset);
-    let _ = write!(
+    let _ = writeln!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>{STYLE}</style></head>\n<body>\n<h1>{}</h1>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>{STYLE}</style></head>\n<body>\n<h1>{}</h1>",
         escape(&title),
         escape(&title)
     );
     let s = &report.summary;
-    let _ = write!(
+    let _ = writeln!(
         h,
-        "<p class=\"meta\">{}D, {} modes (variance explained {}), atlasmesh {}{}</p>\n",
+        "<p class=\"meta\">{}D, {} modes (variance explained {}), atlasmesh {}{}</p>",
         report.dimension,
         report.modes,
         report
@@ -116,9 +116,9 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
             .as_ref()
             .map_or(String::new(), |s| format!(", shard {}", escape(s)))
     );
-    let _ = write!(
+    let _ = writeln!(
         h,
-        "<table class=\"summary\"><tr><th>subjects</th><th>succeeded</th><th>meshes valid</th><th>failed</th><th>needed repair</th><th>below the repair bound</th><th>median fit</th><th>median relative RMS distance</th><th>median normal correlation</th></tr>\n<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} ms</td><td>{}</td><td>{}</td></tr></table>\n",
+        "<table class=\"summary\"><tr><th>subjects</th><th>succeeded</th><th>meshes valid</th><th>failed</th><th>needed repair</th><th>below the repair bound</th><th>median fit</th><th>median relative RMS distance</th><th>median normal correlation</th></tr>\n<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} ms</td><td>{}</td><td>{}</td></tr></table>",
         s.subjects,
         s.succeeded,
         s.meshes_valid,
@@ -130,9 +130,9 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
         num(s.median_normal_correlation, 3)
     );
     if let Some(mm) = &report.mean_mesh {
-        let _ = write!(
+        let _ = writeln!(
             h,
-            "<p>Mean mesh: {} nodes, {} {} elements, min scaled Jacobian {}.</p>\n",
+            "<p>Mean mesh: {} nodes, {} {} elements, min scaled Jacobian {}.</p>",
             mm.nodes,
             mm.elements,
             escape(&mm.element_kind),
@@ -140,9 +140,9 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
         );
     }
     let params = serde_json::to_string_pretty(&report.parameters).unwrap_or_default();
-    let _ = write!(
+    let _ = writeln!(
         h,
-        "<details><summary>Parameters (everything needed to repeat the run)</summary><pre>{}</pre></details>\n",
+        "<details><summary>Parameters (everything needed to repeat the run)</summary><pre>{}</pre></details>",
         escape(&params)
     );
     // The population's figures.
@@ -192,9 +192,9 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
     for (file, caption) in &figs {
         let i = img(dir, file, caption, "fig");
         if !i.is_empty() {
-            let _ = write!(
+            let _ = writeln!(
                 h,
-                "<figure>{i}<figcaption>{}</figcaption></figure>\n",
+                "<figure>{i}<figcaption>{}</figcaption></figure>",
                 escape(caption)
             );
         }
@@ -203,9 +203,9 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
     if !report.failed.is_empty() {
         h.push_str("<h2>Failed subjects</h2>\n<table><tr><th>subject</th><th>input</th><th>reason</th></tr>\n");
         for f in &report.failed {
-            let _ = write!(
+            let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
                 escape(&f.name),
                 escape(&f.input),
                 escape(&f.error)
@@ -246,9 +246,9 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
     }
     h.push_str("</tbody></table>\n");
     if report.subjects.len() > MAX_SUBJECT_PICTURES {
-        let _ = write!(
+        let _ = writeln!(
             h,
-            "<p class=\"hint\">Pictures of the first {MAX_SUBJECT_PICTURES} subjects only; every subject's files are in its folder.</p>\n"
+            "<p class=\"hint\">Pictures of the first {MAX_SUBJECT_PICTURES} subjects only; every subject's files are in its folder.</p>"
         );
     }
     let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");

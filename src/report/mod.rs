@@ -749,7 +749,8 @@ pub fn plot_baselines(path: &Path, subjects: &[SubjectReport]) -> Result<()> {
             .draw()
             .map_err(perr(path))?;
     }
-    let series: [(&str, RGBColor, fn(&(f64, f64, f64)) -> f64); 3] = [
+    type Series = (&'static str, RGBColor, fn(&(f64, f64, f64)) -> f64);
+    let series: [Series; 3] = [
         ("SSM fit", RGBColor(200, 30, 30), |r| r.0),
         ("FFD registration", RGBColor(30, 90, 200), |r| r.1),
         ("similarity ICP", RGBColor(90, 90, 90), |r| r.2),

@@ -454,19 +454,7 @@ pub fn process_subject<const D: usize>(
             .collect();
         let view = render::View::fitting(&to3(&subject.points));
         let far = 0.01 * subject.bbox_diagonal();
-        let img = render::render(
-            &instance,
-            &tris,
-            Some(&distance),
-            None,
-            &render::distance_color(far),
-            &view,
-            480,
-            360,
-        );
-        let name = format!("{base}_distance.png");
-        crate::io::write_atomic(&out.join(&name), &img.png()?)?;
-        files.push(name);
+        let by_distance = render::distance_color(far);
         let mesh3 = FeMesh {
             nodes: to3(&mesh.nodes),
             kind: mesh.kind,
@@ -475,19 +463,38 @@ pub fn process_subject<const D: usize>(
         };
         let sj: Vec<f64> = per_element.iter().map(|e| e.scaled_jacobian_min).collect();
         let (btris, bvals) = render::boundary_triangles(&mesh3, &sj);
-        let img = render::render(
-            &mesh3.nodes,
-            &btris,
-            None,
-            Some(&bvals),
-            &render::jacobian_color,
-            &view,
-            480,
-            360,
+        type Picture<'a> = (
+            &'a str,
+            &'a [Point<3>],
+            &'a [[usize; 3]],
+            Option<&'a [f64]>,
+            Option<&'a [f64]>,
+            render::ColorMap<'a>,
         );
-        let name = format!("{base}_quality.png");
-        crate::io::write_atomic(&out.join(&name), &img.png()?)?;
-        files.push(name);
+        let pictures: [Picture; 2] = [
+            (
+                "distance",
+                &instance,
+                &tris,
+                Some(&distance),
+                None,
+                &by_distance,
+            ),
+            (
+                "quality",
+                &mesh3.nodes,
+                &btris,
+                None,
+                Some(&bvals),
+                &render::jacobian_color,
+            ),
+        ];
+        for (what, points, facets, vertex, face, color) in pictures {
+            let img = render::render(points, facets, vertex, face, color, &view, 480, 360);
+            let name = format!("{base}_{what}.png");
+            crate::io::write_atomic(&out.join(&name), &img.png()?)?;
+            files.push(name);
+        }
     }
     if params.plots && D == 2 {
         let png = format!("{base}.png");

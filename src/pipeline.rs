@@ -55,7 +55,8 @@ pub struct RunParams {
     pub repair: Option<crate::repair::RepairParams>,
     /// A fit whose two-way RMS distance to its subject (eq. 6 both ways) exceeds this share
     /// of the subject's bounding-box diagonal did not converge: the subject is refused
-    /// ([`Error::NotConverged`]) and no mesh is written for it. A good fit is below 0.01.
+    /// ([`Error::NotConverged`]) and no mesh is written for it. A good fit is below 0.01. With
+    /// `fit.partial` the distance is the subject's to the instance only.
     #[serde(default = "default_max_misfit")]
     pub max_misfit: f64,
 }
@@ -362,14 +363,29 @@ pub fn process_subject<const D: usize>(
     let fit_seconds = t0.elapsed().as_secs_f64();
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
-    if rel.is_nan() || rel > params.max_misfit {
+    // A partial subject (`--partial`) misses parts of the model: only its own points' distance
+    // to the instance can tell whether the fit converged.
+    let misfit = if params.fit.partial {
+        let on_instance = ClosestPointIndex::new(&fit.instance, &atlas.facets);
+        let ms = subject
+            .points
+            .iter()
+            .map(|p| on_instance.closest(p).dist2)
+            .sum::<f64>()
+            / subject.points.len().max(1) as f64;
+        ms.sqrt() / subject.bbox_diagonal()
+    } else {
+        rel
+    };
+    if misfit.is_nan() || misfit > params.max_misfit {
         return Err(Error::NotConverged {
             name: subject.name.clone(),
             message: format!(
-                "the fitted model instance stays {rms:.4} (two-way RMS; {:.1} % of the subject's \
+                "the fitted model instance stays {:.4} (RMS distance; {:.1} % of the subject's \
                  bounding-box diagonal) from the subject, above the bound of {:.1} % \
                  (--max-misfit): the subject lies outside what the model can represent",
-                100.0 * rel,
+                misfit * subject.bbox_diagonal(),
+                100.0 * misfit,
                 100.0 * params.max_misfit
             ),
         });

@@ -160,9 +160,12 @@ pub fn read_landmarks_csv<const D: usize>(
     Ok(rows
         .into_iter()
         .map(|(k, mut v)| {
-            v.sort_by(|a, b| match (a.0.parse::<i64>(), b.0.parse::<i64>()) {
-                (Ok(x), Ok(y)) => x.cmp(&y),
-                _ => a.0.cmp(&b.0),
+            // Numeric ids in numeric order, then the others in text order: a total order
+            // (comparing numbers with numbers and text with text pair by pair is not one, and
+            // the sort panics on such an order; found by fuzzing).
+            v.sort_by_cached_key(|(id, _)| match id.parse::<i64>() {
+                Ok(x) => (0u8, x, id.clone()),
+                Err(_) => (1u8, 0, id.clone()),
             });
             (k, v.into_iter().map(|x| x.1).collect())
         })

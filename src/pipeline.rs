@@ -727,6 +727,12 @@ pub(crate) fn finish_report<const D: usize>(
     mean_mesh: Option<MeanMeshReport>,
     batch: crate::batch::BatchFacts,
 ) -> Result<Report> {
+    let crate::batch::BatchFacts {
+        failed,
+        shard,
+        resumed,
+        measures,
+    } = batch;
     let m = atlas_for_variance.num_modes();
     if params.plots {
         plot_cumulative_variance(
@@ -755,18 +761,18 @@ pub(crate) fn finish_report<const D: usize>(
         parameters: serde_json::to_value(params).unwrap_or_default(),
         mean_mesh,
         summary: Summary {
-            resumed: batch.resumed,
-            ..Summary::of(&subjects, batch.failed.len())
+            resumed,
+            ..Summary::of(&subjects, failed.len())
         },
-        failed: batch.failed.clone(),
-        shard: batch.shard.clone(),
+        failed,
+        shard,
         subjects,
         atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
     };
     report.write(&out.join("report.json"))?;
     if params.plots {
         let mut pictures = crate::report::html::Pictures::default();
-        if let Some(m) = &batch.measures {
+        if let Some(m) = &measures {
             crate::report::plot_shape_model_measures(&out.join("measures.png"), m, "")?;
             pictures.measures = Some("measures.png".into());
         }

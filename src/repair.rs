@@ -430,45 +430,9 @@ pub fn repair_with_quality<const D: usize>(
 mod tests {
     use super::*;
 
-    /// A block of `n³` unit cubes.
-    fn block(n: usize) -> FeMesh<3> {
-        let id = |x: usize, y: usize, z: usize| x + (n + 1) * (y + (n + 1) * z);
-        let mut nodes = Vec::new();
-        for z in 0..=n {
-            for y in 0..=n {
-                for x in 0..=n {
-                    nodes.push([x as f64, y as f64, z as f64]);
-                }
-            }
-        }
-        let mut conn = Vec::new();
-        for z in 0..n {
-            for y in 0..n {
-                for x in 0..n {
-                    conn.extend([
-                        id(x, y, z),
-                        id(x + 1, y, z),
-                        id(x + 1, y + 1, z),
-                        id(x, y + 1, z),
-                        id(x, y, z + 1),
-                        id(x + 1, y, z + 1),
-                        id(x + 1, y + 1, z + 1),
-                        id(x, y + 1, z + 1),
-                    ]);
-                }
-            }
-        }
-        FeMesh {
-            nodes,
-            kind: ElementKind::Hex8,
-            connectivity: conn,
-            sets: Default::default(),
-        }
-    }
-
     #[test]
     fn a_node_pushed_through_its_opposite_face_is_repaired() {
-        let mut m = block(4);
+        let mut m = FeMesh::block(4);
         // The interior node (2, 2, 2) pushed down through the face below it.
         let n = 2 + 5 * (2 + 5 * 2);
         m.nodes[n][2] -= 1.6;
@@ -480,7 +444,7 @@ mod tests {
         assert!(r.scaled_jacobian_min >= 0.2, "{r:?}");
         assert_eq!(r.below_bound_after, 0);
         // The boundary did not move (no surface given: boundary nodes are fixed).
-        let fresh = block(4);
+        let fresh = FeMesh::block(4);
         for f in boundary_faces(&fresh) {
             for &b in &f.nodes {
                 assert_eq!(m.nodes[b], fresh.nodes[b]);
@@ -490,9 +454,9 @@ mod tests {
 
     #[test]
     fn a_valid_mesh_is_left_alone() {
-        let mut m = block(2);
+        let mut m = FeMesh::block(2);
         let r = repair(&mut m, None, &RepairParams::default()).unwrap();
         assert_eq!(r.moved_nodes, 0);
-        assert_eq!(m.nodes, block(2).nodes);
+        assert_eq!(m.nodes, FeMesh::block(2).nodes);
     }
 }

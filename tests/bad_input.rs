@@ -7,13 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap()
-}
+use common::atlasmesh;
 
 fn s(p: &Path) -> String {
     p.display().to_string()
@@ -56,7 +50,7 @@ fn loo(d: &Path, shapes: &[&str]) -> Output {
     a.extend_from_slice(shapes);
     let o = s(&out);
     a.extend(["--no-plots", "--out", &o]);
-    let r = run(&a);
+    let r = atlasmesh(&a);
     assert!(
         files_in(&out).is_empty(),
         "output written despite the error: {:?}",
@@ -372,7 +366,7 @@ fn atlas_2d(d: &Path) -> PathBuf {
     let p = d.join("demo.csv");
     std::fs::write(&p, csv).unwrap();
     let atlas = d.join("demo.safetensors");
-    let o = run(&[
+    let o = atlasmesh(&[
         "build",
         "--shapes",
         &s(&p),
@@ -390,7 +384,7 @@ fn atlas_2d(d: &Path) -> PathBuf {
 }
 
 fn fit(d: &Path, atlas: &Path, subject: &Path) -> Output {
-    run(&[
+    atlasmesh(&[
         "fit",
         "--atlas",
         &s(atlas),
@@ -512,7 +506,7 @@ fn an_unwritable_output_folder() {
     // A file where the output folder should be.
     let out = d.join("taken");
     std::fs::write(&out, "").unwrap();
-    let o = run(&[
+    let o = atlasmesh(&[
         "loo",
         "--shapes",
         &s(&pop),

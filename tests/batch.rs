@@ -8,13 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn atlasmesh(args: &[String]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap()
-}
+use common::atlasmesh;
 
 fn s(p: &Path) -> String {
     p.display().to_string()

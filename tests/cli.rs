@@ -5,13 +5,7 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn atlasmesh(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap()
-}
+use common::atlasmesh;
 
 fn assert_clean_error(out: &Output, file: &str, words: &str) {
     let err = String::from_utf8_lossy(&out.stderr);
@@ -507,38 +501,13 @@ fn quality_convert_and_bad_fe_meshes() {
 #[test]
 fn repair_command_untangles_a_folded_block() {
     let d = common::temp_dir("repair");
-    let n = 3;
-    let id = |x: usize, y: usize, z: usize| 1 + x + (n + 1) * (y + (n + 1) * z);
-    let mut s = String::from("*NODE\n");
-    for z in 0..=n {
-        for y in 0..=n {
-            for x in 0..=n {
-                let dz = if (x, y, z) == (1, 1, 2) { -1.7 } else { 0.0 };
-                s.push_str(&format!("{}, {x}, {y}, {}\n", id(x, y, z), z as f64 + dz));
-            }
-        }
-    }
-    s.push_str("*ELEMENT, TYPE=C3D8\n");
-    let mut e = 0;
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                e += 1;
-                s.push_str(&format!(
-                    "{e}, {}, {}, {}, {}, {}, {}, {}, {}\n",
-                    id(x, y, z),
-                    id(x + 1, y, z),
-                    id(x + 1, y + 1, z),
-                    id(x, y + 1, z),
-                    id(x, y, z + 1),
-                    id(x + 1, y, z + 1),
-                    id(x + 1, y + 1, z + 1),
-                    id(x, y + 1, z + 1)
-                ));
-            }
-        }
-    }
-    let folded = write(&d, "folded.inp", &s);
+    let mut block = atlasmesh::fe::FeMesh::block(3);
+    // Node (1, 1, 2) pushed down through the face below it.
+    block.nodes[1 + 4 * (1 + 4 * 2)][2] -= 1.7;
+    let folded = d.join("folded.inp");
+    let q = atlasmesh::fe::quality::mesh_quality(&block);
+    atlasmesh::export::write_mesh(&folded, &block, None, &q).unwrap();
+    let folded = folded.display().to_string();
     assert_eq!(atlasmesh(&["quality", &folded]).status.code(), Some(4));
     let fixed = d.join("fixed.vtu").display().to_string();
     let o = atlasmesh(&["repair", &folded, "--out", &fixed]);

@@ -14,11 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn atlasmesh(args: &[&str]) {
-    let o = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap();
+    let o = common::atlasmesh(args);
     assert!(
         o.status.success(),
         "atlasmesh {args:?}: {}",

@@ -14,36 +14,5 @@ pub fn file(data: &[u8], ext: &str) -> PathBuf {
 
 /// A block of 2 × 2 × 2 unit hexahedra.
 pub fn block() -> atlasmesh::fe::FeMesh<3> {
-    let id = |x: usize, y: usize, z: usize| x + 3 * (y + 3 * z);
-    let mut nodes = Vec::new();
-    for z in 0..3 {
-        for y in 0..3 {
-            for x in 0..3 {
-                nodes.push([x as f64, y as f64, z as f64]);
-            }
-        }
-    }
-    let mut connectivity = Vec::new();
-    for z in 0..2 {
-        for y in 0..2 {
-            for x in 0..2 {
-                connectivity.extend([
-                    id(x, y, z),
-                    id(x + 1, y, z),
-                    id(x + 1, y + 1, z),
-                    id(x, y + 1, z),
-                    id(x, y, z + 1),
-                    id(x + 1, y, z + 1),
-                    id(x + 1, y + 1, z + 1),
-                    id(x, y + 1, z + 1),
-                ]);
-            }
-        }
-    }
-    atlasmesh::fe::FeMesh {
-        nodes,
-        kind: atlasmesh::fe::ElementKind::Hex8,
-        connectivity,
-        sets: Default::default(),
-    }
+    atlasmesh::fe::FeMesh::block(2)
 }

@@ -276,6 +276,46 @@ pub type QuadMesh = FeMesh<2>;
 /// A hexahedral mesh.
 pub type HexMesh = FeMesh<3>;
 
+impl HexMesh {
+    /// A block of `n × n × n` unit hexahedra from the origin, node `x + (n+1)(y + (n+1)z)` at
+    /// `(x, y, z)`, elements in the [`ElementKind::Hex8`] node order (a reference mesh for
+    /// checks and tests).
+    pub fn block(n: usize) -> Self {
+        let id = |x: usize, y: usize, z: usize| x + (n + 1) * (y + (n + 1) * z);
+        let mut nodes = Vec::with_capacity((n + 1).pow(3));
+        for z in 0..=n {
+            for y in 0..=n {
+                for x in 0..=n {
+                    nodes.push([x as f64, y as f64, z as f64]);
+                }
+            }
+        }
+        let mut connectivity = Vec::with_capacity(8 * n.pow(3));
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    connectivity.extend([
+                        id(x, y, z),
+                        id(x + 1, y, z),
+                        id(x + 1, y + 1, z),
+                        id(x, y + 1, z),
+                        id(x, y, z + 1),
+                        id(x + 1, y, z + 1),
+                        id(x + 1, y + 1, z + 1),
+                        id(x, y + 1, z + 1),
+                    ]);
+                }
+            }
+        }
+        FeMesh {
+            nodes,
+            kind: ElementKind::Hex8,
+            connectivity,
+            sets: Default::default(),
+        }
+    }
+}
+
 impl<const D: usize> FeMesh<D> {
     /// Number of elements.
     pub fn num_elements(&self) -> usize {

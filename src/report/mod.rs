@@ -512,18 +512,10 @@ pub fn plot_jacobian_histogram(path: &Path, counts: &[u32]) -> Result<()> {
     rename_png(path)
 }
 
-/// Colour of a scaled Jacobian in [-1, 1]: red (≤ 0) through yellow to green (1).
+/// Colour of a scaled Jacobian in [-1, 1] ([`render::jacobian_color`]).
 fn jacobian_color(s: f64) -> RGBColor {
-    if s <= 0.0 {
-        return RGBColor(200, 0, 0);
-    }
-    let t = s.clamp(0.0, 1.0);
-    let (r, g) = if t < 0.5 {
-        (255.0, 510.0 * t)
-    } else {
-        (510.0 * (1.0 - t), 255.0)
-    };
-    RGBColor(r as u8, g as u8, 60)
+    let [r, g, b] = render::jacobian_color(s);
+    RGBColor(r, g, b)
 }
 
 /// Per-subject figure (fig. 9): left, the mean (red), the subject (blue) and the locus of the

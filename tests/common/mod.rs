@@ -315,3 +315,13 @@ pub fn assert_repaired(name: &str, r: &atlasmesh::report::Report) {
     }
     assert_eq!(r.summary.below_repair_bound, 0);
 }
+
+/// Runs the command-line tool with `args` and `--quiet`.
+#[allow(dead_code)]
+pub fn atlasmesh<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .unwrap()
+}

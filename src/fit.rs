@@ -6,8 +6,8 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::{
-    ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, add, centroid, dist2, dot,
-    facet_normal, norm, scale, sub, vertex_normals,
+    ClosestPointIndex, Point, QueryMemo, Shape, Similarity, SurfacePoint, add, centroid, dist2,
+    dot, facet_normal, norm, scale, sub, vertex_normals,
 };
 use crate::model::Atlas;
 use faer::Mat;
@@ -299,10 +299,10 @@ fn normal_at<const D: usize>(
 struct State<const D: usize> {
     sim: Similarity<D>,
     w: Vec<f64>,
-    /// Closest facets of the last update, per model point and per subject vertex: the
-    /// starting guesses of the next search.
-    forward_hint: Vec<usize>,
-    backward_hint: Vec<usize>,
+    /// What the closest-point searches of the last update learned, per model point and per
+    /// subject vertex: the next update's queries start from there.
+    forward_memo: Vec<QueryMemo<D>>,
+    backward_memo: Vec<QueryMemo<D>>,
 }
 
 /// What one correspondence update measured and did.
@@ -439,8 +439,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
             let mut st = State {
                 sim,
                 w: vec![0.0; self.m],
-                forward_hint: vec![usize::MAX; n],
-                backward_hint: vec![usize::MAX; subject.points.len()],
+                forward_memo: vec![QueryMemo::default(); n],
+                backward_memo: vec![QueryMemo::default(); subject.points.len()],
             };
             let mut score = f64::INFINITY;
             for _ in 0..PRE_ALIGNMENT_ITERATIONS {
@@ -492,8 +492,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let st = State {
             sim: similarity,
             w: weights.to_vec(),
-            forward_hint: vec![usize::MAX; self.atlas.mean.len()],
-            backward_hint: vec![usize::MAX; subject.points.len()],
+            forward_memo: vec![QueryMemo::default(); self.atlas.mean.len()],
+            backward_memo: vec![QueryMemo::default(); subject.points.len()],
         };
         self.run_starts(&subj, vec![st], &coarse, &full, params, &mut x)
     }
@@ -616,8 +616,13 @@ impl<'a, const D: usize> Fitter<'a, D> {
         x.set_weights(self, &run.state.w, false);
         let sim = run.state.sim;
         let instance: Vec<Point<D>> = x.x.iter().map(|p| sim.apply(p)).collect();
-        let projected =
-            project_along_normals(&instance, &self.atlas.facets, subj.index, &subj.normals);
+        let projected = project_along_normals(
+            &instance,
+            &self.atlas.facets,
+            subj.index,
+            &subj.normals,
+            Some(&mut run.state.forward_memo),
+        );
         let corresponded = if params.partial {
             partnered(subj.shape, &projected)
         } else {
@@ -742,8 +747,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
         for &j in &sampling.forward {
             let c = subj
                 .index
-                .closest_from(&sim.apply(&x[j]), st.forward_hint[j]);
-            st.forward_hint[j] = c.facet;
+                .closest_memo(&sim.apply(&x[j]), &mut st.forward_memo[j]);
             forward += c.dist2;
             let f = &subj.shape.facets[c.facet];
             let Some(n) = normal_at(&subj.shape.points, f, &c.weights, &subj.normals) else {
@@ -770,8 +774,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             let sw = (total * sampling.pairs() as f64 / sampling.backward.len() as f64).sqrt();
             for &i in &sampling.backward {
                 let z = sim.apply_inverse(&subj.shape.points[i]);
-                let c = scratch.index.closest_from(&z, st.backward_hint[i]);
-                st.backward_hint[i] = c.facet;
+                let c = scratch.index.closest_memo(&z, &mut st.backward_memo[i]);
                 backward += c.dist2 * sim.s * sim.s;
                 let f = &self.atlas.facets[c.facet];
                 let Some(n) = normal_at(x, f, &c.weights, &scratch.normals) else {
@@ -946,19 +949,31 @@ impl<const D: usize> Run<D> {
 /// (its normal, `subject_normals` interpolated, within 60° of the point's); the closest
 /// point where there is none. Without that condition a normal line near a concave corner
 /// (between two fingers) crosses the neighbouring side first and the correspondence jumps.
+/// `memos`, one per point, are those of the closest-point queries of the same points (e.g.
+/// a fit's last update): they make the closest points cheap.
 pub fn project_along_normals<const D: usize>(
     points: &[Point<D>],
     facets: &[[usize; D]],
     subject: &ClosestPointIndex<D>,
     subject_normals: &[Point<D>],
+    memos: Option<&mut [QueryMemo<D>]>,
 ) -> Vec<SurfacePoint<D>> {
     let normals = vertex_normals(points, facets);
     let h = 0.5 * crate::geometry::median_edge_length(points, facets);
+    let mut fresh = Vec::new();
+    let memos = match memos {
+        Some(m) if m.len() == points.len() => m,
+        _ => {
+            fresh.resize(points.len(), QueryMemo::default());
+            &mut fresh[..]
+        }
+    };
     points
         .iter()
         .zip(&normals)
-        .map(|(p, nrm)| {
-            let c = subject.closest(p);
+        .zip(memos.iter_mut())
+        .map(|((p, nrm), memo)| {
+            let c = subject.closest_memo(p, memo);
             if norm(*nrm) == 0.0 {
                 return c;
             }

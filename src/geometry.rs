@@ -474,8 +474,12 @@ pub struct SurfacePoint<const D: usize> {
 /// fit asks for the closest point of the same query point again and again after small
 /// moves, and [`ClosestPointIndex::closest_from`] starts from the facet found last time,
 /// which prunes nearly the whole tree at once; and it is generic over `D = 2, 3`.
-#[derive(Clone)]
 pub struct ClosestPointIndex<const D: usize> {
+    /// Identity of this index (every clone gets its own), checked by [`QueryMemo`]s.
+    id: u64,
+    /// Sum over every [`refit`](Self::refit) of the largest move of a point: no point of any
+    /// facet moved farther than the difference of two readings (shape units).
+    drift: f64,
     points: Vec<Point<D>>,
     facets: Vec<[usize; D]>,
     nodes: Vec<BvhNode<D>>,
@@ -485,6 +489,120 @@ pub struct ClosestPointIndex<const D: usize> {
     parent: Vec<u32>,
     /// Leaf of every facet.
     leaf_of: Vec<u32>,
+}
+
+/// A fresh identity for a [`ClosestPointIndex`].
+fn next_index_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
+
+impl<const D: usize> Clone for ClosestPointIndex<D> {
+    fn clone(&self) -> Self {
+        ClosestPointIndex {
+            id: next_index_id(),
+            drift: self.drift,
+            points: self.points.clone(),
+            facets: self.facets.clone(),
+            nodes: self.nodes.clone(),
+            order: self.order.clone(),
+            parent: self.parent.clone(),
+            leaf_of: self.leaf_of.clone(),
+        }
+    }
+}
+
+/// Candidate facets kept by a [`QueryMemo`].
+const MEMO_FACETS: usize = 4;
+
+/// What an exact closest-point search learned around its query point: the nearest facets
+/// it met and how far everything else was. The next query of the same point, after the
+/// point and the surface moved a little (a fit's or a registration's next iteration), is
+/// then answered by testing those few facets, with a proof that no other facet can be
+/// nearer; where the proof fails, by a search from the nearest one
+/// ([`ClosestPointIndex::closest_memo`]).
+#[derive(Clone, Copy, Debug)]
+pub struct QueryMemo<const D: usize> {
+    /// The index the memo belongs to (0: none yet).
+    index: u64,
+    /// The query point of the last search.
+    at: Point<D>,
+    /// The index's `drift` at the last search.
+    drift: f64,
+    /// Every facet but `near` was at least this far from `at` (shape units).
+    bound: f64,
+    /// The nearest facets met, nearest first (`u32::MAX`: none), and their distances.
+    near: [u32; MEMO_FACETS],
+    dist: [f64; MEMO_FACETS],
+}
+
+impl<const D: usize> Default for QueryMemo<D> {
+    fn default() -> Self {
+        QueryMemo {
+            index: 0,
+            at: [0.0; D],
+            drift: 0.0,
+            bound: f64::NEG_INFINITY,
+            near: [u32::MAX; MEMO_FACETS],
+            dist: [f64::INFINITY; MEMO_FACETS],
+        }
+    }
+}
+
+impl<const D: usize> QueryMemo<D> {
+    /// The nearest facet of the last search, if any: a hint for
+    /// [`ClosestPointIndex::closest_from`].
+    pub fn facet(&self) -> usize {
+        match self.near[0] {
+            u32::MAX => usize::MAX,
+            f => f as usize,
+        }
+    }
+}
+
+/// What a search reports besides its answer: every facet it tested and every box it
+/// skipped, with their squared distances.
+trait Track {
+    fn facet(&mut self, fi: usize, d2: f64);
+    fn skipped(&mut self, d2: f64);
+}
+
+impl Track for () {
+    #[inline(always)]
+    fn facet(&mut self, _: usize, _: f64) {}
+    #[inline(always)]
+    fn skipped(&mut self, _: f64) {}
+}
+
+/// The [`MEMO_FACETS`] nearest facets tested, and the least squared distance of everything
+/// else (facets tested and dropped from the list, boxes skipped).
+struct Nearest {
+    near: [(f64, u32); MEMO_FACETS],
+    rest: f64,
+}
+
+impl Track for Nearest {
+    #[inline]
+    fn facet(&mut self, fi: usize, d2: f64) {
+        let fi = fi as u32;
+        if self.near.iter().any(|&(_, f)| f == fi) {
+            return;
+        }
+        let mut item = (d2, fi);
+        for slot in self.near.iter_mut() {
+            if item.0 < slot.0 {
+                std::mem::swap(slot, &mut item);
+            }
+        }
+        // `item` is now the farthest of the list plus the new one: it leaves the list.
+        if item.1 != u32::MAX {
+            self.rest = self.rest.min(item.0);
+        }
+    }
+    #[inline]
+    fn skipped(&mut self, d2: f64) {
+        self.rest = self.rest.min(d2);
+    }
 }
 
 /// Facets per leaf of the [`ClosestPointIndex`] hierarchy.
@@ -604,6 +722,8 @@ impl<const D: usize> ClosestPointIndex<D> {
             }
         }
         ClosestPointIndex {
+            id: next_index_id(),
+            drift: 0.0,
             points: points.to_vec(),
             facets: facets.to_vec(),
             nodes,
@@ -628,6 +748,13 @@ impl<const D: usize> ClosestPointIndex<D> {
             self.points.len(),
             "ClosestPointIndex::refit: one point per indexed point"
         );
+        let moved = self
+            .points
+            .iter()
+            .zip(points)
+            .map(|(a, b)| dist2(*a, *b))
+            .fold(0.0, f64::max);
+        self.drift += moved.sqrt();
         self.points.copy_from_slice(points);
         // Children always come after their parent: a reverse sweep sees children first.
         for ni in (0..self.nodes.len()).rev() {
@@ -689,17 +816,69 @@ impl<const D: usize> ClosestPointIndex<D> {
 
     /// The closest point to `p` on the shape's facets (not only its vertices).
     pub fn closest(&self, p: &Point<D>) -> SurfacePoint<D> {
-        self.search(p, None)
+        self.search(p, None, &mut ())
     }
 
     /// [`closest`](Self::closest), starting from the facet `hint` (e.g. the answer of the
     /// previous iteration for a point that moved a little): the same answer, found faster
     /// when the hint is near.
     pub fn closest_from(&self, p: &Point<D>, hint: usize) -> SurfacePoint<D> {
-        self.search(p, (hint < self.facets.len()).then_some(hint))
+        self.search(p, (hint < self.facets.len()).then_some(hint), &mut ())
     }
 
-    fn search(&self, p: &Point<D>, hint: Option<usize>) -> SurfacePoint<D> {
+    /// [`closest`](Self::closest) for a point queried again and again as it and the surface
+    /// move (the points of an iterative fit): `memo` keeps what the last search of this
+    /// point learned (start from `QueryMemo::default()`, one per query point). The answer is
+    /// the exact closest point, as [`closest`](Self::closest) gives it; when neither the
+    /// point nor the surface (through [`refit`](Self::refit)) moved more than a fraction of
+    /// the gap between the nearest facets and the rest, it takes a few facet tests instead
+    /// of a search.
+    pub fn closest_memo(&self, p: &Point<D>, memo: &mut QueryMemo<D>) -> SurfacePoint<D> {
+        if memo.index == self.id {
+            // Every facet but `near` was at least `bound` from `at`; since then the query
+            // moved by `dist(p, at)` and no facet point by more than the drift.
+            let slack = norm(sub(*p, memo.at)) + (self.drift - memo.drift);
+            let mut best: Option<SurfacePoint<D>> = None;
+            for (&fi, &d) in memo.near.iter().zip(&memo.dist) {
+                if fi == u32::MAX {
+                    break;
+                }
+                if let Some(b) = &best
+                    && (d - slack).max(0.0).powi(2) >= b.dist2
+                {
+                    break;
+                }
+                let c = self.closest_on_facet(*p, fi as usize);
+                if best.as_ref().is_none_or(|b| c.dist2 < b.dist2) {
+                    best = Some(c);
+                }
+            }
+            if let Some(b) = best {
+                let reach = memo.bound - slack;
+                // The rounding of the distances is far below this margin.
+                if reach > 0.0 && b.dist2 <= reach * reach * (1.0 - 1e-9) {
+                    return b;
+                }
+            }
+        }
+        let hint = memo.near[0] as usize;
+        let mut track = Nearest {
+            near: [(f64::INFINITY, u32::MAX); MEMO_FACETS],
+            rest: f64::INFINITY,
+        };
+        let best = self.search(p, (hint < self.facets.len()).then_some(hint), &mut track);
+        *memo = QueryMemo {
+            index: self.id,
+            at: *p,
+            drift: self.drift,
+            bound: track.rest.sqrt(),
+            near: track.near.map(|(_, f)| f),
+            dist: track.near.map(|(d2, _)| d2.sqrt()),
+        };
+        best
+    }
+
+    fn search(&self, p: &Point<D>, hint: Option<usize>, track: &mut impl Track) -> SurfacePoint<D> {
         let mut best = SurfacePoint {
             point: *p,
             facet: usize::MAX,
@@ -707,29 +886,39 @@ impl<const D: usize> ClosestPointIndex<D> {
             dist2: f64::INFINITY,
         };
         let Some(h) = hint else {
-            self.descend(p, 0, &mut best);
+            self.descend(p, 0, &mut best, track);
             return best;
         };
         // From the hint: its leaf, then, climbing to the root, the sibling subtree of every
         // node on the way. Every facet lies in exactly one of these; a sibling whose box is
         // farther than the best found is skipped at once.
         best = self.closest_on_facet(*p, h);
+        track.facet(h, best.dist2);
         let mut ni = self.leaf_of[h] as usize;
-        self.descend(p, ni, &mut best);
+        self.descend(p, ni, &mut best, track);
         while ni != 0 {
             let parent = self.parent[ni] as usize;
             let first = self.nodes[parent].child as usize;
             let sibling = if ni == first { first + 1 } else { first };
-            self.descend(p, sibling, &mut best);
+            self.descend(p, sibling, &mut best, track);
             ni = parent;
         }
         best
     }
 
     /// Improves `best` with the facets of the subtree at `root` (pruned by box distance).
-    fn descend(&self, p: &Point<D>, root: usize, best: &mut SurfacePoint<D>) {
+    #[inline]
+    fn descend(
+        &self,
+        p: &Point<D>,
+        root: usize,
+        best: &mut SurfacePoint<D>,
+        track: &mut impl Track,
+    ) {
         let r = &self.nodes[root];
-        if box_dist2(p, &r.lo, &r.hi) >= best.dist2 {
+        let d = box_dist2(p, &r.lo, &r.hi);
+        if d >= best.dist2 {
+            track.skipped(d);
             return;
         }
         // Nodes to visit (48 levels: a balanced tree of 2^47 leaves); a node pushed before
@@ -741,7 +930,9 @@ impl<const D: usize> ClosestPointIndex<D> {
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
-            if box_dist2(p, &node.lo, &node.hi) >= best.dist2 {
+            let d = box_dist2(p, &node.lo, &node.hi);
+            if d >= best.dist2 {
+                track.skipped(d);
                 continue;
             }
             if node.child == 0 {
@@ -752,6 +943,7 @@ impl<const D: usize> ClosestPointIndex<D> {
                         continue;
                     }
                     let c = self.closest_on_facet(*p, fi);
+                    track.facet(fi, c.dist2);
                     if c.dist2 < best.dist2 {
                         *best = c;
                     }
@@ -770,10 +962,14 @@ impl<const D: usize> ClosestPointIndex<D> {
             if df < best.dist2 && top < stack.len() {
                 stack[top] = far as u32;
                 top += 1;
+            } else {
+                track.skipped(df);
             }
             if dn < best.dist2 && top < stack.len() {
                 stack[top] = near as u32;
                 top += 1;
+            } else {
+                track.skipped(dn);
             }
         }
     }
@@ -1096,6 +1292,61 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn memo_queries_equal_plain_ones_as_points_and_surface_move() {
+        // A bumpy closed surface whose shape changes from step to step (refit), and query
+        // points that drift, jump now and then, and sit near and far.
+        let surface = |t: f64| {
+            uv_sphere(24, 16, |th, ph| {
+                let r = 1.0 + 0.2 * (3.0 * ph + t).cos() * th.cos() + 0.05 * t;
+                [
+                    r * th.cos() * ph.cos(),
+                    0.8 * r * th.cos() * ph.sin(),
+                    r * th.sin(),
+                ]
+            })
+        };
+        let (points, facets) = surface(0.0);
+        let mut idx = ClosestPointIndex::new(&points, &facets);
+        let queries = |step: usize| -> Vec<Point<3>> {
+            (0..300)
+                .map(|k| {
+                    let a = k as f64 * 0.37 + 0.001 * step as f64;
+                    let r = 0.6 + (k % 9) as f64 * 0.1 + if step % 7 == 3 { 0.3 } else { 0.0 };
+                    [r * a.cos(), r * (1.3 * a).sin(), r * (0.7 * a).cos()]
+                })
+                .collect()
+        };
+        let mut memos = vec![QueryMemo::default(); 300];
+        let mut hits = 0;
+        for step in 0..20 {
+            if step % 4 == 2 {
+                idx.refit(&surface(0.002 * step as f64).0);
+            }
+            for (q, memo) in queries(step).iter().zip(&mut memos) {
+                let before = *memo;
+                let m = idx.closest_memo(q, memo);
+                let plain = idx.closest(q);
+                assert!(
+                    (m.dist2 - plain.dist2).abs() <= 1e-12 * (1.0 + plain.dist2),
+                    "step {step} query {q:?}: {} vs {}",
+                    m.dist2,
+                    plain.dist2
+                );
+                hits += usize::from(memo.at == before.at && before.index != 0);
+            }
+        }
+        // The memos did answer most queries without a search.
+        assert!(hits > 1500, "only {hits} memo answers of 6000");
+        // A memo from another index is not trusted.
+        let other = ClosestPointIndex::new(&points, &facets);
+        let q = [2.0, 0.0, 0.0];
+        let mut memo = QueryMemo::default();
+        let _ = idx.closest_memo(&q, &mut memo);
+        let c = other.closest_memo(&q, &mut memo);
+        assert!((c.dist2 - other.closest(&q).dist2).abs() < 1e-12);
     }
 
     #[test]

@@ -10,8 +10,8 @@ use crate::error::{Error, Result};
 use crate::ffd::FfdSystem;
 use crate::fit::project_along_normals;
 use crate::geometry::{
-    ClosestPointIndex, Point, Shape, Similarity, SurfacePoint, centroid, dist2, dot, sub,
-    vertex_normals,
+    ClosestPointIndex, Point, QueryMemo, Shape, Similarity, SurfacePoint, centroid, dist2, dot,
+    sub, vertex_normals,
 };
 use crate::procrustes::fit_similarity;
 
@@ -155,46 +155,36 @@ fn pre_align_scored<const D: usize>(
     }
     let s0 = rms(&target.points, cs) / rms(&template.points, ct).max(f64::MIN_POSITIVE);
     let rotations = start_rotations(&template.points, ct, &target.points, cs, starts);
-    let sample = |n: usize| -> Vec<usize> {
-        let step = (n / 400).max(1);
+    let sample = |n: usize, k: usize| -> Vec<usize> {
+        let step = (n / k).max(1);
         (0..n).step_by(step).collect()
     };
-    let ts = sample(template.points.len());
-    let ss = sample(target.points.len());
-    let mut best: Option<(f64, Similarity<D>)> = None;
-    let mut tindex = ClosestPointIndex::new(&template.points, &template.facets);
-    for r in rotations {
-        let mut sim = Similarity::<D> {
-            s: s0,
-            r,
-            t: [0.0; D],
-        };
-        sim.t = sub(cs, sim.apply(&ct));
+    // Backward pairs are searched in the template's frame (a similarity keeps closest
+    // points): its index is built once.
+    let tindex = ClosestPointIndex::new(&template.points, &template.facets);
+    // Similarity ICP from `sim` on the template points `ts` and target points `ss`, for at
+    // most `iterations` updates; returns the two-way mean squared distance and the pose.
+    let icp = |mut sim: Similarity<D>, ts: &[usize], ss: &[usize], iterations: usize| {
         let mut score = f64::INFINITY;
-        for _ in 0..30 {
-            let moved: Vec<Point<D>> = template.points.iter().map(|p| sim.apply(p)).collect();
-            tindex.refit(&moved);
-            let mut src = Vec::with_capacity(ts.len() + ss.len());
-            let mut dst = Vec::with_capacity(ts.len() + ss.len());
+        let mut forward_memo = vec![QueryMemo::default(); ts.len()];
+        let mut backward_memo = vec![QueryMemo::default(); ss.len()];
+        let mut src = Vec::with_capacity(ts.len() + ss.len());
+        let mut dst = Vec::with_capacity(ts.len() + ss.len());
+        for _ in 0..iterations {
+            src.clear();
+            dst.clear();
             let mut fwd = 0.0;
-            for &j in &ts {
-                let c = target_index.closest(&moved[j]);
+            for (&j, memo) in ts.iter().zip(&mut forward_memo) {
+                let c = target_index.closest_memo(&sim.apply(&template.points[j]), memo);
                 fwd += c.dist2;
                 src.push(template.points[j]);
                 dst.push(c.point);
             }
             let mut bwd = 0.0;
-            for &i in &ss {
-                let c = tindex.closest(&target.points[i]);
-                bwd += c.dist2;
-                let f = &template.facets[c.facet];
-                let mut p = [0.0; D];
-                for k in 0..D {
-                    for d in 0..D {
-                        p[d] += c.weights[k] * template.points[f[k]][d];
-                    }
-                }
-                src.push(p);
+            for (&i, memo) in ss.iter().zip(&mut backward_memo) {
+                let c = tindex.closest_memo(&sim.apply_inverse(&target.points[i]), memo);
+                bwd += c.dist2 * sim.s * sim.s;
+                src.push(c.point);
                 dst.push(target.points[i]);
             }
             let previous = score;
@@ -205,10 +195,36 @@ fn pre_align_scored<const D: usize>(
                 break;
             }
         }
-        if best.as_ref().is_none_or(|(b, _)| score < *b) {
-            best = Some((score, sim));
-        }
-    }
+        (score, sim)
+    };
+    // Every start on a rough sampling, a few updates each; the best two go on to the
+    // finer sampling until settled.
+    let (rough_t, rough_s) = (
+        sample(template.points.len(), ROUGH_POINTS),
+        sample(target.points.len(), ROUGH_POINTS),
+    );
+    let mut rough: Vec<(f64, Similarity<D>)> = rotations
+        .into_iter()
+        .map(|r| {
+            let mut sim = Similarity::<D> {
+                s: s0,
+                r,
+                t: [0.0; D],
+            };
+            sim.t = sub(cs, sim.apply(&ct));
+            icp(sim, &rough_t, &rough_s, ROUGH_ITERATIONS)
+        })
+        .collect();
+    rough.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (ts, ss) = (
+        sample(template.points.len(), FINE_POINTS),
+        sample(target.points.len(), FINE_POINTS),
+    );
+    let best = rough
+        .into_iter()
+        .take(FINE_STARTS)
+        .map(|(_, sim)| icp(sim, &ts, &ss, 30))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
     let radius = rms(&target.points, cs);
     best.map(|(score, sim)| (sim, score.sqrt() / radius.max(f64::MIN_POSITIVE)))
         .ok_or_else(|| Error::Numerical(format!("{}: no pre-alignment start", target.name)))
@@ -315,6 +331,14 @@ pub(crate) fn principal_axes_of<const D: usize>(points: &[Point<D>]) -> [[f64; D
     principal_axes(points, centroid(points))
 }
 
+/// Points per shape of the ICP pre-alignment's rough stage, where every start rotation
+/// runs [`ROUGH_ITERATIONS`] updates; then the best [`FINE_STARTS`] go on with
+/// [`FINE_POINTS`] points per shape until settled.
+const ROUGH_POINTS: usize = 100;
+const ROUGH_ITERATIONS: usize = 8;
+const FINE_STARTS: usize = 2;
+const FINE_POINTS: usize = 400;
+
 /// Registers `template` to `target` (section 2.1, eq. 2): pre-alignment ([`pre_align`]),
 /// then, with the template's points `p_j` fixed as the FFD's sources, for each `alpha` of the
 /// schedule `iterations_per_alpha` times: the closest point `c_j` on the target of every
@@ -387,7 +411,7 @@ pub fn register<const D: usize>(
     let target_normals = vertex_normals(&target.points, &target.facets);
     let mut deformed = sources.clone();
     let mut history = Vec::new();
-    let mut hints = vec![usize::MAX; n];
+    let mut memos = vec![QueryMemo::default(); n];
     let mut alpha = params.alpha_start;
     if params.grid < 4 {
         return Err(Error::Parameter(format!(
@@ -408,8 +432,7 @@ pub fn register<const D: usize>(
             let mut ms = 0.0;
             let targets: Vec<Point<D>> = (0..n)
                 .map(|j| {
-                    let c = target_index.closest_from(&deformed[j], hints[j]);
-                    hints[j] = c.facet;
+                    let c = target_index.closest_memo(&deformed[j], &mut memos[j]);
                     ms += c.dist2;
                     let f = &target.facets[c.facet];
                     let mut nt = [0.0; D];
@@ -451,8 +474,13 @@ pub fn register<const D: usize>(
         }
         alpha *= 0.5;
     }
-    let correspondence =
-        project_along_normals(&deformed, &template.facets, target_index, &target_normals);
+    let correspondence = project_along_normals(
+        &deformed,
+        &template.facets,
+        target_index,
+        &target_normals,
+        Some(&mut memos),
+    );
     Ok(Registration {
         similarity: sim,
         deformed,

@@ -34,7 +34,9 @@ pub struct FitParams {
     /// Coarse fits run from the best distinct pre-alignments; the least two-way distance wins.
     pub full_starts: usize,
     /// Points per direction (model and subject) used by the pre-alignment and the coarse
-    /// stage; the last `gamma` runs on all points. 0 = all points throughout.
+    /// stage; the last `gamma` runs on all points. 0 = all points throughout. The coarse
+    /// model (see [`Fitter::fit`]) is built for the default value; with another, the coarse
+    /// stage samples the full model.
     pub coarse_points: usize,
     /// The subject may miss parts (paper, fig. 21-22): `E_d` takes only the distances from
     /// the subject's points to the instance (weighted as both directions of a symmetric fit
@@ -72,6 +74,11 @@ fn rotation_angle<const D: usize>(a: &[[f64; D]; D], b: &[[f64; D]; D]) -> f64 {
 /// After each `gamma`, starts whose two-way mean squared distance exceeds the best one's
 /// by this factor are dropped.
 const PRUNE_FACTOR: f64 = 4.0;
+const COARSE_MODEL_FACTOR: usize = 4;
+
+/// Updates after which a start of the coarse stage gives up a `gamma` when its two-way
+/// distance is still [`PRUNE_FACTOR`] times the best start's (it is then dropped).
+const GIVE_UP_AFTER: usize = 3;
 
 /// Number of points of the paper's hands (2001), for which its `gamma` values were chosen.
 pub const REFERENCE_POINTS: f64 = 2001.0;
@@ -305,6 +312,17 @@ struct State<const D: usize> {
     backward_memo: Vec<QueryMemo<D>>,
 }
 
+/// A stage of Algorithm 1: the model and points it runs on, and when its inner loop stops:
+/// after `max_iterations` updates, when the changes are below `tolerance`, or after
+/// [`GIVE_UP_AFTER`] updates if the two-way distance is still above `give_up`.
+struct Stage<'a> {
+    level: Level,
+    sampling: &'a Sampling,
+    max_iterations: usize,
+    tolerance: f64,
+    give_up: f64,
+}
+
 /// What one correspondence update measured and did.
 struct Step {
     /// Forward `Σ ||y_j - c_j||²` over the sampled model points (subject units squared).
@@ -316,40 +334,155 @@ struct Step {
     weight_change: f64,
 }
 
-/// The atlas prepared for fitting: modes row-major, `Lambda^{-1}`. Build once, fit many.
+/// The shape model at one resolution: the mean's points (a subset of the atlas's, or all),
+/// their rows of the modes, facets on them, and the index of the mean's facets.
+struct Model<const D: usize> {
+    /// The atlas point each point is.
+    ids: Vec<usize>,
+    mean: Vec<Point<D>>,
+    /// Rows of `Psi` of the points, row-major (`(point · D + d) · m + k`).
+    psi: Vec<f64>,
+    facets: Vec<[usize; D]>,
+    /// Index of the mean's facets, refitted to every instance.
+    index: ClosestPointIndex<D>,
+}
+
+impl<const D: usize> Model<D> {
+    fn new(atlas: &Atlas<D>, ids: Vec<usize>, facets: Vec<[usize; D]>) -> Self {
+        let m = atlas.num_modes();
+        let mut psi = vec![0.0; ids.len() * D * m];
+        for (j, &i) in ids.iter().enumerate() {
+            for d in 0..D {
+                for k in 0..m {
+                    psi[(j * D + d) * m + k] = atlas.modes[(i * D + d, k)];
+                }
+            }
+        }
+        let mean: Vec<Point<D>> = ids.iter().map(|&i| atlas.mean[i]).collect();
+        let index = ClosestPointIndex::new(&mean, &facets);
+        Model {
+            ids,
+            mean,
+            psi,
+            facets,
+            index,
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.mean.len()
+    }
+
+    /// The coarse model of about `k` points: for outlines, `k` points evenly spread along
+    /// each and the segments between them; for surfaces, the vertex-clustering decimation
+    /// of the mean (original points kept) with a cell chosen for about `k` points. `None`
+    /// where that is no smaller than the atlas, or the decimation fails or leaves the shape
+    /// without facets.
+    fn coarse(atlas: &Atlas<D>, k: usize) -> Option<Self> {
+        let n = atlas.mean.len();
+        if k == 0 || 2 * k >= n {
+            return None;
+        }
+        if D == 2 {
+            let ids = spread(n, k);
+            let mut at = vec![usize::MAX; n];
+            for (j, &i) in ids.iter().enumerate() {
+                at[i] = j;
+            }
+            // Each kept point joins the next one along the outline (segment by segment).
+            let mut next = vec![usize::MAX; n];
+            for f in &atlas.facets {
+                next[f[0]] = f[1];
+            }
+            let mut facets = Vec::new();
+            for &start in &ids {
+                let mut v = next[start];
+                let mut steps = 0;
+                while v != usize::MAX && at[v] == usize::MAX && steps < n {
+                    v = next[v];
+                    steps += 1;
+                }
+                if v != usize::MAX && at[v] != usize::MAX && v != start {
+                    let mut f = [0; D];
+                    f[0] = at[start];
+                    f[1] = at[v];
+                    facets.push(f);
+                }
+            }
+            return (!facets.is_empty()).then(|| Model::new(atlas, ids, facets));
+        }
+        let shape = Shape {
+            name: "mean".into(),
+            points: atlas.mean.clone(),
+            facets: atlas.facets.clone(),
+            landmarks: Vec::new(),
+        };
+        let area: f64 = atlas
+            .facets
+            .iter()
+            .map(|f| 0.5 * norm(facet_normal(&atlas.mean, f)))
+            .sum();
+        let mut cell = (area / k as f64).sqrt();
+        for _ in 0..4 {
+            let (small, ids) = shape.decimate_by_clustering(cell, [0.0; D]).ok()?;
+            let got = small.points.len();
+            if (k / 2..=2 * k).contains(&got) || got == 0 {
+                return (!small.facets.is_empty() && 2 * got < n)
+                    .then(|| Model::new(atlas, ids, small.facets));
+            }
+            cell *= (got as f64 / k as f64).sqrt();
+        }
+        None
+    }
+}
+
+/// The atlas prepared for fitting: the model at full resolution and a coarse one for the
+/// first stages (see [`Fitter::fit`]), `Lambda^{-1}`. Build once, fit many.
 pub struct Fitter<'a, const D: usize> {
     atlas: &'a Atlas<D>,
-    psi: Vec<f64>,
     m: usize,
     lambda_inv: Vec<f64>,
-    /// Index of the mean shape's facets, refitted to every instance.
-    mean_index: ClosestPointIndex<D>,
+    full: Model<D>,
+    /// Built for [`FitParams::default`]'s `coarse_points`; `None` when the atlas is small.
+    coarse: Option<Model<D>>,
+    coarse_points: usize,
+}
+
+/// Which of the fitter's models.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Level {
+    Coarse,
+    Full,
 }
 
 impl<'a, const D: usize> Fitter<'a, D> {
     pub fn new(atlas: &'a Atlas<D>) -> Self {
-        let m = atlas.num_modes();
-        let rows = atlas.mean.len() * D;
-        let mut psi = vec![0.0; rows * m];
-        for r in 0..rows {
-            for k in 0..m {
-                psi[r * m + k] = atlas.modes[(r, k)];
-            }
-        }
+        let n = atlas.mean.len();
+        let coarse_points = FitParams::default().coarse_points;
         Fitter {
             atlas,
-            psi,
-            m,
+            m: atlas.num_modes(),
             lambda_inv: atlas.eigenvalues.iter().map(|l| 1.0 / l).collect(),
-            mean_index: ClosestPointIndex::new(&atlas.mean, &atlas.facets),
+            full: Model::new(atlas, (0..n).collect(), atlas.facets.clone()),
+            coarse: Model::coarse(atlas, COARSE_MODEL_FACTOR * coarse_points),
+            coarse_points,
         }
     }
 
-    fn instance(&self, w: &[f64], out: &mut Vec<Point<D>>) {
+    /// The model of a level: the coarse one when there is one for `params`, else the full.
+    fn model(&self, level: Level, params: &FitParams) -> &Model<D> {
+        match (level, &self.coarse) {
+            (Level::Coarse, Some(c)) if params.coarse_points == self.coarse_points => c,
+            _ => &self.full,
+        }
+    }
+
+    /// The instance `S_bar + Psi w` at the model's points.
+    fn instance(&self, model: &Model<D>, w: &[f64], out: &mut Vec<Point<D>>) {
         out.clear();
-        out.extend(self.atlas.mean.iter().enumerate().map(|(i, p)| {
+        out.extend(model.mean.iter().enumerate().map(|(i, p)| {
             std::array::from_fn(|d| {
-                let row = &self.psi[(i * D + d) * self.m..(i * D + d + 1) * self.m];
+                let row = &model.psi[(i * D + d) * self.m..(i * D + d + 1) * self.m];
                 p[d] + row.iter().zip(w).map(|(a, b)| a * b).sum::<f64>()
             })
         }));
@@ -396,9 +529,14 @@ impl<'a, const D: usize> Fitter<'a, D> {
     ///   `coarse_points / 4` points, and run Algorithm 1 from the `params.full_starts` best
     ///   distinct ones (more than 20° apart) together on `params.coarse_points` evenly spread
     ///   points, dropping after each `gamma` the starts whose two-way distance is 4 times the
-    ///   best; the best start then runs the last `gamma` again on all points, to the
-    ///   tolerance. The coarse stage is a quadrature of the same `E_d` with fewer points (its
-    ///   `gamma` scaled as above), stopped at 100 times the tolerance.
+    ///   best (a start still that far behind after 3 updates gives the `gamma` up at once);
+    ///   the best start then runs the last `gamma` again on all points, to the tolerance.
+    ///   The coarse stage is a quadrature of the same `E_d` with fewer points (its `gamma`
+    ///   scaled as above), stopped at 100 times the tolerance. It works on a coarse model of
+    ///   about `4 · coarse_points` of the atlas's points (every `k`-th point of an outline; the
+    ///   vertex-clustering decimation of a surface), so that its updates do not instantiate,
+    ///   index and take the normals of the whole instance: the backward pairs take their
+    ///   closest points on the coarse instance.
     pub fn fit(
         &self,
         subject: &Shape<D>,
@@ -408,15 +546,16 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let (subj, coarse, full) = self.prepare(subject, subject_index, params)?;
         let n = self.atlas.mean.len();
         // The pre-alignment needs only the rough layout.
+        let rough_model = self.model(Level::Coarse, params);
         let rough = Sampling {
             forward: if params.partial {
                 Vec::new()
             } else {
-                spread(n, params.coarse_points / 4)
+                spread(rough_model.len(), params.coarse_points / 4)
             },
             backward: spread(subject.points.len(), params.coarse_points / 4),
         };
-        let mut x = Scratch::new(self);
+        let mut x = Scratches::new(self, params);
 
         // Pre-alignment: centroids, RMS radii, and a pose-only fit from each start rotation.
         let pts = &subject.points;
@@ -444,7 +583,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             };
             let mut score = f64::INFINITY;
             for _ in 0..PRE_ALIGNMENT_ITERATIONS {
-                let step = self.update(&subj, &mut st, &rough, None, &mut x)?;
+                let step = self.update(Level::Coarse, &subj, &mut st, &rough, None, &mut x)?;
                 score = step.two_way_ms;
                 if step.pose_change < 1e-3 {
                     break;
@@ -488,7 +627,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 weights.len()
             )));
         }
-        let mut x = Scratch::new(self);
+        let mut x = Scratches::new(self, params);
         let st = State {
             sim: similarity,
             w: weights.to_vec(),
@@ -533,9 +672,10 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let n = self.atlas.mean.len();
         let forward = !params.partial;
         let backward = params.symmetric || params.partial;
+        let coarse_model = self.model(Level::Coarse, params);
         let coarse = Sampling {
             forward: if forward {
-                spread(n, params.coarse_points)
+                spread(coarse_model.len(), params.coarse_points)
             } else {
                 Vec::new()
             },
@@ -569,7 +709,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
         coarse: &Sampling,
         full: &Sampling,
         params: &FitParams,
-        x: &mut Scratch<D>,
+        x: &mut Scratches<D>,
     ) -> Result<FitResult<D>> {
         let n = self.atlas.mean.len();
         // Algorithm 1 on the coarse sampling from every chosen start; the least two-way
@@ -583,17 +723,21 @@ impl<'a, const D: usize> Fitter<'a, D> {
             .map(|st| (f64::INFINITY, Run::new(st, self, x)))
             .collect();
         for &gamma in &gammas {
+            // Best first: a start that is still far behind the best after a few updates
+            // gives up this `gamma` (and is dropped below).
+            runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut best = f64::INFINITY;
             for (score, run) in runs.iter_mut() {
-                *score = self.schedule(
-                    subj,
-                    run,
-                    coarse,
-                    &[gamma],
-                    (COARSE_MAX_ITERATIONS.min(params.max_iterations), tol),
-                    x,
-                )?;
+                let stage = Stage {
+                    level: Level::Coarse,
+                    sampling: coarse,
+                    max_iterations: COARSE_MAX_ITERATIONS.min(params.max_iterations),
+                    tolerance: tol,
+                    give_up: PRUNE_FACTOR * best,
+                };
+                *score = self.schedule(subj, run, &stage, &[gamma], x)?;
+                best = best.min(*score);
             }
-            let best = runs.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
             runs.retain(|r| r.0 <= PRUNE_FACTOR * best);
         }
         let (_, mut run) = runs
@@ -601,21 +745,33 @@ impl<'a, const D: usize> Fitter<'a, D> {
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .ok_or_else(|| Error::Numerical("no start was tried".into()))?;
         // The last gamma on all points.
-        if coarse.forward.len() < n || coarse.backward.len() < full.backward.len() {
+        let coarse_model = self.model(Level::Coarse, params);
+        if coarse_model.len() < n
+            || coarse.forward.len() < n
+            || coarse.backward.len() < full.backward.len()
+        {
             let last = gammas[gammas.len() - 1..].to_vec();
             run.locus.pop();
-            self.schedule(
-                subj,
-                &mut run,
-                full,
-                &last,
-                (params.max_iterations, params.tolerance),
-                x,
-            )?;
+            // The backward searches move to another index.
+            if coarse_model.len() < n {
+                run.state
+                    .backward_memo
+                    .iter_mut()
+                    .for_each(|m| *m = QueryMemo::default());
+            }
+            let stage = Stage {
+                level: Level::Full,
+                sampling: full,
+                max_iterations: params.max_iterations,
+                tolerance: params.tolerance,
+                give_up: f64::INFINITY,
+            };
+            self.schedule(subj, &mut run, &stage, &last, x)?;
         }
-        x.set_weights(self, &run.state.w, false);
+        let full_x = &mut x.full;
+        full_x.set_weights(self, &self.full, &run.state.w, false);
         let sim = run.state.sim;
-        let instance: Vec<Point<D>> = x.x.iter().map(|p| sim.apply(p)).collect();
+        let instance: Vec<Point<D>> = full_x.x.iter().map(|p| sim.apply(p)).collect();
         let projected = project_along_normals(
             &instance,
             &self.atlas.facets,
@@ -647,11 +803,17 @@ impl<'a, const D: usize> Fitter<'a, D> {
         &self,
         subj: &Subject<D>,
         run: &mut Run<D>,
-        sampling: &Sampling,
+        stage: &Stage,
         gammas: &[f64],
-        (max_iterations, tolerance): (usize, f64),
-        x: &mut Scratch<D>,
+        x: &mut Scratches<D>,
     ) -> Result<f64> {
+        let Stage {
+            level,
+            sampling,
+            max_iterations,
+            tolerance,
+            give_up,
+        } = *stage;
         let n = self.atlas.mean.len() as f64;
         let pairs = sampling.pairs() as f64;
         let scale_e_d = if sampling.forward.is_empty() {
@@ -663,8 +825,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
         for &gamma in gammas {
             let gamma = gamma * pairs / REFERENCE_POINTS;
             run.converged = false;
-            for _ in 0..max_iterations.max(1) {
-                let step = self.update(subj, &mut run.state, sampling, Some(gamma), x)?;
+            for k in 0..max_iterations.max(1) {
+                let step = self.update(level, subj, &mut run.state, sampling, Some(gamma), x)?;
                 run.iterations += 1;
                 run.e_d_history.push(step.forward * scale_e_d);
                 score = step.two_way_ms;
@@ -672,10 +834,13 @@ impl<'a, const D: usize> Fitter<'a, D> {
                     run.converged = true;
                     break;
                 }
+                if k + 1 >= GIVE_UP_AFTER && score > give_up {
+                    break;
+                }
             }
-            x.set_weights(self, &run.state.w, false);
+            x.full.set_weights(self, &self.full, &run.state.w, false);
             run.locus
-                .push(x.x.iter().map(|p| run.state.sim.apply(p)).collect());
+                .push(x.full.x.iter().map(|p| run.state.sim.apply(p)).collect());
         }
         Ok(score)
     }
@@ -690,19 +855,28 @@ impl<'a, const D: usize> Fitter<'a, D> {
     /// `ñ · (x - t^{-1}(c) + δs x + Σ δω_k G_k x + δt + Ψ δw)`.
     fn update(
         &self,
+        level: Level,
         subj: &Subject<D>,
         st: &mut State<D>,
         sampling: &Sampling,
         gamma: Option<f64>,
-        scratch: &mut Scratch<D>,
+        scratches: &mut Scratches<D>,
     ) -> Result<Step> {
+        let model = match level {
+            Level::Coarse => scratches.coarse_model(self),
+            Level::Full => &self.full,
+        };
+        let scratch = match level {
+            Level::Coarse if !std::ptr::eq(model, &self.full) => &mut scratches.coarse,
+            _ => &mut scratches.full,
+        };
         let m = self.m;
         let r = rotation_params(D);
         let pose = 1 + r + D;
         let p = if gamma.is_some() { pose + m } else { pose };
         let cols = p + 1;
         let sim = st.sim;
-        scratch.set_weights(self, &st.w, true);
+        scratch.set_weights(self, model, &st.w, true);
         let cos_min = COMPATIBLE_NORMALS_COS;
         let x = &scratch.x;
         let buf = &mut scratch.rows;
@@ -733,7 +907,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
                         }
                         for d in 0..D {
                             let f = sw * b * nr[d];
-                            let pr = &self.psi[(i * D + d) * m..(i * D + d + 1) * m];
+                            let pr = &model.psi[(i * D + d) * m..(i * D + d + 1) * m];
                             for (o, v) in rw.iter_mut().zip(pr) {
                                 *o += f * v;
                             }
@@ -747,7 +921,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
         for &j in &sampling.forward {
             let c = subj
                 .index
-                .closest_memo(&sim.apply(&x[j]), &mut st.forward_memo[j]);
+                .closest_memo(&sim.apply(&x[j]), &mut st.forward_memo[model.ids[j]]);
             forward += c.dist2;
             let f = &subj.shape.facets[c.facet];
             let Some(n) = normal_at(&subj.shape.points, f, &c.weights, &subj.normals) else {
@@ -776,7 +950,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 let z = sim.apply_inverse(&subj.shape.points[i]);
                 let c = scratch.index.closest_memo(&z, &mut st.backward_memo[i]);
                 backward += c.dist2 * sim.s * sim.s;
-                let f = &self.atlas.facets[c.facet];
+                let f = &model.facets[c.facet];
                 let Some(n) = normal_at(x, f, &c.weights, &scratch.normals) else {
                     continue;
                 };
@@ -881,8 +1055,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
     }
 }
 
-/// Buffers reused by every update of a fit: the instance (reference frame), the index of
-/// its facets and its vertex normals, for the weights `w`; the rows of the linear system.
+/// Buffers reused by every update of a fit on one model: the instance (reference frame), the
+/// index of its facets and its vertex normals, for the weights `w`; the rows of the linear
+/// system.
 struct Scratch<const D: usize> {
     x: Vec<Point<D>>,
     w: Option<Vec<f64>>,
@@ -893,28 +1068,55 @@ struct Scratch<const D: usize> {
 }
 
 impl<const D: usize> Scratch<D> {
-    fn new(fitter: &Fitter<D>) -> Self {
+    fn new(model: &Model<D>) -> Self {
         Scratch {
             x: Vec::new(),
             w: None,
             indexed: false,
-            index: fitter.mean_index.clone(),
+            index: model.index.clone(),
             normals: Vec::new(),
             rows: Vec::new(),
         }
     }
 
     /// Makes `x` the instance of `w` (and, with `index`, its index and normals current).
-    fn set_weights(&mut self, fitter: &Fitter<D>, w: &[f64], index: bool) {
+    fn set_weights(&mut self, fitter: &Fitter<D>, model: &Model<D>, w: &[f64], index: bool) {
         if self.w.as_deref() != Some(w) {
-            fitter.instance(w, &mut self.x);
+            fitter.instance(model, w, &mut self.x);
             self.w = Some(w.to_vec());
             self.indexed = false;
         }
         if index && !self.indexed {
             self.index.refit(&self.x);
-            self.normals = vertex_normals(&self.x, &fitter.atlas.facets);
+            self.normals = vertex_normals(&self.x, &model.facets);
             self.indexed = true;
+        }
+    }
+}
+
+/// The scratch of each model of a fit, and which coarse model the fit uses.
+struct Scratches<const D: usize> {
+    full: Scratch<D>,
+    coarse: Scratch<D>,
+    /// Whether the fit's parameters select the fitter's coarse model.
+    use_coarse: bool,
+}
+
+impl<const D: usize> Scratches<D> {
+    fn new(fitter: &Fitter<D>, params: &FitParams) -> Self {
+        let coarse = fitter.model(Level::Coarse, params);
+        Scratches {
+            full: Scratch::new(&fitter.full),
+            coarse: Scratch::new(coarse),
+            use_coarse: !std::ptr::eq(coarse, &fitter.full),
+        }
+    }
+
+    /// The model of the coarse level for this fit.
+    fn coarse_model<'f>(&self, fitter: &'f Fitter<D>) -> &'f Model<D> {
+        match &fitter.coarse {
+            Some(c) if self.use_coarse => c,
+            _ => &fitter.full,
         }
     }
 }
@@ -929,9 +1131,9 @@ struct Run<const D: usize> {
 }
 
 impl<const D: usize> Run<D> {
-    fn new(state: State<D>, fitter: &Fitter<D>, x: &mut Scratch<D>) -> Self {
-        x.set_weights(fitter, &state.w, false);
-        let locus = vec![x.x.iter().map(|p| state.sim.apply(p)).collect()];
+    fn new(state: State<D>, fitter: &Fitter<D>, x: &mut Scratches<D>) -> Self {
+        x.full.set_weights(fitter, &fitter.full, &state.w, false);
+        let locus = vec![x.full.x.iter().map(|p| state.sim.apply(p)).collect()];
         Run {
             state,
             e_d_history: Vec::new(),

@@ -373,8 +373,9 @@ impl<const D: usize> Model<D> {
         self.mean.len()
     }
 
-    /// The coarse model of about `k` points: for outlines, `k` points evenly spread along
-    /// each and the segments between them; for surfaces, the vertex-clustering decimation
+    /// The coarse model of about `k` points: for outlines, `k` of the points evenly spread
+    /// over their order and the segments joining each to the next kept one along the
+    /// outline; for surfaces, the vertex-clustering decimation
     /// of the mean (original points kept) with a cell chosen for about `k` points. `None`
     /// where that is no smaller than the atlas, or the decimation fails or leaves the shape
     /// without facets.

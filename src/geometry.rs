@@ -549,17 +549,6 @@ impl<const D: usize> Default for QueryMemo<D> {
     }
 }
 
-impl<const D: usize> QueryMemo<D> {
-    /// The nearest facet of the last search, if any: a hint for
-    /// [`ClosestPointIndex::closest_from`].
-    pub fn facet(&self) -> usize {
-        match self.near[0] {
-            u32::MAX => usize::MAX,
-            f => f as usize,
-        }
-    }
-}
-
 /// What a search reports besides its answer: every facet it tested and every box it
 /// skipped, with their squared distances.
 trait Track {

@@ -246,6 +246,24 @@ fn rename_png(path: &Path) -> Result<()> {
     })
 }
 
+/// A chart's frame on `area`: the margins, the label areas (`y_label` pixels for the y
+/// axis's labels) and the caption, or bare axes where no font is available (`text`).
+fn chart_frame<'a, 'b, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, plotters::coord::Shift>,
+    caption: &str,
+    y_label: u32,
+    text: bool,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = ChartBuilder::on(area);
+    b.margin(12)
+        .x_label_area_size(if text { 36 } else { 5 })
+        .y_label_area_size(if text { y_label } else { 5 });
+    if text {
+        b.caption(caption, ("sans-serif", 20));
+    }
+    b
+}
+
 fn perr<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> Error + '_ {
     move |e| Error::io(path, std::io::Error::other(format!("plot: {e:?}")))
 }
@@ -258,14 +276,7 @@ pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) ->
     root.fill(&WHITE).map_err(perr(path))?;
     let n = cumulative.len().max(1);
     let lo = cumulative.first().copied().unwrap_or(0.0).min(0.9) - 0.02;
-    let mut b = ChartBuilder::on(&root);
-    b.margin(12)
-        .x_label_area_size(if text { 36 } else { 5 })
-        .y_label_area_size(if text { 52 } else { 5 });
-    if text {
-        b.caption("Cumulative variance", ("sans-serif", 20));
-    }
-    let mut chart = b
+    let mut chart = chart_frame(&root, "Cumulative variance", 52, text)
         .build_cartesian_2d(0.5f64..n as f64 + 0.5, lo..1.005f64)
         .map_err(perr(path))?;
     if text {
@@ -352,14 +363,7 @@ pub fn plot_shape_model_measures(
         } else {
             (0.0, 1.0)
         };
-        let mut b = ChartBuilder::on(area);
-        b.margin(12)
-            .x_label_area_size(if text { 36 } else { 5 })
-            .y_label_area_size(if text { 64 } else { 5 });
-        if text {
-            b.caption(title, ("sans-serif", 20));
-        }
-        let mut chart = b
+        let mut chart = chart_frame(area, title, 64, text)
             .build_cartesian_2d(0.5f64..n + 0.5, lo..hi)
             .map_err(perr(path))?;
         if text {
@@ -421,14 +425,7 @@ pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
         .fold(f64::INFINITY, f64::min)
         .max(1e-300);
     let hi = vals.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
-    let mut b = ChartBuilder::on(&root);
-    b.margin(12)
-        .x_label_area_size(if text { 36 } else { 5 })
-        .y_label_area_size(if text { 64 } else { 5 });
-    if text {
-        b.caption("E_d per iteration", ("sans-serif", 20));
-    }
-    let mut chart = b
+    let mut chart = chart_frame(&root, "E_d per iteration", 64, text)
         .build_cartesian_2d(0f64..maxit as f64, (lo..hi).log_scale())
         .map_err(perr(path))?;
     if text {
@@ -479,14 +476,7 @@ pub fn plot_jacobian_histogram(path: &Path, counts: &[u32]) -> Result<()> {
     let root = BitMapBackend::new(&tmp, (720, 460)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
     let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
-    let mut b = ChartBuilder::on(&root);
-    b.margin(12)
-        .x_label_area_size(if text { 36 } else { 5 })
-        .y_label_area_size(if text { 64 } else { 5 });
-    if text {
-        b.caption("Scaled Jacobians of all morphed meshes", ("sans-serif", 20));
-    }
-    let mut chart = b
+    let mut chart = chart_frame(&root, "Scaled Jacobians of all morphed meshes", 64, text)
         .build_cartesian_2d(-1f64..1f64, 0f64..top * 1.05)
         .map_err(perr(path))?;
     if text {
@@ -723,14 +713,7 @@ pub fn plot_baselines(path: &Path, subjects: &[SubjectReport]) -> Result<()> {
     let tmp = tmp_png(path);
     let root = BitMapBackend::new(&tmp, (720, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
-    let mut b = ChartBuilder::on(&root);
-    b.margin(12)
-        .x_label_area_size(if text { 36 } else { 5 })
-        .y_label_area_size(if text { 56 } else { 5 });
-    if text {
-        b.caption("normal correlation per subject", ("sans-serif", 20));
-    }
-    let mut chart = b
+    let mut chart = chart_frame(&root, "normal correlation per subject", 56, text)
         .build_cartesian_2d(0.0..rows.len().max(1) as f64, lo..1.0)
         .map_err(perr(path))?;
     if text {

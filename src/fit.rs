@@ -49,6 +49,12 @@ pub struct FitParams {
 /// Pose-only updates per start rotation in the pre-alignment.
 const PRE_ALIGNMENT_ITERATIONS: usize = 6;
 
+/// Pose-only updates after which the pre-alignment drops the starts whose two-way distance
+/// is [`PRE_PRUNE_FACTOR`] times the best start's. The factor is wider than the
+/// [`PRUNE_FACTOR`] between the coarse fits: the pre-alignment has no mode to close a gap.
+const PRE_PRUNE_AFTER: usize = 2;
+const PRE_PRUNE_FACTOR: f64 = 10.0;
+
 /// Cap on the updates per `gamma` of the coarse stage (the final stage has
 /// [`FitParams::max_iterations`]).
 const COARSE_MAX_ITERATIONS: usize = 20;
@@ -59,8 +65,18 @@ const COARSE_TOLERANCE_FACTOR: f64 = 100.0;
 
 /// Pairs whose normals (instance and subject) make an angle above 60° are left out of the
 /// update: they join facing sides (a finger's side and its neighbour's), the pull that traps a
-/// fit in a local minimum.
+/// fit in a local minimum. Up to 41° (cosine 0.75) they weigh fully.
 const COMPATIBLE_NORMALS_COS: f64 = 0.5;
+const FULL_WEIGHT_COS: f64 = 0.75;
+
+/// Root of the weight of a pair whose normals make an angle of cosine `cos`: 1 up to
+/// [`FULL_WEIGHT_COS`], down to 0 at [`COMPATIBLE_NORMALS_COS`] (smoothly, so that a pair
+/// crossing the bound does not make the next update jump).
+fn compatibility(cos: f64) -> f64 {
+    let t = ((cos - COMPATIBLE_NORMALS_COS) / (FULL_WEIGHT_COS - COMPATIBLE_NORMALS_COS))
+        .clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
 
 /// The angle of the rotation `a^T b` (radians; 2D and 3D).
 fn rotation_angle<const D: usize>(a: &[[f64; D]; D], b: &[[f64; D]; D]) -> f64 {
@@ -79,6 +95,10 @@ const COARSE_MODEL_FACTOR: usize = 4;
 /// Updates after which a start of the coarse stage gives up a `gamma` when its two-way
 /// distance is still [`PRUNE_FACTOR`] times the best start's (it is then dropped).
 const GIVE_UP_AFTER: usize = 3;
+
+/// With both directions, the last `gamma` takes the backward pairs from every subject vertex
+/// up to one per this many model points (evenly spread over the subject's vertices).
+const FULL_BACKWARD_SHARE: usize = 2;
 
 /// Number of points of the paper's hands (2001), for which its `gamma` values were chosen.
 pub const REFERENCE_POINTS: f64 = 2001.0;
@@ -517,19 +537,27 @@ impl<'a, const D: usize> Fitter<'a, D> {
     /// - Pairs whose two normals (the instance's and the subject's, at the pair's two ends)
     ///   differ by more than 60° are left out of step (ii). Such a pair joins two facing
     ///   sides, a finger's edge to its neighbour's; those pairs are what holds a fit in the
-    ///   local minimum that caught the paper's S38 (our subject `37`). The subject's normals
-    ///   are turned round first if it is listed in the other orientation than the atlas.
+    ///   local minimum that caught the paper's S38 (our subject `37`). Between 41° and 60° a
+    ///   pair's weight falls smoothly to 0, so that a pair crossing the bound does not make
+    ///   the next update jump (a hard cut let a hand fit cycle between two sets of pairs).
+    ///   The subject's normals are turned round first if it is listed in the other
+    ///   orientation than the atlas.
     /// - With `symmetric`, `E_d` also sums, over the subject's vertices, the squared distance
     ///   to their closest point on the instance (weighted so both directions count equally):
     ///   a one-way distance is blind to a part of the subject that the instance leaves
-    ///   uncovered. Test `symmetric_fit_recovers_a_far_instance`.
+    ///   uncovered. Test `symmetric_fit_recovers_a_far_instance`. That term is a coverage
+    ///   check, not the paper's measure: it takes at most one subject vertex per two model
+    ///   points (evenly spread; all of them for a `partial` fit, where it is the only term),
+    ///   which halves the cost of the last `gamma` on a subject as dense as the atlas and
+    ///   keeps a dense subject from costing more than the atlas.
     /// - Algorithm 1 starts from `R = I, T = 0, s = 1`. We start from the centroid and
     ///   RMS-radius match, try start rotations (2D: `params.starts` angles; 3D: the four
     ///   that map the mean's principal axes onto the subject's, and the identity, so that a
     ///   subject in any orientation is found) with a pose-only fit (`w = 0`) on
-    ///   `coarse_points / 4` points, and run Algorithm 1 from the `params.full_starts` best
-    ///   distinct ones (more than 20° apart) together on `params.coarse_points` evenly spread
-    ///   points, dropping after each `gamma` the starts whose two-way distance is 4 times the
+    ///   `coarse_points / 4` points (after 2 updates, the starts whose two-way distance is 10
+    ///   times the best one's stop there), and run Algorithm 1 from the `params.full_starts`
+    ///   best distinct ones left (more than 20° apart) together on `params.coarse_points`
+    ///   evenly spread points, dropping after each `gamma` the starts whose two-way distance is 4 times the
     ///   best (a start still that far behind after 3 updates gives the `gamma` up at once);
     ///   the best start then runs the last `gamma` again on all points, to the tolerance.
     ///   The coarse stage is a quadrature of the same `E_d` with fewer points (its `gamma`
@@ -568,33 +596,42 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let s0 = rms(pts, cs) / rms(&self.atlas.mean, cm).max(f64::MIN_POSITIVE);
         let rotations =
             crate::register::start_rotations(&self.atlas.mean, cm, pts, cs, params.starts);
-        let mut pre: Vec<(f64, State<D>)> = Vec::with_capacity(rotations.len());
-        for r in rotations {
-            let mut sim = Similarity::<D> {
-                s: s0,
-                r,
-                t: [0.0; D],
-            };
-            sim.t = sub(cs, sim.apply(&cm));
-            let mut st = State {
-                sim,
-                w: vec![0.0; self.m],
-                forward_memo: vec![QueryMemo::default(); n],
-                backward_memo: vec![QueryMemo::default(); subject.points.len()],
-            };
-            let mut score = f64::INFINITY;
-            for _ in 0..PRE_ALIGNMENT_ITERATIONS {
-                let step = self.update(Level::Coarse, &subj, &mut st, &rough, None, &mut x)?;
-                score = step.two_way_ms;
-                if step.pose_change < 1e-3 {
-                    break;
-                }
+        // All starts take their pose-only updates together; after the first
+        // [`PRE_PRUNE_AFTER`], those whose two-way distance is [`PRE_PRUNE_FACTOR`] times the
+        // best one's stop (a start in a wrong pose is also the costliest: its points are far
+        // from the surface, where a closest-point search meets many boxes).
+        let mut pre: Vec<(f64, bool, State<D>)> = rotations
+            .into_iter()
+            .map(|r| {
+                let mut sim = Similarity::<D> {
+                    s: s0,
+                    r,
+                    t: [0.0; D],
+                };
+                sim.t = sub(cs, sim.apply(&cm));
+                let st = State {
+                    sim,
+                    w: vec![0.0; self.m],
+                    forward_memo: vec![QueryMemo::default(); n],
+                    backward_memo: vec![QueryMemo::default(); subject.points.len()],
+                };
+                (f64::INFINITY, false, st)
+            })
+            .collect();
+        for k in 0..PRE_ALIGNMENT_ITERATIONS {
+            for (score, done, st) in pre.iter_mut().filter(|p| !p.1) {
+                let step = self.update(Level::Coarse, &subj, st, &rough, None, &mut x)?;
+                *score = step.two_way_ms;
+                *done = step.pose_change < 1e-3;
             }
-            pre.push((score, st));
+            if k + 1 >= PRE_PRUNE_AFTER {
+                let best = pre.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+                pre.retain(|p| p.0 <= PRE_PRUNE_FACTOR * best);
+            }
         }
         pre.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut chosen: Vec<State<D>> = Vec::new();
-        for (_, st) in pre {
+        for (_, _, st) in pre {
             let distinct = chosen
                 .iter()
                 .all(|c| rotation_angle(&c.sim.r, &st.sim.r) > 20f64.to_radians());
@@ -692,7 +729,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
             } else {
                 Vec::new()
             },
-            backward: if backward {
+            backward: if backward && forward {
+                spread(subject.points.len(), n.div_ceil(FULL_BACKWARD_SHARE))
+            } else if backward {
                 (0..subject.points.len()).collect()
             } else {
                 Vec::new()
@@ -878,7 +917,6 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let cols = p + 1;
         let sim = st.sim;
         scratch.set_weights(self, model, &st.w, true);
-        let cos_min = COMPATIBLE_NORMALS_COS;
         let x = &scratch.x;
         let buf = &mut scratch.rows;
         buf.clear();
@@ -924,15 +962,17 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 .index
                 .closest_memo(&sim.apply(&x[j]), &mut st.forward_memo[model.ids[j]]);
             forward += c.dist2;
-            let f = &subj.shape.facets[c.facet];
-            let Some(n) = normal_at(&subj.shape.points, f, &c.weights, &subj.normals) else {
+            // The index's own copy of the facets: the search has just read this one.
+            let f = &subj.index.facets()[c.facet];
+            let Some(n) = normal_at(subj.index.points(), f, &c.weights, &subj.normals) else {
                 continue;
             };
             let nr = sim.rotate_inverse(&n);
-            if dot(nr, scratch.normals[j]) < cos_min {
+            let cw = compatibility(dot(nr, scratch.normals[j]));
+            if cw == 0.0 {
                 continue;
             }
-            push(buf, &[j], &[1.0], nr, sim.apply_inverse(&c.point), 1.0);
+            push(buf, &[j], &[1.0], nr, sim.apply_inverse(&c.point), cw);
         }
         // Backward pairs: subject vertex -> closest point on the instance, searched in the
         // reference frame (a similarity keeps closest points), so the instance's index
@@ -951,14 +991,15 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 let z = sim.apply_inverse(&subj.shape.points[i]);
                 let c = scratch.index.closest_memo(&z, &mut st.backward_memo[i]);
                 backward += c.dist2 * sim.s * sim.s;
-                let f = &model.facets[c.facet];
+                let f = &scratch.index.facets()[c.facet];
                 let Some(n) = normal_at(x, f, &c.weights, &scratch.normals) else {
                     continue;
                 };
-                if dot(n, sim.rotate_inverse(&subj.normals[i])) < cos_min {
+                let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
+                if cw == 0.0 {
                     continue;
                 }
-                push(buf, f, &c.weights, n, z, sw);
+                push(buf, f, &c.weights, n, z, sw * cw);
             }
         }
         let two_way_ms = if sampling.backward.is_empty() {

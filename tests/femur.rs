@@ -36,6 +36,10 @@ fn femur_leave_one_out_with_15_and_5_modes() {
             "{modes} modes: every morphed hex mesh valid"
         );
         assert_eq!(r.summary.succeeded, 30, "{modes} modes: every femur fitted");
+        assert!(
+            r.subjects.iter().all(|s| s.converged),
+            "{modes} modes: every fit met the tolerance at the last gamma"
+        );
         let rms = median(r.subjects.iter().map(|s| s.rms_distance).collect());
         eprintln!("{modes} modes: median two-way RMS {rms:.3} mm (bound {bound:.3})");
         assert!(

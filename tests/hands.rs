@@ -83,6 +83,16 @@ fn hands_leave_one_out() {
     );
     assert!(r.summary.median_rms_distance_relative < 0.005);
     assert!(r.summary.median_normal_correlation > 0.95);
+    let cycling: Vec<&str> = r
+        .subjects
+        .iter()
+        .filter(|s| !s.converged)
+        .map(|s| s.name.as_str())
+        .collect();
+    assert!(
+        cycling.is_empty(),
+        "fits that missed the tolerance at the last gamma: {cycling:?}"
+    );
     assert_eq!(r.modes, 11);
     assert!(
         r.variance_explained[10] > 0.98,

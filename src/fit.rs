@@ -557,8 +557,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
     ///   `coarse_points / 4` points (after 2 updates, the starts whose two-way distance is 10
     ///   times the best one's stop there), and run Algorithm 1 from the `params.full_starts`
     ///   best distinct ones left (more than 20° apart) together on `params.coarse_points`
-    ///   evenly spread points, dropping after each `gamma` the starts whose two-way distance is 4 times the
-    ///   best (a start still that far behind after 3 updates gives the `gamma` up at once);
+    ///   evenly spread points, dropping after each `gamma` the starts whose two-way distance
+    ///   is 4 times the best (a start still that far behind after 3 updates gives the `gamma`
+    ///   up at once);
     ///   the best start then runs the last `gamma` again on all points, to the tolerance.
     ///   The coarse stage is a quadrature of the same `E_d` with fewer points (its `gamma`
     ///   scaled as above), stopped at 100 times the tolerance. It works on a coarse model of

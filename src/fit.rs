@@ -395,8 +395,8 @@ impl<const D: usize> Model<D> {
 
     /// The coarse model of about `k` points: for outlines, `k` of the points evenly spread
     /// over their order and the segments joining each to the next kept one along the
-    /// outline; for surfaces, the vertex-clustering decimation
-    /// of the mean (original points kept) with a cell chosen for about `k` points. `None`
+    /// outline; for surfaces, the vertex-clustering decimation of the mean (original points
+    /// kept) with a cell chosen for about `k` points. `None`
     /// where that is no smaller than the atlas, or the decimation fails or leaves the shape
     /// without facets.
     fn coarse(atlas: &Atlas<D>, k: usize) -> Option<Self> {
@@ -604,14 +604,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let mut pre: Vec<(f64, bool, State<D>)> = rotations
             .into_iter()
             .map(|r| {
-                let mut sim = Similarity::<D> {
-                    s: s0,
-                    r,
-                    t: [0.0; D],
-                };
-                sim.t = sub(cs, sim.apply(&cm));
                 let st = State {
-                    sim,
+                    sim: Similarity::centred(s0, r, &cm, &cs),
                     w: vec![0.0; self.m],
                     forward_memo: vec![QueryMemo::default(); n],
                     backward_memo: vec![QueryMemo::default(); subject.points.len()],
@@ -793,13 +787,6 @@ impl<'a, const D: usize> Fitter<'a, D> {
         {
             let last = gammas[gammas.len() - 1..].to_vec();
             run.locus.pop();
-            // The backward searches move to another index.
-            if coarse_model.len() < n {
-                run.state
-                    .backward_memo
-                    .iter_mut()
-                    .for_each(|m| *m = QueryMemo::default());
-            }
             let stage = Stage {
                 level: Level::Full,
                 sampling: full,

@@ -850,7 +850,12 @@ impl<const D: usize> ClosestPointIndex<D> {
                 }
             }
         }
-        let hint = memo.near[0] as usize;
+        // A memo of another index (or none) knows nothing about this one: no hint.
+        let hint = if memo.index == self.id {
+            memo.near[0] as usize
+        } else {
+            usize::MAX
+        };
         let mut track = Nearest {
             near: [(f64::INFINITY, u32::MAX); MEMO_FACETS],
             rest: f64::INFINITY,
@@ -1158,6 +1163,14 @@ impl<const D: usize> Similarity<D> {
             r: std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 })),
             t: [0.0; D],
         }
+    }
+
+    /// The similarity of scale `s` and rotation `r` that maps the point `from` onto `to`
+    /// (e.g. one shape's centroid onto another's).
+    pub fn centred(s: f64, r: [[f64; D]; D], from: &Point<D>, to: &Point<D>) -> Self {
+        let mut sim = Similarity { s, r, t: [0.0; D] };
+        sim.t = sub(*to, sim.apply(from));
+        sim
     }
 
     /// `s R p + T`.

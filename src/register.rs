@@ -206,13 +206,12 @@ fn pre_align_scored<const D: usize>(
     let mut rough: Vec<(f64, Similarity<D>)> = rotations
         .into_iter()
         .map(|r| {
-            let mut sim = Similarity::<D> {
-                s: s0,
-                r,
-                t: [0.0; D],
-            };
-            sim.t = sub(cs, sim.apply(&ct));
-            icp(sim, &rough_t, &rough_s, ROUGH_ITERATIONS)
+            icp(
+                Similarity::centred(s0, r, &ct, &cs),
+                &rough_t,
+                &rough_s,
+                ROUGH_ITERATIONS,
+            )
         })
         .collect();
     rough.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -1,11 +1,15 @@
-//! Scaling of one fit (issue 7), one core: fit time against the number of vertices (atlas and
-//! subject of the same resolution) and against the number of modes. Sizes: the femurs of
-//! `$ATLASMESH_DATA/knee-distal-femur-synthetic-3d` as given (7313 vertices) and after one
-//! and two midpoint subdivisions (29 246 and 116 978; the subdivision keeps the
-//! correspondence), and the seeded synthetic surfaces of the 3D demo at about 1k, 3k, 10k, 30k
-//! and 100k vertices (without the data, only these). After the measurements the medians are
-//! plotted to `docs/scaling.png` and printed with the fitted exponent of time against
-//! vertices.
+//! Scaling of one fit (issue 7), one core: fit time against the number of vertices and
+//! against the number of modes. Two experiments on the femurs of
+//! `$ATLASMESH_DATA/knee-distal-femur-synthetic-3d` (subject S001, atlas of S002-S021, 10
+//! modes): `femur subject` keeps the atlas as given (7313 points) and varies the subject's
+//! size: S001 decimated by vertex clustering (about 1k vertices), as given, and after one and
+//! two midpoint subdivisions (29 246 and 116 978, the same surface); `femur` varies atlas and
+//! subject together: all 21 femurs decimated alike (the kept vertices and facets of S001's
+//! decimation taken on every femur, which keeps the correspondence), as given and subdivided.
+//! Besides, the seeded synthetic surfaces of the 3D demo at about 1k, 3k, 10k, 30k and 100k
+//! vertices, atlas and subject together (without the data, only these). After the
+//! measurements the medians are plotted to `docs/scaling.png` and printed with the fitted
+//! exponent of time against vertices.
 
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::{ClosestPointIndex, Shape};
@@ -42,27 +46,72 @@ fn subdivide(s: &Shape<3>) -> Shape<3> {
     }
 }
 
-/// (family, shapes) at each size.
+/// `shape` decimated by vertex clustering to about `target` vertices, and the indices of the
+/// kept vertices.
+fn decimate(shape: &Shape<3>, target: usize) -> (Shape<3>, Vec<usize>) {
+    let (lo, hi) = atlasmesh::geometry::bounding_box(&shape.points);
+    let mut cell = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max) / (target as f64).sqrt();
+    loop {
+        let (small, ids) = shape
+            .decimate_by_clustering(cell, [0.0; 3])
+            .expect("decimation");
+        let got = small.points.len();
+        if got.abs_diff(target) * 10 <= target {
+            return (small, ids);
+        }
+        cell *= (got as f64 / target as f64).sqrt();
+    }
+}
+
+/// The femurs S001-S021 as given.
+fn femurs() -> Option<Vec<Shape<3>>> {
+    let Some(d) = std::env::var_os("ATLASMESH_DATA") else {
+        eprintln!("femur scaling skipped: ATLASMESH_DATA is not set");
+        return None;
+    };
+    let dir = std::path::Path::new(&d).join("knee-distal-femur-synthetic-3d/femur");
+    let paths: Vec<_> = (1..=21)
+        .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
+        .collect();
+    Some(atlasmesh::pipeline::load_surfaces(&paths).expect("femur data"))
+}
+
+/// (family, shapes) at each size, atlas and subject together.
 fn populations() -> Vec<(&'static str, Vec<Shape<3>>)> {
     let mut out = Vec::new();
     for rings in [22, 39, 71, 122, 224] {
         let shapes = atlasmesh::pipeline::demo_population_3d(21, rings, 11).expect("synthetic");
         out.push(("synthetic", shapes));
     }
-    if let Some(d) = std::env::var_os("ATLASMESH_DATA") {
-        let dir = std::path::Path::new(&d).join("knee-distal-femur-synthetic-3d/femur");
-        let paths: Vec<_> = (1..=21)
-            .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
+    if let Some(mut shapes) = femurs() {
+        let (small, ids) = decimate(&shapes[0], 1800);
+        let decimated = shapes
+            .iter()
+            .map(|s| Shape {
+                name: s.name.clone(),
+                points: ids.iter().map(|&i| s.points[i]).collect(),
+                facets: small.facets.clone(),
+                landmarks: Vec::new(),
+            })
             .collect();
-        let mut shapes = atlasmesh::pipeline::load_surfaces(&paths).expect("femur data");
+        out.push(("femur", decimated));
         for _ in 0..3 {
             out.push(("femur", shapes.clone()));
             shapes = shapes.iter().map(subdivide).collect();
         }
-    } else {
-        eprintln!("femur scaling skipped: ATLASMESH_DATA is not set");
     }
     out
+}
+
+/// The subject S001 at each size, for the atlas of the others as given.
+fn subjects() -> Option<(Vec<Shape<3>>, Vec<Shape<3>>)> {
+    let shapes = femurs()?;
+    let mut subjects = vec![decimate(&shapes[0], 1000).0, shapes[0].clone()];
+    for _ in 0..2 {
+        let finer = subdivide(&subjects[subjects.len() - 1]);
+        subjects.push(finer);
+    }
+    Some((shapes[1..].to_vec(), subjects))
 }
 
 fn bench(c: &mut Criterion) {
@@ -93,6 +142,31 @@ fn bench(c: &mut Criterion) {
                     .expect("fit")
             })
         });
+    }
+    // The subject alone.
+    if let Some((training, subjects)) = subjects() {
+        let atlas = Atlas::build(
+            &training,
+            &AtlasParams {
+                modes: ModeSelection::Count(10),
+                element_size: 0.1,
+                ..AtlasParams::default()
+            },
+        )
+        .expect("atlas");
+        let fitter = Fitter::new(&atlas);
+        for subject in &subjects {
+            let index = ClosestPointIndex::from_shape(subject);
+            let n = subject.points.len();
+            sizes.push(("femur subject", n));
+            g.bench_with_input(BenchmarkId::new("femur subject", n), &n, |b, _| {
+                b.iter(|| {
+                    fitter
+                        .fit(subject, &index, &FitParams::default())
+                        .expect("fit")
+                })
+            });
+        }
     }
     g.finish();
     // Modes: the synthetic 10k family has 4 true modes; the femurs (when there) have more.
@@ -151,7 +225,7 @@ fn median(group: &str, family: &str, x: usize) -> Option<f64> {
 
 fn plot(sizes: &[(&str, usize)], mode_family: &str, modes: &[usize]) {
     let mut series: Vec<(&str, Vec<(f64, f64)>)> = Vec::new();
-    for family in ["synthetic", "femur"] {
+    for family in ["synthetic", "femur", "femur subject"] {
         let pts: Vec<(f64, f64)> = sizes
             .iter()
             .filter(|(f, _)| *f == family)
@@ -178,6 +252,14 @@ fn plot(sizes: &[(&str, usize)], mode_family: &str, modes: &[usize]) {
                     .collect::<Vec<_>>()
                     .join(", ")
             );
+            for w in pts.windows(2) {
+                let ((n0, t0), (n1, t1)) = (w[0], w[1]);
+                eprintln!(
+                    "  {n0:.0} -> {n1:.0} vertices: time x{:.2}, N log N x{:.2}",
+                    t1 / t0,
+                    n1 * n1.ln() / (n0 * n0.ln())
+                );
+            }
             series.push((family, pts));
         }
     }
@@ -212,7 +294,17 @@ fn plot(sizes: &[(&str, usize)], mode_family: &str, modes: &[usize]) {
     );
     let (y0, y1) = (
         all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min) * 0.5,
-        all.iter().map(|p| p.1).fold(0.0, f64::max) * 2.0,
+        // Room for the N log N references too.
+        series
+            .iter()
+            .filter_map(|(_, pts)| {
+                let &(n0, t0) = pts.first()?;
+                let n1 = pts.iter().map(|p| p.0).fold(n0, f64::max);
+                Some(t0 * n1 * n1.ln() / (n0 * n0.ln()))
+            })
+            .chain(all.iter().map(|p| p.1))
+            .fold(0.0, f64::max)
+            * 1.5,
     );
     if let Ok(mut chart) = ChartBuilder::on(&left)
         .caption("fit time against vertices (one core)", ("sans-serif", 18))
@@ -223,38 +315,54 @@ fn plot(sizes: &[(&str, usize)], mode_family: &str, modes: &[usize]) {
     {
         let _ = chart
             .configure_mesh()
-            .x_desc("vertices (atlas and subject)")
+            .x_desc("vertices of the subject")
             .y_desc("seconds")
             .draw();
         for (k, (family, pts)) in series.iter().enumerate() {
-            let color = Palette99::pick(k).to_rgba();
+            let color = [
+                RGBColor(200, 30, 60),
+                RGBColor(30, 150, 60),
+                RGBColor(30, 90, 200),
+            ][k % 3]
+                .to_rgba();
             let _ = chart
                 .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
                 .map(|s| {
-                    s.label(*family).legend(move |(x, y)| {
+                    let label = match *family {
+                        "femur" => "femur (atlas and subject)",
+                        "femur subject" => "femur subject (atlas of 7313 points)",
+                        other => other,
+                    };
+                    s.label(label).legend(move |(x, y)| {
                         PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
                     })
                 });
             let _ = chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())));
         }
-        // The N log N reference through the first synthetic point.
-        if let Some(&(n0, t0)) = series[0].1.first() {
+        // N log N through the first point of each series.
+        for (k, (_, pts)) in series.iter().enumerate() {
+            let Some(&(n0, t0)) = pts.first() else {
+                continue;
+            };
+            let n1 = pts.iter().map(|p| p.0).fold(n0, f64::max);
             let reference: Vec<(f64, f64)> = (0..=20)
                 .map(|i| {
-                    let n = n0 * (x1 / n0).powf(i as f64 / 20.0);
+                    let n = n0 * (n1 / n0).powf(i as f64 / 20.0);
                     (n, t0 * n * n.ln() / (n0 * n0.ln()))
                 })
                 .collect();
-            let _ = chart
-                .draw_series(LineSeries::new(reference, BLACK.mix(0.4)))
-                .map(|s| {
-                    s.label("N log N").legend(|(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.4))
-                    })
+            let style = BLACK.mix(0.35);
+            let drawn = chart.draw_series(DashedLineSeries::new(reference, 4, 4, style.into()));
+            if k == 0 {
+                let _ = drawn.map(|s| {
+                    s.label("N log N (from each first point)")
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], style))
                 });
+            }
         }
         let _ = chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw();

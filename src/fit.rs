@@ -23,6 +23,8 @@ pub struct FitParams {
     /// The schedule stops after the first `gamma` below this (paper: 0.008).
     pub gamma_stop: f64,
     /// Inner loop ends when the change of `w` (and of the pose) is below this (paper: 1e-6).
+    /// `||Δw||` is taken as for the paper's 2001 points, `||Δw|| sqrt(2001 / n)` for an atlas
+    /// of `n` points, so that the tolerance does not tighten as the atlas gets finer.
     pub tolerance: f64,
     /// Cap on correspondence updates per `gamma`.
     pub max_iterations: usize,
@@ -517,7 +519,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
     /// Each correspondence update (i) takes, for every model point, the closest point on the
     /// subject's segments/facets (through the spatial index), (ii) minimizes eq. 5 for that
     /// correspondence over `R, T, s, w` together, (iii) instantiates. The inner loop ends when
-    /// `||Δw||` (and the pose change) is below `params.tolerance`; then `gamma` decreases.
+    /// `||Δw||` (per point, see [`FitParams::tolerance`]) and the pose change are below
+    /// `params.tolerance`; then `gamma` decreases.
     ///
     /// # Deviations from the paper
     /// - Step (ii): the paper alternates the similarity and eq. 8 (Cootes' protocol 1) on
@@ -533,7 +536,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
     ///   unit box, `s ≈ 1`). Test `fit_is_invariant_to_the_subject_units`.
     /// - `E_d` sums over the `N` model points and the eigenvalues grow with `N`, so the
     ///   regularization's strength depends on `N`; the paper chose `gamma` for `N = 2001`.
-    ///   We use `gamma · n / 2001` with `n` the points in use.
+    ///   We use `gamma · n / 2001` with `n` the points in use; for the same reason the
+    ///   tolerance applies to `||Δw|| sqrt(2001 / n)`.
     /// - Pairs whose two normals (the instance's and the subject's, at the pair's two ends)
     ///   differ by more than 60° are left out of step (ii). Such a pair joins two facing
     ///   sides, a finger's edge to its neighbour's; those pairs are what holds a fit in the
@@ -1072,6 +1076,13 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 weight_change += dz[pose + k] * dz[pose + k];
             }
         }
+        // The modes are orthonormal over all `D n` coordinates, so `||Δw||` is the root of
+        // the sum of the squared point moves: the same move of the shape gives a larger
+        // `||Δw||` the more points the atlas has. Measured as for the paper's 2001 points
+        // (the root mean square move times the root of 2001), the tolerance means the same
+        // at every resolution.
+        let weight_change =
+            (weight_change * REFERENCE_POINTS / self.atlas.mean.len() as f64).sqrt();
         Ok(Step {
             forward: if sampling.forward.is_empty() {
                 backward
@@ -1080,7 +1091,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             },
             two_way_ms,
             pose_change: dz[..pose].iter().fold(0.0, |a, v| a.max(v.abs())),
-            weight_change: weight_change.sqrt(),
+            weight_change,
         })
     }
 }
@@ -1227,14 +1238,19 @@ mod tests {
     use crate::model::{AtlasParams, ModeSelection};
 
     fn atlas() -> Atlas<2> {
+        atlas_of(120)
+    }
+
+    /// The egg population with `points` points per outline.
+    fn atlas_of(points: usize) -> Atlas<2> {
         let shapes: Vec<Shape<2>> = (0..12)
             .map(|k| {
                 let a = 1.0 + 0.1 * (k as f64 * 1.7).sin();
                 let b = 0.6 + 0.06 * (k as f64 * 2.3).cos();
                 let c = 0.05 * (k as f64 * 0.9).cos();
-                let pts = (0..120)
+                let pts = (0..points)
                     .map(|i| {
-                        let t = i as f64 / 120.0 * std::f64::consts::TAU;
+                        let t = i as f64 / points as f64 * std::f64::consts::TAU;
                         // An egg (no symmetry, so the pose is identifiable) with three modes.
                         let egg = 1.0 + 0.25 * t.cos();
                         [
@@ -1269,6 +1285,45 @@ mod tests {
             })
             .collect();
         Shape::polyline("subject", sub_pts, true)
+    }
+
+    #[test]
+    fn the_tolerance_means_the_same_at_every_resolution() {
+        // The same shapes sampled 8 times finer: `||Δw||` for the same move grows with the
+        // root of the points, the updates must not.
+        let mut sim = Similarity::<2>::planar_rotation(0.5);
+        sim.s = 20.0;
+        let mut fits = Vec::new();
+        for points in [120, 960] {
+            let a = atlas_of(points);
+            let w: Vec<f64> = a
+                .eigenvalues
+                .iter()
+                .zip([1.2, -0.8, 0.5])
+                .map(|(l, f)| f * l.sqrt())
+                .collect();
+            let s = subject(&a, &w, &sim);
+            let idx = ClosestPointIndex::from_shape(&s);
+            let r = Fitter::new(&a)
+                .fit(&s, &idx, &FitParams::default())
+                .unwrap();
+            assert!(r.converged);
+            let sigmas: Vec<f64> = r
+                .weights
+                .iter()
+                .zip(&a.eigenvalues)
+                .map(|(w, l)| w / l.sqrt())
+                .collect();
+            fits.push((r.iterations, sigmas));
+        }
+        let ((coarse, w0), (fine, w1)) = (&fits[0], &fits[1]);
+        assert!(
+            fine.abs_diff(*coarse) <= 1,
+            "{coarse} updates at 120 points, {fine} at 960"
+        );
+        for (a, b) in w0.iter().zip(w1) {
+            assert!((a - b).abs() < 0.05, "weights {w0:?} vs {w1:?} (sigmas)");
+        }
     }
 
     #[test]

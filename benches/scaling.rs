@@ -14,7 +14,8 @@
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::{ClosestPointIndex, Shape};
 use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
 use plotters::prelude::*;
 use std::collections::HashMap;
 
@@ -114,6 +115,39 @@ fn subjects() -> Option<(Vec<Shape<3>>, Vec<Shape<3>>)> {
     Some((shapes[1..].to_vec(), subjects))
 }
 
+/// The atlas of `shapes` with `modes` modes.
+fn atlas_of(shapes: &[Shape<3>], modes: usize) -> Atlas<3> {
+    Atlas::build(
+        shapes,
+        &AtlasParams {
+            modes: ModeSelection::Count(modes),
+            element_size: 0.1,
+            ..AtlasParams::default()
+        },
+    )
+    .expect("atlas")
+}
+
+/// Benchmarks the fit of `subject`, under `family` and its vertex count (noted in `sizes`).
+fn bench_fit(
+    g: &mut BenchmarkGroup<WallTime>,
+    sizes: &mut Vec<(&'static str, usize)>,
+    family: &'static str,
+    fitter: &Fitter<3>,
+    subject: &Shape<3>,
+) {
+    let index = ClosestPointIndex::from_shape(subject);
+    let n = subject.points.len();
+    sizes.push((family, n));
+    g.bench_with_input(BenchmarkId::new(family, n), &n, |b, _| {
+        b.iter(|| {
+            fitter
+                .fit(subject, &index, &FitParams::default())
+                .expect("fit")
+        })
+    });
+}
+
 fn bench(c: &mut Criterion) {
     faer::set_global_parallelism(faer::Par::Seq);
     let mut g = c.benchmark_group("scaling_vertices");
@@ -121,51 +155,15 @@ fn bench(c: &mut Criterion) {
     let mut sizes: Vec<(&str, usize)> = Vec::new();
     for (family, shapes) in populations() {
         // Subject 0 fitted with the atlas of the other 20, 10 modes.
-        let atlas = Atlas::build(
-            &shapes[1..],
-            &AtlasParams {
-                modes: ModeSelection::Count(10),
-                element_size: 0.1,
-                ..AtlasParams::default()
-            },
-        )
-        .expect("atlas");
-        let fitter = Fitter::new(&atlas);
-        let subject = &shapes[0];
-        let index = ClosestPointIndex::from_shape(subject);
-        let n = subject.points.len();
-        sizes.push((family, n));
-        g.bench_with_input(BenchmarkId::new(family, n), &n, |b, _| {
-            b.iter(|| {
-                fitter
-                    .fit(subject, &index, &FitParams::default())
-                    .expect("fit")
-            })
-        });
+        let atlas = atlas_of(&shapes[1..], 10);
+        bench_fit(&mut g, &mut sizes, family, &Fitter::new(&atlas), &shapes[0]);
     }
     // The subject alone.
     if let Some((training, subjects)) = subjects() {
-        let atlas = Atlas::build(
-            &training,
-            &AtlasParams {
-                modes: ModeSelection::Count(10),
-                element_size: 0.1,
-                ..AtlasParams::default()
-            },
-        )
-        .expect("atlas");
+        let atlas = atlas_of(&training, 10);
         let fitter = Fitter::new(&atlas);
         for subject in &subjects {
-            let index = ClosestPointIndex::from_shape(subject);
-            let n = subject.points.len();
-            sizes.push(("femur subject", n));
-            g.bench_with_input(BenchmarkId::new("femur subject", n), &n, |b, _| {
-                b.iter(|| {
-                    fitter
-                        .fit(subject, &index, &FitParams::default())
-                        .expect("fit")
-                })
-            });
+            bench_fit(&mut g, &mut sizes, "femur subject", &fitter, subject);
         }
     }
     g.finish();
@@ -187,15 +185,7 @@ fn bench(c: &mut Criterion) {
         if m >= shapes.len() - 1 {
             continue;
         }
-        let atlas = Atlas::build(
-            &shapes[1..],
-            &AtlasParams {
-                modes: ModeSelection::Count(m),
-                element_size: 0.1,
-                ..AtlasParams::default()
-            },
-        )
-        .expect("atlas");
+        let atlas = atlas_of(&shapes[1..], m);
         let fitter = Fitter::new(&atlas);
         let index = ClosestPointIndex::from_shape(&shapes[0]);
         measured_modes.push(m);

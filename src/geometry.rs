@@ -263,8 +263,8 @@ pub fn median_edge_length<const D: usize>(points: &[Point<D>], facets: &[[usize;
     if l.is_empty() {
         return 0.0;
     }
-    l.sort_by(f64::total_cmp);
-    l[l.len() / 2]
+    let mid = l.len() / 2;
+    *l.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// A triangulated sphere-like surface: a pole, `rings - 1` rings of `sectors` points, a pole;

@@ -77,14 +77,15 @@ fn femurs() -> Option<Vec<Shape<3>>> {
     Some(atlasmesh::pipeline::load_surfaces(&paths).expect("femur data"))
 }
 
-/// (family, shapes) at each size, atlas and subject together.
-fn populations() -> Vec<(&'static str, Vec<Shape<3>>)> {
+/// (family, shapes) at each size, atlas and subject together; `femurs` as given.
+fn populations(femurs: Option<&[Shape<3>]>) -> Vec<(&'static str, Vec<Shape<3>>)> {
     let mut out = Vec::new();
     for rings in [22, 39, 71, 122, 224] {
         let shapes = atlasmesh::pipeline::demo_population_3d(21, rings, 11).expect("synthetic");
         out.push(("synthetic", shapes));
     }
-    if let Some(mut shapes) = femurs() {
+    if let Some(femurs) = femurs {
+        let mut shapes = femurs.to_vec();
         let (small, ids) = decimate(&shapes[0], 1800);
         let decimated = shapes
             .iter()
@@ -104,15 +105,14 @@ fn populations() -> Vec<(&'static str, Vec<Shape<3>>)> {
     out
 }
 
-/// The subject S001 at each size, for the atlas of the others as given.
-fn subjects() -> Option<(Vec<Shape<3>>, Vec<Shape<3>>)> {
-    let shapes = femurs()?;
+/// The subject S001 at each size, for the atlas of the others (`femurs` as given).
+fn subjects(shapes: &[Shape<3>]) -> (Vec<Shape<3>>, Vec<Shape<3>>) {
     let mut subjects = vec![decimate(&shapes[0], 1000).0, shapes[0].clone()];
     for _ in 0..2 {
         let finer = subdivide(&subjects[subjects.len() - 1]);
         subjects.push(finer);
     }
-    Some((shapes[1..].to_vec(), subjects))
+    (shapes[1..].to_vec(), subjects)
 }
 
 /// The atlas of `shapes` with `modes` modes.
@@ -153,13 +153,15 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("scaling_vertices");
     g.sample_size(10);
     let mut sizes: Vec<(&str, usize)> = Vec::new();
-    for (family, shapes) in populations() {
+    let femurs = femurs();
+    let populations = populations(femurs.as_deref());
+    for (family, shapes) in &populations {
         // Subject 0 fitted with the atlas of the other 20, 10 modes.
         let atlas = atlas_of(&shapes[1..], 10);
         bench_fit(&mut g, &mut sizes, family, &Fitter::new(&atlas), &shapes[0]);
     }
     // The subject alone.
-    if let Some((training, subjects)) = subjects() {
+    if let Some((training, subjects)) = femurs.as_deref().map(subjects) {
         let atlas = atlas_of(&training, 10);
         let fitter = Fitter::new(&atlas);
         for subject in &subjects {
@@ -170,15 +172,17 @@ fn bench(c: &mut Criterion) {
     // Modes: the synthetic 10k family has 4 true modes; the femurs (when there) have more.
     let mut g = c.benchmark_group("scaling_modes");
     g.sample_size(10);
-    let (family, shapes) = populations()
-        .into_iter()
+    let fallback;
+    let (family, shapes): (&str, &[Shape<3>]) = match populations
+        .iter()
         .rfind(|(f, s)| *f == "femur" && s[0].points.len() < 10_000)
-        .unwrap_or_else(|| {
-            (
-                "synthetic",
-                atlasmesh::pipeline::demo_population_3d(31, 71, 11).expect("synthetic"),
-            )
-        });
+    {
+        Some((f, s)) => (f, s),
+        None => {
+            fallback = atlasmesh::pipeline::demo_population_3d(31, 71, 11).expect("synthetic");
+            ("synthetic", &fallback)
+        }
+    };
     let modes: Vec<usize> = vec![1, 5, 10, 15, 20, 25];
     let mut measured_modes = Vec::new();
     for &m in &modes {

@@ -1241,6 +1241,15 @@ mod tests {
         atlas_of(120)
     }
 
+    /// Mode weights of `sigmas` standard deviations along the first modes.
+    fn weights_at(a: &Atlas<2>, sigmas: [f64; 3]) -> Vec<f64> {
+        a.eigenvalues
+            .iter()
+            .zip(sigmas)
+            .map(|(l, f)| f * l.sqrt())
+            .collect()
+    }
+
     /// The egg population with `points` points per outline.
     fn atlas_of(points: usize) -> Atlas<2> {
         let shapes: Vec<Shape<2>> = (0..12)
@@ -1296,12 +1305,7 @@ mod tests {
         let mut fits = Vec::new();
         for points in [120, 960] {
             let a = atlas_of(points);
-            let w: Vec<f64> = a
-                .eigenvalues
-                .iter()
-                .zip([1.2, -0.8, 0.5])
-                .map(|(l, f)| f * l.sqrt())
-                .collect();
+            let w = weights_at(&a, [1.2, -0.8, 0.5]);
             let s = subject(&a, &w, &sim);
             let idx = ClosestPointIndex::from_shape(&s);
             let r = Fitter::new(&a)
@@ -1329,12 +1333,7 @@ mod tests {
     #[test]
     fn fit_recovers_the_weights_and_pose_of_a_model_instance() {
         let a = atlas();
-        let w: Vec<f64> = a
-            .eigenvalues
-            .iter()
-            .zip([1.5, -1.0, 0.8])
-            .map(|(l, f)| f * l.sqrt())
-            .collect();
+        let w = weights_at(&a, [1.5, -1.0, 0.8]);
         let mut sim = Similarity::<2>::planar_rotation(2.0);
         sim.s = 40.0;
         sim.t = [100.0, -20.0];
@@ -1359,12 +1358,7 @@ mod tests {
     #[test]
     fn fit_is_invariant_to_the_subject_units() {
         let a = atlas();
-        let w: Vec<f64> = a
-            .eigenvalues
-            .iter()
-            .zip([-1.0, 1.0, 0.5])
-            .map(|(l, f)| f * l.sqrt())
-            .collect();
+        let w = weights_at(&a, [-1.0, 1.0, 0.5]);
         let mut small = Similarity::<2>::identity();
         small.s = 1.0;
         let mut big = small;
@@ -1397,12 +1391,7 @@ mod tests {
     #[test]
     fn symmetric_fit_recovers_a_far_instance() {
         let a = atlas();
-        let w: Vec<f64> = a
-            .eigenvalues
-            .iter()
-            .zip([2.8, -2.5, 2.5])
-            .map(|(l, f)| f * l.sqrt())
-            .collect();
+        let w = weights_at(&a, [2.8, -2.5, 2.5]);
         let s = subject(&a, &w, &Similarity::identity());
         let idx = ClosestPointIndex::from_shape(&s);
         let r = Fitter::new(&a)

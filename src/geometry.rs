@@ -483,11 +483,22 @@ pub struct ClosestPointIndex<const D: usize> {
     points: Vec<Point<D>>,
     facets: Vec<[usize; D]>,
     nodes: Vec<BvhNode<D>>,
-    /// Facet indices, ordered so that every node covers a contiguous range.
+    /// Facet indices, ordered so that every node covers a contiguous range; a facet's place
+    /// in this order is its slot.
     order: Vec<u32>,
+    /// The facet of every slot, its corners numbered as in `corners`.
+    slots: Vec<[u32; D]>,
+    /// The facets' corners, numbered in the order of their first use by `slots`, so that
+    /// the corners of a leaf lie together in memory (a search's facet tests read nothing
+    /// else, and cache misses were what they spent most of their time on).
+    corners: Vec<Point<D>>,
+    /// The point of every corner.
+    corner_point: Vec<u32>,
+    /// Slot of every facet.
+    slot_of: Vec<u32>,
     /// Parent of every node (the root's is itself).
     parent: Vec<u32>,
-    /// Leaf of every facet.
+    /// Leaf of every slot.
     leaf_of: Vec<u32>,
 }
 
@@ -506,6 +517,10 @@ impl<const D: usize> Clone for ClosestPointIndex<D> {
             facets: self.facets.clone(),
             nodes: self.nodes.clone(),
             order: self.order.clone(),
+            slots: self.slots.clone(),
+            corners: self.corners.clone(),
+            corner_point: self.corner_point.clone(),
+            slot_of: self.slot_of.clone(),
             parent: self.parent.clone(),
             leaf_of: self.leaf_of.clone(),
         }
@@ -531,7 +546,8 @@ pub struct QueryMemo<const D: usize> {
     drift: f64,
     /// Every facet but `near` was at least this far from `at` (shape units).
     bound: f64,
-    /// The nearest facets met, nearest first (`u32::MAX`: none), and their distances.
+    /// The slots of the nearest facets met, nearest first (`u32::MAX`: none), and their
+    /// distances.
     near: [u32; MEMO_FACETS],
     dist: [f64; MEMO_FACETS],
 }
@@ -549,10 +565,10 @@ impl<const D: usize> Default for QueryMemo<D> {
     }
 }
 
-/// What a search reports besides its answer: every facet it tested and every box it
-/// skipped, with their squared distances.
+/// What a search reports besides its answer: every facet it tested (by slot) and every box
+/// it skipped, with their squared distances.
 trait Track {
-    fn facet(&mut self, fi: usize, d2: f64);
+    fn facet(&mut self, slot: usize, d2: f64);
     fn skipped(&mut self, d2: f64);
 }
 
@@ -572,12 +588,12 @@ struct Nearest {
 
 impl Track for Nearest {
     #[inline]
-    fn facet(&mut self, fi: usize, d2: f64) {
-        let fi = fi as u32;
-        if self.near.iter().any(|&(_, f)| f == fi) {
+    fn facet(&mut self, slot: usize, d2: f64) {
+        let slot = slot as u32;
+        if self.near.iter().any(|&(_, s)| s == slot) {
             return;
         }
-        let mut item = (d2, fi);
+        let mut item = (d2, slot);
         for slot in self.near.iter_mut() {
             if item.0 < slot.0 {
                 std::mem::swap(slot, &mut item);
@@ -702,14 +718,29 @@ impl<const D: usize> ClosestPointIndex<D> {
         for (ni, node) in nodes.iter().enumerate() {
             if node.child == 0 {
                 let s = node.start as usize;
-                for &fi in &order[s..s + node.count as usize] {
-                    leaf_of[fi as usize] = ni as u32;
-                }
+                leaf_of[s..s + node.count as usize].fill(ni as u32);
             } else {
                 parent[node.child as usize] = ni as u32;
                 parent[node.child as usize + 1] = ni as u32;
             }
         }
+        let mut corner_of = vec![u32::MAX; points.len()];
+        let mut corner_point = Vec::new();
+        let mut slot_of = vec![0u32; facets.len()];
+        let slots: Vec<[u32; D]> = order
+            .iter()
+            .enumerate()
+            .map(|(slot, &fi)| {
+                slot_of[fi as usize] = slot as u32;
+                facets[fi as usize].map(|v| {
+                    if corner_of[v] == u32::MAX {
+                        corner_of[v] = corner_point.len() as u32;
+                        corner_point.push(v as u32);
+                    }
+                    corner_of[v]
+                })
+            })
+            .collect();
         ClosestPointIndex {
             id: next_index_id(),
             drift: 0.0,
@@ -717,6 +748,10 @@ impl<const D: usize> ClosestPointIndex<D> {
             facets: facets.to_vec(),
             nodes,
             order,
+            slots,
+            corners: corner_point.iter().map(|&v| points[v as usize]).collect(),
+            corner_point,
+            slot_of,
             parent,
             leaf_of,
         }
@@ -745,17 +780,20 @@ impl<const D: usize> ClosestPointIndex<D> {
             .fold(0.0, f64::max);
         self.drift += moved.sqrt();
         self.points.copy_from_slice(points);
+        for (c, &v) in self.corners.iter_mut().zip(&self.corner_point) {
+            *c = points[v as usize];
+        }
         // Children always come after their parent: a reverse sweep sees children first.
         for ni in (0..self.nodes.len()).rev() {
             let node = self.nodes[ni];
             let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
             if node.child == 0 {
                 let s = node.start as usize;
-                for &fi in &self.order[s..s + node.count as usize] {
-                    for &v in &self.facets[fi as usize] {
+                for f in &self.slots[s..s + node.count as usize] {
+                    for &c in f {
                         for d in 0..D {
-                            lo[d] = lo[d].min(self.points[v][d]);
-                            hi[d] = hi[d].max(self.points[v][d]);
+                            lo[d] = lo[d].min(self.corners[c as usize][d]);
+                            hi[d] = hi[d].max(self.corners[c as usize][d]);
                         }
                     }
                 }
@@ -775,29 +813,30 @@ impl<const D: usize> ClosestPointIndex<D> {
         }
     }
 
-    fn closest_on_facet(&self, p: Point<D>, fi: usize) -> SurfacePoint<D> {
-        let f = self.facets[fi];
+    /// The closest point to `p` on the facet in `slot`.
+    #[inline]
+    fn closest_on_slot(&self, p: Point<D>, slot: usize) -> SurfacePoint<D> {
+        let c = self.slots[slot].map(|v| self.corners[v as usize]);
         let mut weights = [0.0; D];
         match D {
             2 => {
-                let t = closest_on_segment(p, self.points[f[0]], self.points[f[1]]);
+                let t = closest_on_segment(p, c[0], c[1]);
                 weights[0] = 1.0 - t;
                 weights[1] = t;
             }
             3 => {
-                let w =
-                    closest_on_triangle(p, self.points[f[0]], self.points[f[1]], self.points[f[2]]);
+                let w = closest_on_triangle(p, c[0], c[1], c[2]);
                 weights.copy_from_slice(&w);
             }
             _ => unreachable!(),
         }
         let mut q = [0.0; D];
         for k in 0..D {
-            q = add(q, scale(self.points[f[k]], weights[k]));
+            q = add(q, scale(c[k], weights[k]));
         }
         SurfacePoint {
             point: q,
-            facet: fi,
+            facet: self.order[slot] as usize,
             weights,
             dist2: dist2(p, q),
         }
@@ -812,7 +851,8 @@ impl<const D: usize> ClosestPointIndex<D> {
     /// previous iteration for a point that moved a little): the same answer, found faster
     /// when the hint is near.
     pub fn closest_from(&self, p: &Point<D>, hint: usize) -> SurfacePoint<D> {
-        self.search(p, (hint < self.facets.len()).then_some(hint), &mut ())
+        let slot = self.slot_of.get(hint).map(|&s| s as usize);
+        self.search(p, slot, &mut ())
     }
 
     /// [`closest`](Self::closest) for a point queried again and again as it and the surface
@@ -828,8 +868,8 @@ impl<const D: usize> ClosestPointIndex<D> {
             // moved by `dist(p, at)` and no facet point by more than the drift.
             let slack = norm(sub(*p, memo.at)) + (self.drift - memo.drift);
             let mut best: Option<SurfacePoint<D>> = None;
-            for (&fi, &d) in memo.near.iter().zip(&memo.dist) {
-                if fi == u32::MAX {
+            for (&slot, &d) in memo.near.iter().zip(&memo.dist) {
+                if slot == u32::MAX {
                     break;
                 }
                 if let Some(b) = &best
@@ -837,7 +877,7 @@ impl<const D: usize> ClosestPointIndex<D> {
                 {
                     break;
                 }
-                let c = self.closest_on_facet(*p, fi as usize);
+                let c = self.closest_on_slot(*p, slot as usize);
                 if best.as_ref().is_none_or(|b| c.dist2 < b.dist2) {
                     best = Some(c);
                 }
@@ -872,6 +912,7 @@ impl<const D: usize> ClosestPointIndex<D> {
         best
     }
 
+    /// The exact closest point, searched from the root or from the facet in slot `hint`.
     fn search(&self, p: &Point<D>, hint: Option<usize>, track: &mut impl Track) -> SurfacePoint<D> {
         let mut best = SurfacePoint {
             point: *p,
@@ -886,7 +927,7 @@ impl<const D: usize> ClosestPointIndex<D> {
         // From the hint: its leaf, then, climbing to the root, the sibling subtree of every
         // node on the way. Every facet lies in exactly one of these; a sibling whose box is
         // farther than the best found is skipped at once.
-        best = self.closest_on_facet(*p, h);
+        best = self.closest_on_slot(*p, h);
         track.facet(h, best.dist2);
         let mut ni = self.leaf_of[h] as usize;
         self.descend(p, ni, &mut best, track);
@@ -931,13 +972,12 @@ impl<const D: usize> ClosestPointIndex<D> {
             }
             if node.child == 0 {
                 let s = node.start as usize;
-                for &fi in &self.order[s..s + node.count as usize] {
-                    let fi = fi as usize;
-                    if fi == best.facet {
+                for slot in s..s + node.count as usize {
+                    if self.order[slot] as usize == best.facet {
                         continue;
                     }
-                    let c = self.closest_on_facet(*p, fi);
-                    track.facet(fi, c.dist2);
+                    let c = self.closest_on_slot(*p, slot);
+                    track.facet(slot, c.dist2);
                     if c.dist2 < best.dist2 {
                         *best = c;
                     }
@@ -995,18 +1035,12 @@ impl<const D: usize> ClosestPointIndex<D> {
             }
             if node.child == 0 {
                 let s = node.start as usize;
-                for &fi in &self.order[s..s + node.count as usize] {
-                    let fi = fi as usize;
-                    let f = self.facets[fi];
+                for slot in s..s + node.count as usize {
+                    let fi = self.order[slot] as usize;
+                    let c = self.slots[slot].map(|v| self.corners[v as usize]);
                     let hit = match D {
-                        2 => ray_segment(*p, *n, self.points[f[0]], self.points[f[1]]),
-                        3 => ray_triangle(
-                            *p,
-                            *n,
-                            self.points[f[0]],
-                            self.points[f[1]],
-                            self.points[f[2]],
-                        ),
+                        2 => ray_segment(*p, *n, c[0], c[1]),
+                        3 => ray_triangle(*p, *n, c[0], c[1], c[2]),
                         _ => unreachable!(),
                     };
                     if let Some((t, w)) = hit
@@ -1323,9 +1357,11 @@ mod tests {
         };
         let mut memos = vec![QueryMemo::default(); 300];
         let mut hits = 0;
+        let mut now = points.clone();
         for step in 0..20 {
             if step % 4 == 2 {
-                idx.refit(&surface(0.002 * step as f64).0);
+                now = surface(0.002 * step as f64).0;
+                idx.refit(&now);
             }
             for (q, memo) in queries(step).iter().zip(&mut memos) {
                 let before = *memo;
@@ -1337,6 +1373,22 @@ mod tests {
                     m.dist2,
                     plain.dist2
                 );
+                // Against every facet of the surface as it is now (not the index's copy),
+                // and the answer's facet and weights give its point.
+                if step % 4 == 2 {
+                    let brute = facets
+                        .iter()
+                        .map(|f| {
+                            let w = closest_on_triangle(*q, now[f[0]], now[f[1]], now[f[2]]);
+                            let c = (0..3).fold([0.0; 3], |c, k| add(c, scale(now[f[k]], w[k])));
+                            dist2(*q, c)
+                        })
+                        .fold(f64::INFINITY, f64::min);
+                    assert!((m.dist2 - brute).abs() <= 1e-12 * (1.0 + brute));
+                    let f = facets[m.facet];
+                    let at = (0..3).fold([0.0; 3], |c, k| add(c, scale(now[f[k]], m.weights[k])));
+                    assert!(dist2(at, m.point) < 1e-24, "step {step} query {q:?}");
+                }
                 hits += usize::from(memo.at == before.at && before.index != 0);
             }
         }
@@ -1379,8 +1431,15 @@ mod tests {
                 ((k * 53) % 97) as f64 / 38.0 - 1.25,
             ];
             let c = idx.closest(&q);
-            let brute = (0..s.facets.len())
-                .map(|f| idx.closest_on_facet(q, f).dist2)
+            // Straight from the shape's own points, not the index's copies.
+            let brute = s
+                .facets
+                .iter()
+                .map(|f| {
+                    let (a, b) = (s.points[f[0]], s.points[f[1]]);
+                    let t = closest_on_segment(q, a, b);
+                    dist2(q, add(a, scale(sub(b, a), t)))
+                })
                 .fold(f64::INFINITY, f64::min);
             assert!((c.dist2 - brute).abs() < 1e-12, "query {q:?}");
         }

@@ -300,27 +300,9 @@ struct Subject<'s, const D: usize> {
     shape: &'s Shape<D>,
     index: &'s ClosestPointIndex<D>,
     normals: Vec<Point<D>>,
-}
-
-/// Interpolated unit normal at a surface point (vertex normals blended by the barycentric
-/// weights; the facet normal where they cancel); `None` on a degenerate facet.
-fn normal_at<const D: usize>(
-    points: &[Point<D>],
-    facet: &[usize; D],
-    weights: &[f64; D],
-    vertex_normals: &[Point<D>],
-) -> Option<Point<D>> {
-    let mut n = [0.0; D];
-    for k in 0..D {
-        n = add(n, scale(vertex_normals[facet[k]], weights[k]));
-    }
-    let l = norm(n);
-    if l > 1e-12 {
-        return Some(scale(n, 1.0 / l));
-    }
-    let f = facet_normal(points, facet);
-    let l = norm(f);
-    (l > 0.0).then(|| scale(f, 1.0 / l))
+    /// -1 where the subject runs the other way round than the atlas (its normals are turned
+    /// round), else 1.
+    sign: f64,
 }
 
 /// State of Algorithm 1: pose and weights.
@@ -357,14 +339,14 @@ struct Step {
 }
 
 /// The shape model at one resolution: the mean's points (a subset of the atlas's, or all),
-/// their rows of the modes, facets on them, and the index of the mean's facets.
+/// their rows of the modes, and the index of the mean's facets on them (it keeps the
+/// facets).
 struct Model<const D: usize> {
     /// The atlas point each point is.
     ids: Vec<usize>,
     mean: Vec<Point<D>>,
     /// Rows of `Psi` of the points, row-major (`(point · D + d) · m + k`).
     psi: Vec<f64>,
-    facets: Vec<[usize; D]>,
     /// Index of the mean's facets, refitted to every instance.
     index: ClosestPointIndex<D>,
 }
@@ -386,7 +368,6 @@ impl<const D: usize> Model<D> {
             ids,
             mean,
             psi,
-            facets,
             index,
         }
     }
@@ -689,22 +670,25 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 "has no segments/facets to fit to",
             ));
         }
+        // A subject listed in the other order than the atlas (clockwise against
+        // counter-clockwise, or inward facets) gets its normals turned round, so that
+        // corresponding normals agree.
+        let sign = if orientation(&subject.points, &subject.facets)
+            * orientation(&self.atlas.mean, &self.atlas.facets)
+            < 0.0
+        {
+            -1.0
+        } else {
+            1.0
+        };
         let subj = Subject {
             shape: subject,
             index: subject_index,
-            normals: {
-                let mut nv = vertex_normals(&subject.points, &subject.facets);
-                // A subject listed in the other order than the atlas (clockwise against
-                // counter-clockwise, or inward facets) gets its normals turned round, so that
-                // corresponding normals agree.
-                if orientation(&subject.points, &subject.facets)
-                    * orientation(&self.atlas.mean, &self.atlas.facets)
-                    < 0.0
-                {
-                    nv.iter_mut().for_each(|v| *v = scale(*v, -1.0));
-                }
-                nv
-            },
+            normals: vertex_normals(&subject.points, &subject.facets)
+                .into_iter()
+                .map(|v| scale(v, sign))
+                .collect(),
+            sign,
         };
         let n = self.atlas.mean.len();
         let forward = !params.partial;
@@ -808,7 +792,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             &instance,
             &self.atlas.facets,
             subj.index,
-            &subj.normals,
+            subj.sign < 0.0,
             Some(&mut run.state.forward_memo),
         );
         let corresponded = if params.partial {
@@ -954,11 +938,11 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 .index
                 .closest_memo(&sim.apply(&x[j]), &mut st.forward_memo[model.ids[j]]);
             forward += c.dist2;
-            // The index's own copy of the facets: the search has just read this one.
-            let f = &subj.index.facets()[c.facet];
-            let Some(n) = normal_at(subj.index.points(), f, &c.weights, &subj.normals) else {
+            // From the index, which the search has just read.
+            let Some(n) = subj.index.normal_at(&c) else {
                 continue;
             };
+            let n = scale(n, subj.sign);
             let nr = sim.rotate_inverse(&n);
             let cw = compatibility(dot(nr, scratch.normals[j]));
             if cw == 0.0 {
@@ -983,10 +967,10 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 let z = sim.apply_inverse(&subj.shape.points[i]);
                 let c = scratch.index.closest_memo(&z, &mut st.backward_memo[i]);
                 backward += c.dist2 * sim.s * sim.s;
-                let f = &scratch.index.facets()[c.facet];
-                let Some(n) = normal_at(x, f, &c.weights, &scratch.normals) else {
+                let Some(n) = scratch.index.normal_at(&c) else {
                     continue;
                 };
+                let f = &scratch.index.facet_vertices(&c);
                 let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
                 if cw == 0.0 {
                     continue;
@@ -1129,7 +1113,7 @@ impl<const D: usize> Scratch<D> {
         }
         if index && !self.indexed {
             self.index.refit(&self.x);
-            self.normals = vertex_normals(&self.x, &model.facets);
+            self.index.vertex_normals_into(&mut self.normals);
             self.indexed = true;
         }
     }
@@ -1189,7 +1173,8 @@ impl<const D: usize> Run<D> {
 /// onto the indexed subject along its normal (section 3, last step of Algorithm 1): the
 /// nearest crossing of the normal line within three times the closest-point distance plus
 /// half the local edge length, among the crossings where the subject faces the same way
-/// (its normal, `subject_normals` interpolated, within 60° of the point's); the closest
+/// (its normal, [`ClosestPointIndex::normal_at`], turned round with `flip`, within 60° of
+/// the point's); the closest
 /// point where there is none. Without that condition a normal line near a concave corner
 /// (between two fingers) crosses the neighbouring side first and the correspondence jumps.
 /// `memos`, one per point, are those of the closest-point queries of the same points (e.g.
@@ -1198,7 +1183,7 @@ pub fn project_along_normals<const D: usize>(
     points: &[Point<D>],
     facets: &[[usize; D]],
     subject: &ClosestPointIndex<D>,
-    subject_normals: &[Point<D>],
+    flip: bool,
     memos: Option<&mut [QueryMemo<D>]>,
 ) -> Vec<SurfacePoint<D>> {
     let normals = vertex_normals(points, facets);
@@ -1223,9 +1208,10 @@ pub fn project_along_normals<const D: usize>(
             let max_t = 3.0 * c.dist2.sqrt() + h;
             subject
                 .ray_where(p, nrm, max_t, |hit| {
-                    let f = &subject.facets()[hit.facet];
-                    normal_at(subject.points(), f, &hit.weights, subject_normals)
-                        .is_some_and(|ns| dot(ns, *nrm) >= COMPATIBLE_NORMALS_COS)
+                    subject.normal_at(hit).is_some_and(|ns| {
+                        let cos = dot(ns, *nrm);
+                        (if flip { -cos } else { cos }) >= COMPATIBLE_NORMALS_COS
+                    })
                 })
                 .unwrap_or(c)
         })

@@ -494,6 +494,10 @@ pub struct ClosestPointIndex<const D: usize> {
     corners: Vec<Point<D>>,
     /// The point of every corner.
     corner_point: Vec<u32>,
+    /// Unit vertex normal of every corner (as [`vertex_normals`] gives them).
+    corner_normals: Vec<Point<D>>,
+    /// Corner of every point (`u32::MAX`: on no facet).
+    corner_of: Vec<u32>,
     /// Slot of every facet.
     slot_of: Vec<u32>,
     /// Parent of every node (the root's is itself).
@@ -520,6 +524,8 @@ impl<const D: usize> Clone for ClosestPointIndex<D> {
             slots: self.slots.clone(),
             corners: self.corners.clone(),
             corner_point: self.corner_point.clone(),
+            corner_normals: self.corner_normals.clone(),
+            corner_of: self.corner_of.clone(),
             slot_of: self.slot_of.clone(),
             parent: self.parent.clone(),
             leaf_of: self.leaf_of.clone(),
@@ -741,7 +747,7 @@ impl<const D: usize> ClosestPointIndex<D> {
                 })
             })
             .collect();
-        ClosestPointIndex {
+        let mut index = ClosestPointIndex {
             id: next_index_id(),
             drift: 0.0,
             points: points.to_vec(),
@@ -751,10 +757,14 @@ impl<const D: usize> ClosestPointIndex<D> {
             slots,
             corners: corner_point.iter().map(|&v| points[v as usize]).collect(),
             corner_point,
+            corner_normals: Vec::new(),
+            corner_of,
             slot_of,
             parent,
             leaf_of,
-        }
+        };
+        index.update_normals();
+        index
     }
 
     /// From a shape.
@@ -783,6 +793,7 @@ impl<const D: usize> ClosestPointIndex<D> {
         for (c, &v) in self.corners.iter_mut().zip(&self.corner_point) {
             *c = points[v as usize];
         }
+        self.update_normals();
         // Children always come after their parent: a reverse sweep sees children first.
         for ni in (0..self.nodes.len()).rev() {
             let node = self.nodes[ni];
@@ -811,6 +822,61 @@ impl<const D: usize> ClosestPointIndex<D> {
             self.nodes[ni].lo = lo;
             self.nodes[ni].hi = hi;
         }
+    }
+
+    /// The corners' vertex normals, from the corners and the facets (as [`vertex_normals`]).
+    fn update_normals(&mut self) {
+        self.corner_normals.clear();
+        self.corner_normals.resize(self.corners.len(), [0.0; D]);
+        for f in &self.slots {
+            let f = f.map(|c| c as usize);
+            let n = facet_normal(&self.corners, &f);
+            for &c in &f {
+                self.corner_normals[c] = add(self.corner_normals[c], n);
+            }
+        }
+        for n in &mut self.corner_normals {
+            *n = normalize(*n);
+        }
+    }
+
+    /// Unit normal at the point `sp` of this index's facets (a query's answer): the vertex
+    /// normals (area-weighted facet normals, section 2.1) blended by its barycentric weights,
+    /// or the facet's own normal where they cancel; `None` on a degenerate facet. It reads
+    /// what the query that found `sp` has just read, not the shape's arrays.
+    pub fn normal_at(&self, sp: &SurfacePoint<D>) -> Option<Point<D>> {
+        let slot = *self.slot_of.get(sp.facet)? as usize;
+        let f = self.slots[slot].map(|c| c as usize);
+        let mut n = [0.0; D];
+        for k in 0..D {
+            n = add(n, scale(self.corner_normals[f[k]], sp.weights[k]));
+        }
+        let l = norm(n);
+        if l > 1e-12 {
+            return Some(scale(n, 1.0 / l));
+        }
+        let n = facet_normal(&self.corners, &f);
+        let l = norm(n);
+        (l > 0.0).then(|| scale(n, 1.0 / l))
+    }
+
+    /// The vertices of the facet of `sp` (as in the shape's facets).
+    pub fn facet_vertices(&self, sp: &SurfacePoint<D>) -> [usize; D] {
+        let slot = self.slot_of[sp.facet] as usize;
+        self.slots[slot].map(|c| self.corner_point[c as usize] as usize)
+    }
+
+    /// The unit vertex normal of every point (as [`vertex_normals`] gives them; zero for a
+    /// point on no facet), into `out`.
+    pub fn vertex_normals_into(&self, out: &mut Vec<Point<D>>) {
+        out.clear();
+        out.extend(self.corner_of.iter().map(|&c| {
+            if c == u32::MAX {
+                [0.0; D]
+            } else {
+                self.corner_normals[c as usize]
+            }
+        }));
     }
 
     /// The closest point to `p` on the facet in `slot`.
@@ -1401,6 +1467,45 @@ mod tests {
         let _ = idx.closest_memo(&q, &mut memo);
         let c = other.closest_memo(&q, &mut memo);
         assert!((c.dist2 - other.closest(&q).dist2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_index_normals_follow_the_surface_through_refits() {
+        // The index's own vertex normals (kept in its corner order) against those of the
+        // shape's arrays, before and after the surface moves.
+        let surface = |t: f64| {
+            uv_sphere(20, 12, |th, ph| {
+                let r = 1.0 + 0.3 * (2.0 * ph + t).sin() * th.cos();
+                [
+                    r * th.cos() * ph.cos(),
+                    r * th.cos() * ph.sin(),
+                    0.7 * r * th.sin(),
+                ]
+            })
+        };
+        let (points, facets) = surface(0.0);
+        let mut idx = ClosestPointIndex::new(&points, &facets);
+        let mut out = Vec::new();
+        for t in [0.0, 0.5, 1.5] {
+            let now = surface(t).0;
+            idx.refit(&now);
+            let vn = vertex_normals(&now, &facets);
+            idx.vertex_normals_into(&mut out);
+            assert_eq!(out.len(), vn.len());
+            for (a, b) in out.iter().zip(&vn) {
+                assert!(dist2(*a, *b) < 1e-24);
+            }
+            for k in 0..200 {
+                let a = k as f64 * 0.61;
+                let q = [1.5 * a.cos(), 1.3 * (0.9 * a).sin(), (0.4 * a).cos() - 0.2];
+                let c = idx.closest(&q);
+                let f = facets[c.facet];
+                assert_eq!(idx.facet_vertices(&c), f);
+                let blend = (0..3).fold([0.0; 3], |n, i| add(n, scale(vn[f[i]], c.weights[i])));
+                let n = idx.normal_at(&c).expect("no degenerate facet here");
+                assert!(dist2(n, normalize(blend)) < 1e-20, "t {t} query {q:?}");
+            }
+        }
     }
 
     #[test]

@@ -407,7 +407,6 @@ pub fn register<const D: usize>(
             landmark_target[a] = Some(target.points[b]);
         }
     }
-    let target_normals = vertex_normals(&target.points, &target.facets);
     let mut deformed = sources.clone();
     let mut history = Vec::new();
     let mut memos = vec![QueryMemo::default(); n];
@@ -433,19 +432,11 @@ pub fn register<const D: usize>(
                 .map(|j| {
                     let c = target_index.closest_memo(&deformed[j], &mut memos[j]);
                     ms += c.dist2;
-                    let f = &target.facets[c.facet];
-                    let mut nt = [0.0; D];
-                    for k in 0..D {
-                        for d in 0..D {
-                            nt[d] += c.weights[k] * target_normals[f[k]][d];
-                        }
-                    }
                     // Facing sides do not pull: the point is asked to stay.
-                    let c_point = if dot(nt, normals[j]) < 0.5 * crate::geometry::norm(nt) {
-                        deformed[j]
-                    } else {
-                        c.point
-                    };
+                    let facing = target_index
+                        .normal_at(&c)
+                        .is_some_and(|nt| dot(nt, normals[j]) < 0.5);
+                    let c_point = if facing { deformed[j] } else { c.point };
                     match landmark_target[j] {
                         Some(q) => std::array::from_fn(|d| {
                             (c_point[d] + (weight[j] - 1.0) * q[d]) / weight[j]
@@ -477,7 +468,7 @@ pub fn register<const D: usize>(
         &deformed,
         &template.facets,
         target_index,
-        &target_normals,
+        false,
         Some(&mut memos),
     );
     Ok(Registration {

@@ -967,10 +967,13 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 let z = sim.apply_inverse(&subj.shape.points[i]);
                 let c = scratch.index.closest_memo(&z, &mut st.backward_memo[i]);
                 backward += c.dist2 * sim.s * sim.s;
-                let Some(n) = scratch.index.normal_at(&c) else {
+                let (Some(n), Some(f)) = (
+                    scratch.index.normal_at(&c),
+                    scratch.index.facet_vertices(&c),
+                ) else {
                     continue;
                 };
-                let f = &scratch.index.facet_vertices(&c);
+                let f = &f;
                 let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
                 if cw == 0.0 {
                     continue;
@@ -1174,9 +1177,9 @@ impl<const D: usize> Run<D> {
 /// nearest crossing of the normal line within three times the closest-point distance plus
 /// half the local edge length, among the crossings where the subject faces the same way
 /// (its normal, [`ClosestPointIndex::normal_at`], turned round with `flip`, within 60° of
-/// the point's); the closest
-/// point where there is none. Without that condition a normal line near a concave corner
-/// (between two fingers) crosses the neighbouring side first and the correspondence jumps.
+/// the point's); the closest point where there is none. Without that condition a normal
+/// line near a concave corner (between two fingers) crosses the neighbouring side first and
+/// the correspondence jumps.
 /// `memos`, one per point, are those of the closest-point queries of the same points (e.g.
 /// a fit's last update): they make the closest points cheap.
 pub fn project_along_normals<const D: usize>(

@@ -875,10 +875,11 @@ impl<const D: usize> ClosestPointIndex<D> {
         (l > 0.0).then(|| scale(n, 1.0 / l))
     }
 
-    /// The vertices of the facet of `sp` (as in the shape's facets).
-    pub fn facet_vertices(&self, sp: &SurfacePoint<D>) -> [usize; D] {
-        let slot = self.slot_of[sp.facet] as usize;
-        self.slots[slot].map(|c| self.corner_point[c as usize] as usize)
+    /// The vertices of the facet of `sp` (as in the shape's facets; `None` for a facet the
+    /// index does not have).
+    pub fn facet_vertices(&self, sp: &SurfacePoint<D>) -> Option<[usize; D]> {
+        let slot = *self.slot_of.get(sp.facet)? as usize;
+        Some(self.slots[slot].map(|c| self.corner_point[c as usize] as usize))
     }
 
     /// The unit vertex normal of every point (as [`vertex_normals`] gives them; zero for a
@@ -1516,7 +1517,7 @@ mod tests {
                 let q = [1.5 * a.cos(), 1.3 * (0.9 * a).sin(), (0.4 * a).cos() - 0.2];
                 let c = idx.closest(&q);
                 let f = facets[c.facet];
-                assert_eq!(idx.facet_vertices(&c), f);
+                assert_eq!(idx.facet_vertices(&c), Some(f));
                 let blend = (0..3).fold([0.0; 3], |n, i| add(n, scale(vn[f[i]], c.weights[i])));
                 let n = idx.normal_at(&c).expect("no degenerate facet here");
                 assert!(dist2(n, normalize(blend)) < 1e-20, "t {t} query {q:?}");

@@ -279,8 +279,18 @@ fn spread(n: usize, k: usize) -> Vec<usize> {
 
 /// Which model points (forward pairs) and subject vertices (backward pairs) take part.
 struct Sampling {
+    /// Which of a fit's samplings this is.
+    pass: Pass,
     forward: Vec<usize>,
     backward: Vec<usize>,
+}
+
+/// The samplings of a fit: the pre-alignment's, the coarse stage's, the full stage's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Pass {
+    Rough,
+    Coarse,
+    Full,
 }
 
 impl Sampling {
@@ -310,10 +320,16 @@ struct Subject<'s, const D: usize> {
 struct State<const D: usize> {
     sim: Similarity<D>,
     w: Vec<f64>,
-    /// What the closest-point searches of the last update learned, per model point and per
-    /// subject vertex: the next update's queries start from there.
+    /// What the closest-point searches of the last update learned, per forward and per
+    /// backward pair of the sampling `memos_for` (by place in its lists): the next update's
+    /// queries start from there. A new sampling starts them afresh: they are a few hundred
+    /// bytes per pair (allocated for every point of every start, they cost a fit more in
+    /// page faults than they saved), and what a coarse sampling learned helps little at
+    /// the next (the coarse model's index is another, and most of its points' memos
+    /// missed at the full model's first update).
     forward_memo: Vec<QueryMemo<D>>,
     backward_memo: Vec<QueryMemo<D>>,
+    memos_for: Option<Pass>,
 }
 
 /// A stage of Algorithm 1: the model and points it runs on, and when its inner loop stops:
@@ -342,8 +358,6 @@ struct Step {
 /// their rows of the modes, and the index of the mean's facets on them (it keeps the
 /// facets).
 struct Model<const D: usize> {
-    /// The atlas point each point is.
-    ids: Vec<usize>,
     mean: Vec<Point<D>>,
     /// Rows of `Psi` of the points, row-major (`(point · D + d) · m + k`).
     psi: Vec<f64>,
@@ -364,12 +378,7 @@ impl<const D: usize> Model<D> {
         }
         let mean: Vec<Point<D>> = ids.iter().map(|&i| atlas.mean[i]).collect();
         let index = ClosestPointIndex::new(&mean, &facets);
-        Model {
-            ids,
-            mean,
-            psi,
-            index,
-        }
+        Model { mean, psi, index }
     }
 
     fn len(&self) -> usize {
@@ -450,7 +459,14 @@ pub struct Fitter<'a, const D: usize> {
     /// Built for [`FitParams::default`]'s `coarse_points`; `None` when the atlas is small.
     coarse: Option<Model<D>>,
     coarse_points: usize,
+    /// The buffers of finished fits, for the next ones: megabytes for a femur (the instance's
+    /// index, the rows of the linear system), whose pages, allocated afresh for every fit,
+    /// cost it a few percent in page faults.
+    spare: std::sync::Mutex<Vec<Scratches<D>>>,
 }
+
+/// Spare buffers a [`Fitter`] keeps at most (one per worker of a batch, typically).
+const SPARE_SCRATCHES: usize = 16;
 
 /// Which of the fitter's models.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -470,6 +486,40 @@ impl<'a, const D: usize> Fitter<'a, D> {
             full: Model::new(atlas, (0..n).collect(), atlas.facets.clone()),
             coarse: Model::coarse(atlas, COARSE_MODEL_FACTOR * coarse_points),
             coarse_points,
+            spare: std::sync::Mutex::new(Vec::new()),
+        }
+    }
+
+    /// Buffers for a fit with `params`: spare ones if there are any, else new ones.
+    fn scratches(&self, params: &FitParams) -> Scratches<D> {
+        let use_coarse = !std::ptr::eq(self.model(Level::Coarse, params), &self.full);
+        let spare = {
+            let mut spare = self
+                .spare
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            let k = spare.iter().position(|x| x.use_coarse == use_coarse);
+            k.map(|k| spare.swap_remove(k))
+        };
+        match spare {
+            Some(mut x) => {
+                // Their instances are another fit's.
+                x.full.w = None;
+                x.coarse.w = None;
+                x
+            }
+            None => Scratches::new(self, params),
+        }
+    }
+
+    /// Keeps the buffers of a finished fit for the next one.
+    fn recycle(&self, x: Scratches<D>) {
+        let mut spare = self
+            .spare
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if spare.len() < SPARE_SCRATCHES {
+            spare.push(x);
         }
     }
 
@@ -559,10 +609,10 @@ impl<'a, const D: usize> Fitter<'a, D> {
         params: &FitParams,
     ) -> Result<FitResult<D>> {
         let (subj, coarse, full) = self.prepare(subject, subject_index, params)?;
-        let n = self.atlas.mean.len();
         // The pre-alignment needs only the rough layout.
         let rough_model = self.model(Level::Coarse, params);
         let rough = Sampling {
+            pass: Pass::Rough,
             forward: if params.partial {
                 Vec::new()
             } else {
@@ -570,7 +620,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             },
             backward: spread(subject.points.len(), params.coarse_points / 4),
         };
-        let mut x = Scratches::new(self, params);
+        let mut x = self.scratches(params);
 
         // Pre-alignment: centroids, RMS radii, and a pose-only fit from each start rotation.
         let pts = &subject.points;
@@ -592,8 +642,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 let st = State {
                     sim: Similarity::centred(s0, r, &cm, &cs),
                     w: vec![0.0; self.m],
-                    forward_memo: vec![QueryMemo::default(); n],
-                    backward_memo: vec![QueryMemo::default(); subject.points.len()],
+                    forward_memo: Vec::new(),
+                    backward_memo: Vec::new(),
+                    memos_for: None,
                 };
                 (f64::INFINITY, false, st)
             })
@@ -623,7 +674,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
             }
         }
 
-        self.run_starts(&subj, chosen, &coarse, &full, params, &mut x)
+        let result = self.run_starts(&subj, chosen, &coarse, &full, params, &mut x);
+        self.recycle(x);
+        result
     }
 
     /// Algorithm 1 (with the final projection) from a given pose `t_{R,T,s}` and weights,
@@ -645,14 +698,17 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 weights.len()
             )));
         }
-        let mut x = Scratches::new(self, params);
+        let mut x = self.scratches(params);
         let st = State {
             sim: similarity,
             w: weights.to_vec(),
-            forward_memo: vec![QueryMemo::default(); self.atlas.mean.len()],
-            backward_memo: vec![QueryMemo::default(); subject.points.len()],
+            forward_memo: Vec::new(),
+            backward_memo: Vec::new(),
+            memos_for: None,
         };
-        self.run_starts(&subj, vec![st], &coarse, &full, params, &mut x)
+        let result = self.run_starts(&subj, vec![st], &coarse, &full, params, &mut x);
+        self.recycle(x);
+        result
     }
 
     #[allow(clippy::type_complexity)]
@@ -695,6 +751,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let backward = params.symmetric || params.partial;
         let coarse_model = self.model(Level::Coarse, params);
         let coarse = Sampling {
+            pass: Pass::Coarse,
             forward: if forward {
                 spread(coarse_model.len(), params.coarse_points)
             } else {
@@ -707,6 +764,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             },
         };
         let full = Sampling {
+            pass: Pass::Full,
             forward: if forward {
                 (0..n).collect()
             } else {
@@ -793,6 +851,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
             &self.atlas.facets,
             subj.index,
             subj.sign < 0.0,
+            // By place in the last sampling's forward list: every point in order where it
+            // has all of them (project_along_normals takes memos of the right length only).
             Some(&mut run.state.forward_memo),
         );
         let corresponded = if params.partial {
@@ -896,6 +956,17 @@ impl<'a, const D: usize> Fitter<'a, D> {
         let x = &scratch.x;
         let buf = &mut scratch.rows;
         buf.clear();
+        // One allocation for all the rows, not a doubling series.
+        buf.reserve(cols * (sampling.forward.len() + sampling.backward.len()));
+        if st.memos_for != Some(sampling.pass) {
+            st.forward_memo.clear();
+            st.forward_memo
+                .resize(sampling.forward.len(), QueryMemo::default());
+            st.backward_memo.clear();
+            st.backward_memo
+                .resize(sampling.backward.len(), QueryMemo::default());
+            st.memos_for = Some(sampling.pass);
+        }
         // Appends the row of the model point combination `(ids, bw)` with unit normal `nr`
         // and target `z` (both in the reference frame), scaled by `sw` (root of its weight).
         let push =
@@ -933,10 +1004,8 @@ impl<'a, const D: usize> Fitter<'a, D> {
             };
         // Forward pairs: model point -> closest point on the subject (subject frame).
         let mut forward = 0.0;
-        for &j in &sampling.forward {
-            let c = subj
-                .index
-                .closest_memo(&sim.apply(&x[j]), &mut st.forward_memo[model.ids[j]]);
+        for (&j, memo) in sampling.forward.iter().zip(&mut st.forward_memo) {
+            let c = subj.index.closest_memo(&sim.apply(&x[j]), memo);
             forward += c.dist2;
             // From the index, which the search has just read.
             let Some(n) = subj.index.normal_at(&c) else {
@@ -963,9 +1032,9 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 1.0
             };
             let sw = (total * sampling.pairs() as f64 / sampling.backward.len() as f64).sqrt();
-            for &i in &sampling.backward {
+            for (&i, memo) in sampling.backward.iter().zip(&mut st.backward_memo) {
                 let z = sim.apply_inverse(&subj.shape.points[i]);
-                let c = scratch.index.closest_memo(&z, &mut st.backward_memo[i]);
+                let c = scratch.index.closest_memo(&z, memo);
                 backward += c.dist2 * sim.s * sim.s;
                 let (Some(n), Some(f)) = (
                     scratch.index.normal_at(&c),

@@ -463,6 +463,9 @@ pub struct SurfacePoint<const D: usize> {
     pub weights: [f64; D],
     /// Squared distance from the query.
     pub dist2: f64,
+    /// Where the [`ClosestPointIndex`] that found the point keeps its facet (`u32::MAX`:
+    /// unknown): it spares [`ClosestPointIndex::normal_at`] a lookup that missed the cache.
+    pub slot: u32,
 }
 
 /// Closest-point and ray queries on the facets of a shape, through a bounding-volume
@@ -855,12 +858,27 @@ impl<const D: usize> ClosestPointIndex<D> {
         }
     }
 
+    /// The slot of the facet of `sp`: its own `slot` where this index gave it (the search
+    /// has just read `order` there), else looked up.
+    #[inline]
+    fn slot_of_point(&self, sp: &SurfacePoint<D>) -> Option<usize> {
+        let given = sp.slot as usize;
+        if self
+            .order
+            .get(given)
+            .is_some_and(|&f| f as usize == sp.facet)
+        {
+            return Some(given);
+        }
+        self.slot_of.get(sp.facet).map(|&s| s as usize)
+    }
+
     /// Unit normal at the point `sp` of this index's facets (a query's answer): the vertex
     /// normals (area-weighted facet normals, section 2.1) blended by its barycentric weights,
     /// or the facet's own normal where they cancel; `None` on a degenerate facet. It reads
     /// what the query that found `sp` has just read, not the shape's arrays.
     pub fn normal_at(&self, sp: &SurfacePoint<D>) -> Option<Point<D>> {
-        let slot = *self.slot_of.get(sp.facet)? as usize;
+        let slot = self.slot_of_point(sp)?;
         let f = self.slots[slot].map(|c| c as usize);
         let mut n = [0.0; D];
         for k in 0..D {
@@ -878,7 +896,7 @@ impl<const D: usize> ClosestPointIndex<D> {
     /// The vertices of the facet of `sp` (as in the shape's facets; `None` for a facet the
     /// index does not have).
     pub fn facet_vertices(&self, sp: &SurfacePoint<D>) -> Option<[usize; D]> {
-        let slot = *self.slot_of.get(sp.facet)? as usize;
+        let slot = self.slot_of_point(sp)?;
         Some(self.slots[slot].map(|c| self.corner_point[c as usize] as usize))
     }
 
@@ -921,6 +939,7 @@ impl<const D: usize> ClosestPointIndex<D> {
             facet: self.order[slot] as usize,
             weights,
             dist2: dist2(p, q),
+            slot: slot as u32,
         }
     }
 
@@ -1001,6 +1020,7 @@ impl<const D: usize> ClosestPointIndex<D> {
             facet: usize::MAX,
             weights: [0.0; D],
             dist2: f64::INFINITY,
+            slot: u32::MAX,
         };
         let Some(h) = hint else {
             self.descend(p, 0, &mut best, track);
@@ -1144,6 +1164,7 @@ impl<const D: usize> ClosestPointIndex<D> {
                             facet: fi,
                             weights,
                             dist2: t * t * dot(*n, *n),
+                            slot: slot as u32,
                         };
                         if accept(&sp) {
                             best = Some((t, sp));

@@ -208,6 +208,7 @@ pub fn stress<const D: usize>(
                         facet: 0,
                         weights: [0.0; D],
                         dist2: 0.0,
+                        slot: u32::MAX,
                     })
                     .collect(),
                 corresponded: vec![true; instance.len()],

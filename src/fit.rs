@@ -737,13 +737,22 @@ impl<'a, const D: usize> Fitter<'a, D> {
         } else {
             1.0
         };
+        // The index's normals are the subject's (it keeps them for its queries' answers).
+        if subject_index.points().len() != subject.points.len()
+            || subject_index.facets().len() != subject.facets.len()
+        {
+            return Err(Error::shape(
+                &subject.name,
+                "comes with a closest-point index of another shape",
+            ));
+        }
+        let mut normals = Vec::new();
+        subject_index.vertex_normals_into(&mut normals);
+        normals.iter_mut().for_each(|v| *v = scale(*v, sign));
         let subj = Subject {
             shape: subject,
             index: subject_index,
-            normals: vertex_normals(&subject.points, &subject.facets)
-                .into_iter()
-                .map(|v| scale(v, sign))
-                .collect(),
+            normals,
             sign,
         };
         let n = self.atlas.mean.len();
@@ -1042,12 +1051,11 @@ impl<'a, const D: usize> Fitter<'a, D> {
                 ) else {
                     continue;
                 };
-                let f = &f;
                 let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
                 if cw == 0.0 {
                     continue;
                 }
-                push(buf, f, &c.weights, n, z, sw * cw);
+                push(buf, &f, &c.weights, n, z, sw * cw);
             }
         }
         let two_way_ms = if sampling.backward.is_empty() {

@@ -302,16 +302,28 @@ pub fn uv_sphere(
 
 /// Vertex normals of `points` with connectivity `facets`: see [`Shape::vertex_normals`].
 pub fn vertex_normals<const D: usize>(points: &[Point<D>], facets: &[[usize; D]]) -> Vec<Point<D>> {
-    let mut n = vec![[0.0; D]; points.len()];
+    let mut n = Vec::new();
+    vertex_normals_of(points, facets.iter().copied(), &mut n);
+    n
+}
+
+/// [`vertex_normals`] into `out`, for facets given one by one.
+fn vertex_normals_of<const D: usize>(
+    points: &[Point<D>],
+    facets: impl Iterator<Item = [usize; D]>,
+    out: &mut Vec<Point<D>>,
+) {
+    out.clear();
+    out.resize(points.len(), [0.0; D]);
     for f in facets {
-        let fn_ = facet_normal(points, f);
-        for &i in f {
-            for d in 0..D {
-                n[i][d] += fn_[d];
-            }
+        let fn_ = facet_normal(points, &f);
+        for &i in &f {
+            out[i] = add(out[i], fn_);
         }
     }
-    n.iter().map(|v| normalize(*v)).collect()
+    for v in out.iter_mut() {
+        *v = normalize(*v);
+    }
 }
 
 /// Unnormalized facet normal: for a segment `(a, b)` the vector `(b - a)` turned clockwise
@@ -844,18 +856,8 @@ impl<const D: usize> ClosestPointIndex<D> {
 
     /// The corners' vertex normals, from the corners and the facets (as [`vertex_normals`]).
     fn update_normals(&mut self) {
-        self.corner_normals.clear();
-        self.corner_normals.resize(self.corners.len(), [0.0; D]);
-        for f in &self.slots {
-            let f = f.map(|c| c as usize);
-            let n = facet_normal(&self.corners, &f);
-            for &c in &f {
-                self.corner_normals[c] = add(self.corner_normals[c], n);
-            }
-        }
-        for n in &mut self.corner_normals {
-            *n = normalize(*n);
-        }
+        let facets = self.slots.iter().map(|f| f.map(|c| c as usize));
+        vertex_normals_of(&self.corners, facets, &mut self.corner_normals);
     }
 
     /// The slot of the facet of `sp`: its own `slot` where this index gave it (the search

@@ -1,6 +1,6 @@
 #!/bin/bash
 # Starts a single-node Slurm cluster on this machine (Debian's slurm-wlm and munge, as root),
-# to try scripts/atlasmesh-array.sbatch for real; .ci/run uses it for tests/slurm.rs.
+# to try scripts/atlasmesh-array.sbatch for real; .ci/run uses it for the array-job test in tests/batch.rs.
 # Prints the SLURM_CONF to export. State, spool and logs under $1 (default /tmp/atlasmesh-slurm).
 set -euo pipefail
 DIR=${1:-/tmp/atlasmesh-slurm}

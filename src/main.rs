@@ -392,7 +392,7 @@ fn quality_of<const D: usize>(
     m: &atlasmesh::fe::FeMesh<D>,
 ) -> atlasmesh::fe::quality::QualityDistribution {
     let q = atlasmesh::fe::quality::mesh_quality(m);
-    atlasmesh::fe::quality::distribution(m.kind, &q)
+    atlasmesh::fe::quality::distribution(m, &q)
 }
 
 /// `atlasmesh convert` of a mesh (or an atlas's mean mesh, with the atlas's landmarks) of
@@ -868,7 +868,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 println!("{}", serde_json::to_string_pretty(&d)?);
             } else {
                 println!(
-                    "{}: {} elements; Jacobian min {:.4e}, 1 % {:.4e}, 5 % {:.4e}; scaled Jacobian min {:.4}, 1 % {:.4}, 5 % {:.4}; {} below {}; {} inverted",
+                    "{}: {} elements; Jacobian min {:.4e}, 1 % {:.4e}, 5 % {:.4e}; scaled Jacobian min {:.4}, 1 % {:.4}, 5 % {:.4}; {} below {}; {} inverted; largest edge ratio {:.2}",
                     mesh.display(),
                     d.elements,
                     d.jacobian_min,
@@ -879,7 +879,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     d.scaled_jacobian_p05,
                     d.elements_below_bound,
                     d.bound,
-                    d.inverted_elements
+                    d.inverted_elements,
+                    d.edge_ratio_max
                 );
             }
             if d.inverted_elements > 0 {

@@ -402,7 +402,7 @@ pub fn process_subject<const D: usize>(
     }
     let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
     let q = summarize(&per_element);
-    let dist = crate::fe::quality::distribution(mesh.kind, &per_element);
+    let dist = crate::fe::quality::distribution(&mesh, &per_element);
     let mean_normals = atlas.mean_shape().vertex_normals();
     let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
     let baselines = if params.baselines {
@@ -485,7 +485,7 @@ pub fn process_subject<const D: usize>(
             &'a [[usize; 3]],
             Option<&'a [f64]>,
             Option<&'a [f64]>,
-            render::ColorMap<'a>,
+            render::Legend<'a>,
         );
         let pictures: [Picture; 2] = [
             (
@@ -494,7 +494,13 @@ pub fn process_subject<const D: usize>(
                 &tris,
                 Some(&distance),
                 None,
-                &by_distance,
+                render::Legend {
+                    color: &by_distance,
+                    lo: 0.0,
+                    hi: far,
+                    lo_label: "0".into(),
+                    hi_label: format!("{far:.3} (1 % diag.)"),
+                },
             ),
             (
                 "quality",
@@ -502,11 +508,22 @@ pub fn process_subject<const D: usize>(
                 &btris,
                 None,
                 Some(&bvals),
-                &render::jacobian_color,
+                render::Legend {
+                    color: &render::jacobian_color,
+                    lo: 0.0,
+                    hi: 1.0,
+                    lo_label: "≤ 0".into(),
+                    hi_label: "1".into(),
+                },
             ),
         ];
-        for (what, points, facets, vertex, face, color) in pictures {
-            let img = render::render(points, facets, vertex, face, color, &view, 480, 360);
+        for (what, points, facets, vertex, face, legend) in pictures {
+            let img = render::render(points, facets, vertex, face, legend.color, &view, 480, 360);
+            let title = match what {
+                "distance" => format!("{}: fit, distance to the subject", subject.name),
+                _ => format!("{}: morphed mesh, scaled Jacobian", subject.name),
+            };
+            let img = render::annotated(&img, &title, Some(&legend));
             let name = format!("{base}_{what}.png");
             crate::io::write_atomic(&out.join(&name), &img.png()?)?;
             files.push(name);
@@ -566,6 +583,7 @@ pub fn process_subject<const D: usize>(
         ),
         scaled_jacobian_p01: dist.scaled_jacobian_p01,
         scaled_jacobian_p05: dist.scaled_jacobian_p05,
+        edge_ratio_max: dist.edge_ratio_max,
         elements_below_bound: dist.elements_below_bound,
         success: rel < 0.01 && q.inverted_elements == 0,
         converged: fit.converged,
@@ -614,6 +632,7 @@ pub(crate) fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshRepo
         element_kind: atlas.mesh.kind.name().into(),
         scaled_jacobian_min: q.scaled_jacobian_min,
         jacobian_min: q.jacobian_min,
+        edge_ratio_max: crate::fe::quality::edge_ratio_max(&atlas.mesh),
     }
 }
 

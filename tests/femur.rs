@@ -53,6 +53,24 @@ fn femur_leave_one_out_with_15_and_5_modes() {
             "mean hex mesh min SJ {}",
             mm.scaled_jacobian_min
         );
+        // No sliver hexahedron in the pillow layer of the mean mesh or of a morphed one
+        // (their corners can be square while they are flat).
+        let worst = r
+            .subjects
+            .iter()
+            .map(|s| s.edge_ratio_max)
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{modes} modes: largest edge ratio {:.2} (mean mesh), {worst:.2} (morphed)",
+            mm.edge_ratio_max
+        );
+        assert!(
+            mm.edge_ratio_max < 5.0,
+            "mean mesh edge ratio {}",
+            mm.edge_ratio_max
+        );
+        // Abaqus warns from an aspect ratio of 10 on.
+        assert!(worst < 10.0, "morphed mesh edge ratio {worst}");
         // VTU written per subject.
         assert!(out.join("S001_Femur_mesh.vtu").is_file());
     }

@@ -16,10 +16,12 @@
 //!
 //! Lengths in the surface's units; the surface must be closed and oriented outwards.
 
-use super::quality::element_quality_at;
+use super::quality::{edge_ratio, element_quality_at};
 use super::{ElementKind, FeMesh};
 use crate::error::{Error, Result};
-use crate::geometry::{ClosestPointIndex, Point, Shape, add, bounding_box, normalize, scale, sub};
+use crate::geometry::{
+    ClosestPointIndex, Point, Shape, add, bounding_box, dot, normalize, scale, sub,
+};
 use std::collections::HashMap;
 
 /// Parameters of the hexahedral mesher.
@@ -336,6 +338,15 @@ fn hex_mesh_once(
     bnodes.sort_unstable();
     for &v in &bnodes {
         let q = index.closest(&nodes[v]).point;
+        // A grid node nearer the surface than `PILLOW_MIN h` along the staircase's outward
+        // normal (a cube corner may even poke out of it) moves inwards, so that its pillow
+        // hexahedron is not a sliver: the scaled Jacobian does not see a hexahedron of
+        // vanishing thickness, a solver does.
+        let ns = normalize(normal_sum[&v]);
+        let along = dot(sub(q, nodes[v]), ns);
+        if along < PILLOW_MIN * h {
+            nodes[v] = sub(nodes[v], scale(ns, PILLOW_MIN * h - along));
+        }
         nodes.push(q);
         outer.insert(v, nodes.len() - 1);
     }
@@ -484,6 +495,22 @@ fn largest_component(keep: &mut [bool], n: [usize; 3]) {
     }
 }
 
+/// The 12 edges of a hexahedron in VTK node order.
+const HEX_EDGES: [(usize, usize); 12] = [
+    (0, 1),
+    (1, 2),
+    (2, 3),
+    (3, 0),
+    (4, 5),
+    (5, 6),
+    (6, 7),
+    (7, 4),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
+
 /// Laplacian smoothing with a guard: a node moves to the mean of its edge neighbours (surface
 /// nodes: of their surface neighbours, then back onto the surface) only if the smallest
 /// scaled Jacobian of its hexahedra does not drop.
@@ -498,26 +525,12 @@ fn smooth(
     let ne = mesh.num_elements();
     let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nn];
     let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); nn];
-    const EDGES: [(usize, usize); 12] = [
-        (0, 1),
-        (1, 2),
-        (2, 3),
-        (3, 0),
-        (4, 5),
-        (5, 6),
-        (6, 7),
-        (7, 4),
-        (0, 4),
-        (1, 5),
-        (2, 6),
-        (3, 7),
-    ];
     for e in 0..ne {
         let el = mesh.element(e).to_vec();
         for &v in &el {
             incident[v].push(e);
         }
-        for (a, b) in EDGES {
+        for (a, b) in HEX_EDGES {
             let (a, b) = (el[a], el[b]);
             // Surface nodes average over surface neighbours only.
             if on_surface[a] == on_surface[b] || !on_surface[a] {
@@ -536,8 +549,9 @@ fn smooth(
         incident[v]
             .iter()
             .map(|&e| {
-                element_quality_at(ElementKind::Hex8, mesh.element(e), &mesh.nodes)
-                    .scaled_jacobian_min
+                let el = mesh.element(e);
+                let sj = element_quality_at(ElementKind::Hex8, el, &mesh.nodes).scaled_jacobian_min;
+                sj.min(EDGE_RATIO_WEIGHT / edge_ratio(ElementKind::Hex8, el, &mesh.nodes))
             })
             .fold(f64::INFINITY, f64::min)
     };
@@ -612,6 +626,14 @@ fn smooth(
 /// Cubes kept have their centre at least this many cube edges inside the surface.
 const INSET: f64 = 0.75;
 
+/// The smoothing's quality of a hexahedron is the smaller of its scaled Jacobian and this
+/// over its edge ratio: an edge ratio above 5 counts as poor, like a scaled Jacobian below
+/// 0.3.
+const EDGE_RATIO_WEIGHT: f64 = 1.5;
+
+/// Least thickness of the pillow layer along the staircase's normals, in cube edges.
+const PILLOW_MIN: f64 = 0.3;
+
 /// Elements below this scaled Jacobian get the pattern search of [`smooth`].
 const POOR: f64 = 0.3;
 
@@ -662,6 +684,9 @@ mod tests {
             "boundary {}",
             m.boundary_distance_max
         );
+        // No sliver in the pillow layer (a flat hexahedron can have square corners).
+        let ratio = super::super::quality::edge_ratio_max(&m.mesh);
+        assert!(ratio < 5.0, "largest edge ratio {ratio}");
         // The volume of the mesh is close to the ball's.
         let vol: f64 = (0..m.mesh.num_elements())
             .map(|e| hex_volume(&m.mesh, e))

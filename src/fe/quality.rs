@@ -32,6 +32,37 @@ pub fn element_quality<const D: usize>(mesh: &FeMesh<D>, e: usize) -> ElementQua
     element_quality_at(mesh.kind, mesh.element(e), &mesh.nodes)
 }
 
+/// Edge ratio of an element: its longest edge over its shortest (1 for a square, a cube or
+/// an equilateral simplex; unbounded for a collapsed edge). The scaled Jacobian does not see
+/// a flat element whose corners stay square (a hexahedron of vanishing thickness); this
+/// does. Edges are those of [`super::ElementKind::corner_frames`].
+pub fn edge_ratio<const D: usize>(
+    kind: super::ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+) -> f64 {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0_f64);
+    for (c, frame) in kind.corner_frames().iter().enumerate() {
+        for &o in frame.iter() {
+            let l = crate::geometry::dist2(nodes[el[c]], nodes[el[o]]);
+            lo = lo.min(l);
+            hi = hi.max(l);
+        }
+    }
+    if lo > 0.0 {
+        (hi / lo).sqrt()
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The largest [`edge_ratio`] of a mesh's elements.
+pub fn edge_ratio_max<const D: usize>(mesh: &FeMesh<D>) -> f64 {
+    (0..mesh.num_elements())
+        .map(|e| edge_ratio(mesh.kind, mesh.element(e), &mesh.nodes))
+        .fold(1.0, f64::max)
+}
+
 /// Corner Jacobians of an element given by its node indices into `nodes`.
 pub fn element_quality_at<const D: usize>(
     kind: super::ElementKind,
@@ -130,6 +161,8 @@ pub struct QualityDistribution {
     pub elements_below_bound: usize,
     pub inverted_elements: usize,
     pub elements: usize,
+    /// The largest [`edge_ratio`].
+    pub edge_ratio_max: f64,
 }
 
 /// The `p`-quantile (nearest rank) of sorted values.
@@ -141,9 +174,11 @@ fn quantile(sorted: &[f64], p: f64) -> f64 {
     sorted[k - 1]
 }
 
-/// Min, 1 % and 5 % percentiles of the corner Jacobians and scaled Jacobians, and the counts
-/// of elements below the acceptance bound of `kind` and inverted.
-pub fn distribution(kind: super::ElementKind, q: &[ElementQuality]) -> QualityDistribution {
+/// Min, 1 % and 5 % percentiles of the corner Jacobians and scaled Jacobians, the counts of
+/// elements below the acceptance bound of `mesh`'s kind and inverted, and the largest edge
+/// ratio; `q` is the element quality of `mesh`.
+pub fn distribution<const D: usize>(mesh: &FeMesh<D>, q: &[ElementQuality]) -> QualityDistribution {
+    let kind = mesh.kind;
     let mut j: Vec<f64> = q.iter().map(|e| e.jacobian_min).collect();
     let mut s: Vec<f64> = q.iter().map(|e| e.scaled_jacobian_min).collect();
     j.sort_by(f64::total_cmp);
@@ -160,6 +195,7 @@ pub fn distribution(kind: super::ElementKind, q: &[ElementQuality]) -> QualityDi
         elements_below_bound: s.iter().filter(|v| **v < bound).count(),
         inverted_elements: j.iter().filter(|v| **v <= 0.0).count(),
         elements: q.len(),
+        edge_ratio_max: edge_ratio_max(mesh),
     }
 }
 

@@ -79,6 +79,9 @@ pub struct SubjectReport {
     pub scaled_jacobian_p01: f64,
     #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_p05: f64,
+    /// The largest element edge ratio (longest edge over shortest) of the mesh written.
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub edge_ratio_max: f64,
     /// Elements below the usual acceptance bound of their kind (hexahedra 0.5,
     /// quadrilaterals 0.3, simplices 0.2).
     pub elements_below_bound: usize,
@@ -125,6 +128,9 @@ pub struct MeanMeshReport {
     pub element_kind: String,
     pub scaled_jacobian_min: f64,
     pub jacobian_min: f64,
+    /// The largest element edge ratio (longest edge over shortest).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub edge_ratio_max: f64,
 }
 
 /// `report.json`.
@@ -603,8 +609,9 @@ pub fn plot_subject(
 
 /// The mean shape and the instances at -2σ and +2σ along each of the first 3 modes (figs. 4
 /// and 15), in the reference frame. 2D: one panel per mode, the mean black, -2σ blue, +2σ
-/// red. 3D: a row per mode (-2σ, mean, +2σ), shaded renders coloured by the distance of each
-/// point from its place on the mean (white 0, red the row's largest).
+/// red. 3D: a row per mode (-2σ, mean, +2σ), shaded renders coloured by each point's
+/// displacement from its place on the mean along the mean's outward normal (blue inwards,
+/// white 0, red outwards; the row's largest at the ends of its colour bar).
 pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -> Result<()> {
     let modes = atlas.num_modes().min(3);
     let at = |m: usize, k: f64| -> Vec<Point<D>> {
@@ -613,7 +620,7 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
         atlas.instance(&w)
     };
     if D == 3 {
-        use render::{Image, View, distance_color, render};
+        use render::{Image, Legend, View, annotated, render, signed_color};
         let to3 = |v: &[Point<D>]| -> Vec<Point<3>> {
             v.iter().map(|p| std::array::from_fn(|d| p[d])).collect()
         };
@@ -622,26 +629,55 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
             .iter()
             .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
             .collect();
+        let mean_shape = atlas.mean_shape();
+        let normals = mean_shape.vertex_normals();
         let mean = to3(&atlas.mean);
         let view = View::fitting(&mean);
         let (w, h) = (320, 240);
-        let mut img = Image::new(3 * w, modes * h);
+        let mut tiles = Vec::new();
         for m in 0..modes {
             let shapes = [to3(&at(m, -2.0)), mean.clone(), to3(&at(m, 2.0))];
+            // Displacement from the mean along its outward normal, in the reference frame
+            // (the mean's largest side is 1).
             let moved: Vec<Vec<f64>> = shapes
                 .iter()
                 .map(|s| {
                     s.iter()
                         .zip(&mean)
-                        .map(|(a, b)| crate::geometry::dist2(*a, *b).sqrt())
+                        .zip(&normals)
+                        .map(|((a, b), n)| {
+                            (0..3).map(|d| (a[d] - b[d]) * n[d.min(D - 1)]).sum::<f64>()
+                        })
                         .collect()
                 })
                 .collect();
-            let max = moved.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
+            let max = moved
+                .iter()
+                .flatten()
+                .fold(0.0f64, |a, b| a.max(b.abs()))
+                .max(f64::MIN_POSITIVE);
+            let color = signed_color(max);
+            let legend = Legend {
+                color: &color,
+                lo: -max,
+                hi: max,
+                lo_label: format!("in {:.1} %", 100.0 * max),
+                hi_label: format!("out {:.1} %", 100.0 * max),
+            };
             for (c, (s, d)) in shapes.iter().zip(&moved).enumerate() {
-                let tile = render(s, &tris, Some(d), None, &distance_color(max), &view, w, h);
-                img.paste(&tile, c * w, m * h);
+                let title = match c {
+                    0 => format!("mode {}: -2σ", m + 1),
+                    1 => "mean; normal displacement, % of size".to_string(),
+                    _ => format!("mode {}: +2σ", m + 1),
+                };
+                let picture = render(s, &tris, Some(d), None, &color, &view, w, h);
+                tiles.push(annotated(&picture, &title, Some(&legend)));
             }
+        }
+        let th = tiles.first().map_or(h, |t| t.height);
+        let mut img = Image::new(3 * w, modes * th);
+        for (k, t) in tiles.iter().enumerate() {
+            img.paste(t, (k % 3) * w, (k / 3) * th);
         }
         return crate::io::write_atomic(path, &img.png()?);
     }

@@ -199,6 +199,75 @@ pub fn distance_color(max: f64) -> impl Fn(f64) -> [u8; 3] {
     }
 }
 
+/// Blue (`-max`) through white (0) to red (`max`): a signed displacement (inwards negative).
+pub fn signed_color(max: f64) -> impl Fn(f64) -> [u8; 3] {
+    let c = distance_color(2.0 * max);
+    move |v: f64| c(v + max)
+}
+
+/// A colour bar for [`annotate`]: the map, the values at its two ends and their labels.
+pub struct Legend<'a> {
+    pub color: ColorMap<'a>,
+    pub lo: f64,
+    pub hi: f64,
+    pub lo_label: String,
+    pub hi_label: String,
+}
+
+/// `img` with a strip above holding `title` and, with `legend`, a strip below holding a
+/// colour bar with a label at each end. Text needs a system font (see
+/// [`crate::report::font_available`]); without one the strips hold only the bar.
+pub fn annotated(img: &Image, title: &str, legend: Option<&Legend>) -> Image {
+    const TOP: usize = 22;
+    let bottom = if legend.is_some() { 26 } else { 0 };
+    let (w, h) = (img.width, img.height + TOP + bottom);
+    let mut out = Image::new(w, h);
+    out.paste(img, 0, TOP);
+    let bar = legend.map(|l| {
+        let (x0, x1) = (w / 3, w - w / 3);
+        let (y0, y1) = (h - 20, h - 8);
+        for x in x0..x1 {
+            let t = (x - x0) as f64 / (x1 - x0 - 1).max(1) as f64;
+            let rgb = (l.color)(l.lo + t * (l.hi - l.lo));
+            for y in y0..y1 {
+                let k = 3 * (y * w + x);
+                out.rgb[k..k + 3].copy_from_slice(&rgb);
+            }
+        }
+        (x0, x1, y0, l)
+    });
+    if !crate::report::font_available() {
+        return out;
+    }
+    use plotters::prelude::*;
+    {
+        let root =
+            BitMapBackend::with_buffer(&mut out.rgb, (w as u32, h as u32)).into_drawing_area();
+        let font = ("sans-serif", 14).into_font().color(&BLACK);
+        // Drawing text fails only without a font, checked above; a picture without its
+        // labels is still right, so a failure here is not an error.
+        let _ = root.draw(&Text::new(title.to_string(), (6, 4), font.clone()));
+        if let Some((x0, x1, y0, l)) = bar {
+            let right = font.pos(plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Right,
+                plotters::style::text_anchor::VPos::Top,
+            ));
+            let _ = root.draw(&Text::new(
+                l.lo_label.clone(),
+                (x0 as i32 - 6, y0 as i32 - 2),
+                right,
+            ));
+            let _ = root.draw(&Text::new(
+                l.hi_label.clone(),
+                (x1 as i32 + 6, y0 as i32 - 2),
+                font,
+            ));
+        }
+        let _ = root.present();
+    }
+    out
+}
+
 /// Red (inverted, ≤ 0) through yellow to green (1): a scaled Jacobian.
 pub fn jacobian_color(s: f64) -> [u8; 3] {
     if s <= 0.0 {

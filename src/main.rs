@@ -130,6 +130,10 @@ enum Command {
         /// Sets (TOML) to add, evaluated on the input mesh.
         #[arg(long, value_name = "TOML")]
         sets: Option<PathBuf>,
+        /// Write quadratic elements (hex8 to hex20, tet4 to tet10: a node in the middle of
+        /// every edge; an atlas whose mean mesh is quadratic morphs them along, curved).
+        #[arg(long)]
+        quadratic: bool,
     },
     /// Repairs an FE mesh: untangles inverted elements and raises scaled Jacobians below the
     /// bound by moving nodes; boundary nodes on SURFACE slide on it, other boundary nodes stay.
@@ -396,13 +400,28 @@ fn quality_of<const D: usize>(
 }
 
 /// `atlasmesh convert` of a mesh (or an atlas's mean mesh, with the atlas's landmarks) of
-/// dimension `D`.
+/// dimension `D`, made quadratic first when asked (sets from `sets` are evaluated on the
+/// quadratic mesh).
 fn convert<const D: usize>(
     mut mesh: atlasmesh::fe::FeMesh<D>,
     landmarks: &[atlasmesh::geometry::Point<D>],
     output: &std::path::Path,
     sets: Option<&atlasmesh::fe::sets::SetsConfig>,
+    quadratic: bool,
 ) -> anyhow::Result<()> {
+    if quadratic {
+        mesh = match mesh.to_quadratic() {
+            Some(q) => q,
+            None if mesh.kind.linear() != mesh.kind => mesh,
+            None => {
+                return Err(atlasmesh::Error::Parameter(format!(
+                    "--quadratic: {} elements have no quadratic kind here (hex8 and tet4 do)",
+                    mesh.kind.name()
+                ))
+                .into());
+            }
+        };
+    }
     if let Some(c) = sets {
         mesh.sets.merge(c.evaluate(&mesh, landmarks)?);
     }
@@ -896,6 +915,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             input,
             output,
             sets,
+            quadratic,
         } => {
             let sets = sets
                 .map(|f| atlasmesh::fe::sets::SetsConfig::read(&f))
@@ -912,15 +932,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if is_atlas(&input) {
                 if atlasmesh::model::atlas_dimension(&input)? == 2 {
                     let (m, l) = mean_mesh::<2>(&input)?;
-                    convert(m, &l, &output, sets)?;
+                    convert(m, &l, &output, sets, quadratic)?;
                 } else {
                     let (m, l) = mean_mesh::<3>(&input)?;
-                    convert(m, &l, &output, sets)?;
+                    convert(m, &l, &output, sets, quadratic)?;
                 }
             } else {
                 match read_any_mesh(&input)? {
-                    AnyMesh::Two(m) => convert(m, &[], &output, sets)?,
-                    AnyMesh::Three(m) => convert(m, &[], &output, sets)?,
+                    AnyMesh::Two(m) => convert(m, &[], &output, sets, quadratic)?,
+                    AnyMesh::Three(m) => convert(m, &[], &output, sets, quadratic)?,
                 }
             }
             println!("{} -> {}", input.display(), output.display());

@@ -223,7 +223,7 @@ pub fn repair_with_quality<const D: usize>(
     report.median_edge = median_edge;
     let mut distance_before = vec![0.0; nn];
     for f in &faces {
-        for &n in &f.nodes {
+        for &n in f.nodes.iter().chain(&f.mids) {
             if role[n] != 0 {
                 continue;
             }
@@ -303,7 +303,13 @@ pub fn repair_with_quality<const D: usize>(
             for &e in &incident[n] {
                 let el = &conn[e * k..(e + 1) * k];
                 for (c, frame) in kind.corner_frames().iter().enumerate() {
-                    if el[c] == n || frame.iter().any(|&m| el[m] == n) {
+                    // (A quadratic element's corner moves with the mid-edge nodes of its
+                    // frame's edges too.)
+                    if el[c] == n
+                        || frame.iter().any(|&m| {
+                            el[m] == n || kind.mid_node(c, m).is_some_and(|mid| el[mid] == n)
+                        })
+                    {
                         moving.push((e, c));
                     } else {
                         let (j, sj) = corner(kind, el, &mesh.nodes, c);

@@ -197,7 +197,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
             &py,
             &out.join("S001_Femur/S001_Femur_mesh"),
             &reference,
-            true,
+            "hexahedron",
         );
         // And a quadrilateral mesh (the 2D demo's atlas, its mean mesh with sets).
         let quad_dir = dir.join("quad");
@@ -232,14 +232,14 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
             connectivity: q.connectivity.clone(),
             sets: q.sets.clone(),
         };
-        meshio_check(&py, &qbase, &q3, false);
+        meshio_check(&py, &qbase, &q3, "quad");
     }
     std::fs::remove_dir_all(&dir).ok();
 }
 
 /// meshio reads `base.{inp,msh,vtu,vtk}` with the node and element counts of `reference` and
 /// the same set sizes.
-fn meshio_check(py: &Path, base: &Path, reference: &FeMesh<3>, hex: bool) {
+fn meshio_check(py: &Path, base: &Path, reference: &FeMesh<3>, kind: &str) {
     let script = r#"
 import sys, json, meshio
 base, kind = sys.argv[1], sys.argv[2]
@@ -273,7 +273,6 @@ for ext in ["inp", "msh", "vtu", "vtk"]:
     out[ext] = {"points": len(m.points), "cells": cells, "sets": sets}
 print(json.dumps(out))
 "#;
-    let kind = if hex { "hexahedron" } else { "quad" };
     let o = Command::new(py)
         .arg("-c")
         .arg(script)
@@ -405,6 +404,201 @@ fn template_inp_with_sets_morphed_to_three_femurs() {
         let f = feb_sets(&out.join(format!("S{k:03}_Femur/S{k:03}_Femur_mesh.feb")));
         assert_eq!(f.node_sets, tm.sets.node_sets);
         assert_eq!(f.element_sets, tm.sets.element_sets);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Quadratic elements (issue 5): a template mesh made quadratic (`convert --quadratic`, hex8
+/// to hex20; its node sets gain the mid-edge nodes) and a 10-node tetrahedral mesh made by
+/// Gmsh (`-order 2`) serve as an atlas's FE mesh; morphed to femurs, written in every format
+/// with the mid-edge nodes in each program's order, read back by atlasmesh, meshio and Gmsh,
+/// and solved by CalculiX (C3D20, C3D10).
+#[test]
+fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
+    let Some(data) = common::data_dir("quadratic_hex20_and_tet10_meshes_morphed_and_solved") else {
+        return;
+    };
+    let dir = common::temp_dir("solver-quadratic");
+    let femur = |k: usize| {
+        data.join(format!(
+            "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
+        ))
+        .display()
+        .to_string()
+    };
+    let s = |p: &Path| p.display().to_string();
+    let sets = dir.join("sets.toml");
+    std::fs::write(&sets, SETS).unwrap();
+    // Hex20: a coarse hex mesh morphed to S001 (with the sets), made quadratic.
+    let a0 = dir.join("a0.safetensors");
+    let mut args = vec!["build".to_string(), "--shapes".into()];
+    args.extend((2..=12).map(femur));
+    args.extend(
+        [
+            "--modes",
+            "8",
+            "--element-size",
+            "0.06",
+            "--no-plots",
+            "--out",
+        ]
+        .map(String::from),
+    );
+    args.push(s(&a0));
+    atlasmesh(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let t = dir.join("t");
+    atlasmesh(&[
+        "fit",
+        "--atlas",
+        &s(&a0),
+        "--subject",
+        &femur(1),
+        "--sets",
+        &s(&sets),
+        "--format",
+        "inp",
+        "--no-plots",
+        "--out",
+        &s(&t),
+    ]);
+    let linear: FeMesh<3> =
+        atlasmesh::io::femesh::read_fe_mesh(&t.join("S001_Femur/S001_Femur_mesh.inp")).unwrap();
+    let t20 = dir.join("t20.inp");
+    atlasmesh(&[
+        "convert",
+        &s(&t.join("S001_Femur/S001_Femur_mesh.inp")),
+        &s(&t20),
+        "--quadratic",
+    ]);
+    let hex20: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(&t20).unwrap();
+    assert_eq!(hex20.kind, atlasmesh::fe::ElementKind::Hex20);
+    assert_eq!(hex20.num_elements(), linear.num_elements());
+    assert_eq!(hex20.connectivity[..20][..8], linear.connectivity[..8]);
+    // A node set gains the mid-edge nodes between its members.
+    assert!(hex20.sets.node_sets["LOAD"].len() > linear.sets.node_sets["LOAD"].len());
+    assert_eq!(hex20.sets.element_sets, linear.sets.element_sets);
+    assert_eq!(hex20.sets.surfaces, linear.sets.surfaces);
+    // Tet10: Gmsh remeshes S001's surface at about 10 mm and fills it with 10-node
+    // tetrahedra (mid-edge nodes on straight edges: its curved placement on the reclassified
+    // surface can fail).
+    let tet10 = if common::tool("gmsh", "a tet10 mesh made by Gmsh") {
+        let full = atlasmesh::io::surface::read_surface(Path::new(&femur(1))).unwrap();
+        atlasmesh::io::surface::write_stl(&dir.join("s1.stl"), &full).unwrap();
+        std::fs::write(
+            dir.join("t10.geo"),
+            "Merge \"s1.stl\";\nClassifySurfaces{40 * Pi / 180, 1, 1, Pi};\nCreateGeometry;\nSurface Loop(1) = Surface{:};\nVolume(1) = {1};\nPhysical Volume(\"SOLID\") = {1};\nMesh.MeshSizeMax = 10;\nMesh.ElementOrder = 2;\nMesh.SecondOrderLinear = 1;\n",
+        )
+        .unwrap();
+        let o = Command::new("gmsh")
+            .args(["-3", "-format", "msh41", "t10.geo", "-o", "t10.msh"])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+        let m: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(&dir.join("t10.msh")).unwrap();
+        assert_eq!(m.kind, atlasmesh::fe::ElementKind::Tet10);
+        let q = atlasmesh::fe::quality::summarize(&atlasmesh::fe::quality::mesh_quality(&m));
+        assert_eq!(
+            q.inverted_elements, 0,
+            "Gmsh's tet10 mesh read in Gmsh's node order"
+        );
+        Some(dir.join("t10.msh"))
+    } else {
+        None
+    };
+    let mut templates = vec![("hex20", t20.clone(), "hexahedron20")];
+    templates.extend(tet10.map(|p| ("tet10", p, "tetra10")));
+    for (name, template, meshio_kind) in templates {
+        // The atlas with that template mesh (S001 first); its mean mesh with the sets and a
+        // deck around it; two femurs fitted, every format written.
+        let atlas = dir.join(format!("{name}.safetensors"));
+        let mut args = vec!["build".to_string(), "--shapes".into(), femur(1)];
+        args.extend((13..=25).map(femur));
+        args.extend(["--template-mesh".to_string(), s(&template)]);
+        args.extend(["--modes", "8", "--no-plots", "--out"].map(String::from));
+        args.push(s(&atlas));
+        atlasmesh(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        let mean = dir.join(format!("{name}_mean.inp"));
+        atlasmesh(&["convert", &s(&atlas), &s(&mean), "--sets", &s(&sets)]);
+        let reference: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(&mean).unwrap();
+        assert_eq!(reference.kind.name(), name);
+        let deck = dir.join(format!("{name}_deck.inp"));
+        std::fs::write(
+            &deck,
+            std::fs::read_to_string(&mean).unwrap() + common::CCX_STEP,
+        )
+        .unwrap();
+        let out = dir.join(format!("{name}_out"));
+        atlasmesh(&[
+            "fit",
+            "--atlas",
+            &s(&atlas),
+            "--subject",
+            &femur(26),
+            &femur(27),
+            "--deck",
+            &s(&deck),
+            "--sets",
+            &s(&sets),
+            "--format",
+            "inp,msh,feb,vtu,vtk",
+            "--no-plots",
+            "--out",
+            &s(&out),
+        ]);
+        for k in [26, 27] {
+            let base = out.join(format!("S{k:03}_Femur"));
+            for ext in ["inp", "msh", "vtu", "vtk"] {
+                let m: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(
+                    &base.join(format!("S{k:03}_Femur_mesh.{ext}")),
+                )
+                .unwrap();
+                assert_eq!(m.kind, reference.kind, "{name} {ext}");
+                assert_eq!(m.connectivity, reference.connectivity, "{name} {ext}");
+                assert_eq!(m.sets.node_sets, reference.sets.node_sets, "{name} {ext}");
+                let q =
+                    atlasmesh::fe::quality::summarize(&atlasmesh::fe::quality::mesh_quality(&m));
+                assert_eq!(q.inverted_elements, 0, "{name} S{k:03}: morphed mesh valid");
+            }
+            if common::tool("ccx", "CalculiX solves") {
+                let u = common::solve(&base.join(format!("S{k:03}_Femur_deck.inp")));
+                assert_eq!(u.len(), reference.sets.node_sets["LOAD"].len());
+                assert!(u.iter().flatten().all(|v| v.is_finite()));
+                assert!(u.iter().any(|v| v.iter().any(|c| *c != 0.0)));
+                let mean_uz = u.iter().map(|v| v[2]).sum::<f64>() / u.len() as f64;
+                eprintln!(
+                    "{name} S{k:03}: {} elements, ccx solved; mean z displacement of LOAD {mean_uz:.3e} mm",
+                    reference.num_elements()
+                );
+            }
+            if common::tool("gmsh", "gmsh -check") {
+                let p = base.join(format!("S{k:03}_Femur_mesh.msh"));
+                let o = Command::new("gmsh").arg("-check").arg(&p).output().unwrap();
+                let log = String::from_utf8_lossy(&o.stdout).to_string()
+                    + &String::from_utf8_lossy(&o.stderr);
+                assert!(o.status.success() && !log.contains("Error"), "{log}");
+            }
+        }
+        if let Some(py) = python() {
+            let base = out.join("S026_Femur/S026_Femur_mesh");
+            meshio_check(&py, &base, &reference, meshio_kind);
+            // The same elements in every format (in any order: the .msh groups them by set):
+            // meshio reorders Gmsh's mid-edge nodes to VTK's, as atlasmesh does.
+            let o = Command::new(&py)
+                .arg("-c")
+                .arg(format!(
+                    "import meshio, numpy as np\nb = {:?}\nc = [np.concatenate([x.data for x in meshio.read(b + '.' + e).cells if x.type == {meshio_kind:?}]) for e in ['vtu', 'msh', 'inp', 'vtk']]\nr = [sorted(map(tuple, x.tolist())) for x in c]\nprint(all(r[0] == x for x in r[1:]))",
+                    s(&base)
+                ))
+                .output()
+                .unwrap();
+            assert_eq!(
+                String::from_utf8_lossy(&o.stdout).trim(),
+                "True",
+                "{name}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
     }
     std::fs::remove_dir_all(&dir).ok();
 }

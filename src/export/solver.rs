@@ -148,8 +148,14 @@ pub fn inp_mesh<const D: usize>(s: &mut String, mesh: &FeMesh<D>) {
     let _ = writeln!(s, "*ELEMENT, TYPE={}, ELSET=EALL", mesh.kind.abaqus_type());
     for e in 0..mesh.num_elements() {
         let _ = write!(s, "{}", e + 1);
-        for n in mesh.element(e) {
-            let _ = write!(s, ", {}", n + 1);
+        for (k, n) in mesh.element(e).iter().enumerate() {
+            // At most 16 entries on a data line: a C3D20's last 5 nodes go on a second line.
+            if k == 15 {
+                s.push_str(",\n");
+                let _ = write!(s, "{}", n + 1);
+            } else {
+                let _ = write!(s, ", {}", n + 1);
+            }
         }
         s.push('\n');
     }
@@ -298,10 +304,13 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
     }
     s.push_str("$EndNodes\n");
     // Elements: the FE elements by group, then surface faces, then the points.
-    let face_type = match (D, mesh.kind.faces()[0].len()) {
-        (2, _) => 1, // 2-node line
-        (_, 3) => 2, // triangle
-        _ => 3,      // quadrangle
+    let quadratic = mesh.kind.linear() != mesh.kind;
+    let face_type = match (D, mesh.kind.faces()[0].len(), quadratic) {
+        (2, _, _) => 1,     // 2-node line
+        (_, 3, false) => 2, // triangle
+        (_, 3, true) => 9,  // 6-node triangle
+        (_, _, false) => 3, // quadrangle
+        (_, _, true) => 16, // 8-node quadrangle
     };
     let n_faces: usize = surfaces.iter().map(|(_, f)| f.len()).sum();
     let total = ne + n_faces + tagged_nodes.len();
@@ -317,7 +326,13 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
         );
         for &e in els {
             let _ = write!(s, "{}", e + 1);
-            for n in mesh.element(e) {
+            // Gmsh's order of the nodes (its own for the mid-edge nodes).
+            let el = mesh.element(e);
+            let mut gmsh = vec![0; el.len()];
+            for (k, &g) in mesh.kind.gmsh_order().iter().enumerate() {
+                gmsh[g] = el[k];
+            }
+            for n in gmsh {
                 let _ = write!(s, " {}", n + 1);
             }
             s.push('\n');
@@ -331,7 +346,9 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
             next += 1;
             let el = mesh.element(e);
             let _ = write!(s, "{next}");
-            for &c in mesh.kind.faces()[f as usize] {
+            // Corners, then (quadratic) the mid-edge nodes in the order of the face's edges,
+            // as Gmsh's 6-node triangle and 8-node quadrangle have them.
+            for c in mesh.kind.face_nodes(f as usize) {
                 let _ = write!(s, " {}", el[c] + 1);
             }
             s.push('\n');
@@ -406,8 +423,13 @@ pub fn feb<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> Result<String> {
         let _ = writeln!(s, "    <Surface name=\"{name}\">");
         for (k, &(e, f)) in faces.iter().enumerate() {
             let el = mesh.element(e);
-            let local = mesh.kind.faces()[f as usize];
-            let t = if local.len() == 4 { "quad4" } else { "tri3" };
+            let local = mesh.kind.face_nodes(f as usize);
+            let t = match local.len() {
+                4 => "quad4",
+                8 => "quad8",
+                6 => "tri6",
+                _ => "tri3",
+            };
             let ids: Vec<String> = local.iter().map(|&c| (el[c] + 1).to_string()).collect();
             let _ = writeln!(s, "      <{t} id=\"{}\">{}</{t}>", k + 1, ids.join(","));
         }
@@ -602,6 +624,31 @@ mod tests {
     fn every_format_reads_back_with_its_sets() {
         round_trip(&two_cubes(), "hex");
         round_trip(&quads(), "quad");
+        // Quadratic: mid-edge nodes in each program's order and back; sets carried.
+        let hex20 = two_cubes().to_quadratic().unwrap();
+        assert_eq!(hex20.nodes.len(), 12 + 20);
+        round_trip(&hex20, "hex20");
+        let tets = FeMesh {
+            nodes: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+            ],
+            kind: ElementKind::Tet4,
+            connectivity: vec![0, 1, 2, 3, 1, 2, 3, 4],
+            sets: MeshSets {
+                node_sets: [("TIP".to_string(), vec![3, 4])].into(),
+                surfaces: [("BASE".to_string(), vec![(0, 0)])].into(),
+                ..Default::default()
+            },
+        };
+        let tet10 = tets.to_quadratic().unwrap();
+        // The mid-edge node of 3-4 joins TIP; 9 edges, 9 mid-edge nodes.
+        assert_eq!(tet10.nodes.len(), 5 + 9);
+        assert_eq!(tet10.sets.node_sets["TIP"].len(), 3);
+        round_trip(&tet10, "tet10");
     }
 
     #[test]

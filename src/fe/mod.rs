@@ -10,8 +10,10 @@ use crate::geometry::Point;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// Element types. Node numbering follows VTK, which Gmsh, Abaqus/CalculiX and FEBio share for
-/// these linear elements (0-based here, 1-based in their files).
+/// Element types. Node numbering follows VTK, which Abaqus/CalculiX and FEBio share for all
+/// of these and Gmsh for the linear ones (0-based here, 1-based in their files; Gmsh numbers
+/// the mid-edge nodes of its quadratic elements otherwise, and its reader and writer
+/// reorder them).
 ///
 /// ```text
 /// Quad4 (counter-clockwise)     Hex8 (bottom 0-3 counter-clockwise seen from +z, top 4-7 above)
@@ -31,6 +33,15 @@ use std::collections::BTreeMap;
 ///                                    1
 /// ```
 ///
+/// The quadratic elements have the corners of their linear kind first, then a node at the
+/// middle of every edge, in this order of edges:
+///
+/// ```text
+/// Hex20: 8 (0,1)  9 (1,2)  10 (2,3)  11 (3,0)       Tet10: 4 (0,1)  5 (1,2)  6 (2,0)
+///        12 (4,5) 13 (5,6) 14 (6,7)  15 (7,4)              7 (0,3)  8 (1,3)  9 (2,3)
+///        16 (0,4) 17 (1,5) 18 (2,6)  19 (3,7)
+/// ```
+///
 /// Faces (edges in 2D) are numbered as Abaqus numbers them (`S1` is face 0), each listed
 /// with its nodes ordered so that its normal points out of the element:
 /// Quad4 `S1..S4` = (0,1) (1,2) (2,3) (3,0); Tri3 `S1..S3` = (0,1) (1,2) (2,0);
@@ -46,7 +57,47 @@ pub enum ElementKind {
     Tri3,
     /// Linear tetrahedron (3D).
     Tet4,
+    /// Quadratic (serendipity) hexahedron, 20 nodes (3D).
+    Hex20,
+    /// Quadratic tetrahedron, 10 nodes (3D).
+    Tet10,
 }
+
+/// Mid-edge nodes of a Hex20 by edge (corner, corner, mid).
+const HEX20_EDGES: [[usize; 3]; 12] = [
+    [0, 1, 8],
+    [1, 2, 9],
+    [2, 3, 10],
+    [3, 0, 11],
+    [4, 5, 12],
+    [5, 6, 13],
+    [6, 7, 14],
+    [7, 4, 15],
+    [0, 4, 16],
+    [1, 5, 17],
+    [2, 6, 18],
+    [3, 7, 19],
+];
+
+/// Mid-edge nodes of a Tet10 by edge (corner, corner, mid).
+const TET10_EDGES: [[usize; 3]; 6] = [
+    [0, 1, 4],
+    [1, 2, 5],
+    [2, 0, 6],
+    [0, 3, 7],
+    [1, 3, 8],
+    [2, 3, 9],
+];
+
+/// Every kind.
+const ALL_KINDS: [ElementKind; 6] = [
+    ElementKind::Quad4,
+    ElementKind::Hex8,
+    ElementKind::Tri3,
+    ElementKind::Tet4,
+    ElementKind::Hex20,
+    ElementKind::Tet10,
+];
 
 impl ElementKind {
     /// Nodes per element.
@@ -56,13 +107,49 @@ impl ElementKind {
             ElementKind::Hex8 => 8,
             ElementKind::Tri3 => 3,
             ElementKind::Tet4 => 4,
+            ElementKind::Hex20 => 20,
+            ElementKind::Tet10 => 10,
         }
+    }
+    /// The linear kind of the same shape (itself for a linear kind): its nodes are the first
+    /// nodes of this kind's.
+    pub fn linear(self) -> Self {
+        match self {
+            ElementKind::Hex20 => ElementKind::Hex8,
+            ElementKind::Tet10 => ElementKind::Tet4,
+            k => k,
+        }
+    }
+    /// The mid-edge node of the edge between corners `a` and `b` of a quadratic kind.
+    pub fn mid_node(self, a: usize, b: usize) -> Option<usize> {
+        let edges: &[[usize; 3]] = match self {
+            ElementKind::Hex20 => &HEX20_EDGES,
+            ElementKind::Tet10 => &TET10_EDGES,
+            _ => return None,
+        };
+        edges
+            .iter()
+            .find(|e| (e[0] == a && e[1] == b) || (e[0] == b && e[1] == a))
+            .map(|e| e[2])
+    }
+    /// The nodes of face `f` ([`ElementKind::faces`]) with, for a quadratic kind, the
+    /// mid-edge nodes after the corners (in the order of the face's edges).
+    pub fn face_nodes(self, f: usize) -> Vec<usize> {
+        let corners = self.faces()[f];
+        let mut v = corners.to_vec();
+        if self.linear() != self {
+            for (i, &a) in corners.iter().enumerate() {
+                let b = corners[(i + 1) % corners.len()];
+                v.extend(self.mid_node(a, b));
+            }
+        }
+        v
     }
     /// Spatial dimension of the element.
     pub fn dimension(self) -> usize {
         match self {
             ElementKind::Quad4 | ElementKind::Tri3 => 2,
-            ElementKind::Hex8 | ElementKind::Tet4 => 3,
+            ElementKind::Hex8 | ElementKind::Tet4 | ElementKind::Hex20 | ElementKind::Tet10 => 3,
         }
     }
     /// VTK cell type id.
@@ -72,13 +159,13 @@ impl ElementKind {
             ElementKind::Hex8 => 12,
             ElementKind::Tri3 => 5,
             ElementKind::Tet4 => 10,
+            ElementKind::Hex20 => 25,
+            ElementKind::Tet10 => 24,
         }
     }
     /// The kind of VTK cell type `t`.
     pub fn from_vtk_type(t: u8) -> Option<Self> {
-        [Self::Quad4, Self::Hex8, Self::Tri3, Self::Tet4]
-            .into_iter()
-            .find(|k| k.vtk_type() == t)
+        ALL_KINDS.into_iter().find(|k| k.vtk_type() == t)
     }
     /// Gmsh element type number.
     pub fn gmsh_type(self) -> u32 {
@@ -87,13 +174,30 @@ impl ElementKind {
             ElementKind::Quad4 => 3,
             ElementKind::Tet4 => 4,
             ElementKind::Hex8 => 5,
+            ElementKind::Tet10 => 11,
+            ElementKind::Hex20 => 17,
         }
     }
     /// The kind of Gmsh element type `t`.
     pub fn from_gmsh_type(t: u32) -> Option<Self> {
-        [Self::Quad4, Self::Hex8, Self::Tri3, Self::Tet4]
-            .into_iter()
-            .find(|k| k.gmsh_type() == t)
+        ALL_KINDS.into_iter().find(|k| k.gmsh_type() == t)
+    }
+    /// For each node in this crate's (VTK) order, its place in Gmsh's order of the element's
+    /// nodes (the identity for the linear kinds).
+    pub fn gmsh_order(self) -> &'static [usize] {
+        match self {
+            // Gmsh's hexahedron 20: edges (0,1) (0,3) (0,4) (1,2) (1,5) (2,3) (2,6) (3,7)
+            // (4,5) (4,7) (5,6) (6,7).
+            ElementKind::Hex20 => &[
+                0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15,
+            ],
+            // Gmsh's tetrahedron 10: edges (0,1) (1,2) (2,0) (0,3) (2,3) (1,3).
+            ElementKind::Tet10 => &[0, 1, 2, 3, 4, 5, 6, 7, 9, 8],
+            ElementKind::Quad4 => &[0, 1, 2, 3],
+            ElementKind::Tri3 => &[0, 1, 2],
+            ElementKind::Tet4 => &[0, 1, 2, 3],
+            ElementKind::Hex8 => &[0, 1, 2, 3, 4, 5, 6, 7],
+        }
     }
     /// Abaqus/CalculiX element type written (plane stress in 2D).
     pub fn abaqus_type(self) -> &'static str {
@@ -102,6 +206,8 @@ impl ElementKind {
             ElementKind::Tri3 => "CPS3",
             ElementKind::Hex8 => "C3D8",
             ElementKind::Tet4 => "C3D4",
+            ElementKind::Hex20 => "C3D20",
+            ElementKind::Tet10 => "C3D10",
         }
     }
     /// The kind of an Abaqus/CalculiX element type (continuum elements of these node counts:
@@ -113,10 +219,12 @@ impl ElementKind {
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric())
             .collect();
-        let stem = base.trim_end_matches(['R', 'H', 'I', 'T']);
+        let stem = base.trim_end_matches(['R', 'H', 'I', 'T', 'M']);
         match stem {
             "C3D8" => Some(ElementKind::Hex8),
             "C3D4" => Some(ElementKind::Tet4),
+            "C3D20" => Some(ElementKind::Hex20),
+            "C3D10" => Some(ElementKind::Tet10),
             "CPS4" | "CPE4" | "CAX4" => Some(ElementKind::Quad4),
             "CPS3" | "CPE3" | "CAX3" => Some(ElementKind::Tri3),
             _ => None,
@@ -129,11 +237,15 @@ impl ElementKind {
             ElementKind::Tri3 => "tri3",
             ElementKind::Hex8 => "hex8",
             ElementKind::Tet4 => "tet4",
+            ElementKind::Hex20 => "hex20",
+            ElementKind::Tet10 => "tet10",
         }
     }
-    /// The faces (edges in 2D) of the element, by local node, outward (see the type's doc).
+    /// The faces (edges in 2D) of the element, by local corner node, outward (see the type's
+    /// doc); a quadratic kind has those of its linear kind ([`ElementKind::face_nodes`] adds
+    /// the mid-edge nodes).
     pub fn faces(self) -> &'static [&'static [usize]] {
-        match self {
+        match self.linear() {
             ElementKind::Quad4 => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
             ElementKind::Tri3 => &[&[0, 1], &[1, 2], &[2, 0]],
             ElementKind::Hex8 => &[
@@ -144,31 +256,33 @@ impl ElementKind {
                 &[2, 3, 7, 6],
                 &[3, 0, 4, 7],
             ],
-            ElementKind::Tet4 => &[&[0, 2, 1], &[0, 1, 3], &[1, 2, 3], &[2, 0, 3]],
+            _ => &[&[0, 2, 1], &[0, 1, 3], &[1, 2, 3], &[2, 0, 3]],
         }
     }
     /// Scale of the scaled Jacobian: 1 for the ideal element's corners (square, cube,
     /// equilateral triangle and tetrahedron).
     pub fn scaled_jacobian_factor(self) -> f64 {
-        match self {
+        match self.linear() {
             ElementKind::Quad4 | ElementKind::Hex8 => 1.0,
             ElementKind::Tri3 => 2.0 / 3f64.sqrt(),
-            ElementKind::Tet4 => std::f64::consts::SQRT_2,
+            _ => std::f64::consts::SQRT_2,
         }
     }
     /// The usual acceptance bound on the scaled Jacobian (hexahedra 0.5, quadrilaterals 0.3,
     /// simplices 0.2).
     pub fn scaled_jacobian_bound(self) -> f64 {
-        match self {
+        match self.linear() {
             ElementKind::Hex8 => 0.5,
             ElementKind::Quad4 => 0.3,
-            ElementKind::Tri3 | ElementKind::Tet4 => 0.2,
+            _ => 0.2,
         }
     }
     /// For each corner, the `D` neighbouring corners whose edge vectors span the corner's
-    /// Jacobian matrix (right-handed for a valid element).
+    /// Jacobian matrix (right-handed for a valid element); a quadratic kind has those of its
+    /// linear kind, the edge vectors then being the edges' tangents at the corner
+    /// (`4 mid - 3 corner - other corner`, see [`crate::fe::quality`]).
     pub fn corner_frames(self) -> &'static [&'static [usize]] {
-        match self {
+        match self.linear() {
             ElementKind::Quad4 => &[&[1, 3], &[2, 0], &[3, 1], &[0, 2]],
             ElementKind::Hex8 => &[
                 &[1, 3, 4],
@@ -181,7 +295,7 @@ impl ElementKind {
                 &[6, 4, 3],
             ],
             ElementKind::Tri3 => &[&[1, 2], &[2, 0], &[0, 1]],
-            ElementKind::Tet4 => &[&[1, 2, 3], &[2, 0, 3], &[0, 1, 3], &[0, 2, 1]],
+            _ => &[&[1, 2, 3], &[2, 0, 3], &[0, 1, 3], &[0, 2, 1]],
         }
     }
     /// Name used in files and reports.
@@ -191,13 +305,13 @@ impl ElementKind {
             ElementKind::Hex8 => "hex8",
             ElementKind::Tri3 => "tri3",
             ElementKind::Tet4 => "tet4",
+            ElementKind::Hex20 => "hex20",
+            ElementKind::Tet10 => "tet10",
         }
     }
     /// The kind named `name` (as written by [`ElementKind::name`]).
     pub fn from_name(name: &str) -> Option<Self> {
-        [Self::Quad4, Self::Hex8, Self::Tri3, Self::Tet4]
-            .into_iter()
-            .find(|k| k.name() == name)
+        ALL_KINDS.into_iter().find(|k| k.name() == name)
     }
 }
 
@@ -340,5 +454,54 @@ impl<const D: usize> FeMesh<D> {
             connectivity: self.connectivity.clone(),
             sets: self.sets.clone(),
         }
+    }
+
+    /// The quadratic mesh of a linear 3D one (Hex8 to Hex20, Tet4 to Tet10): a node at the
+    /// middle of every edge, shared by the elements around it, numbered after the linear
+    /// mesh's nodes (which keep their numbers). Element sets and surfaces are kept; a node
+    /// set gains the mid-edge nodes of the edges whose two ends it holds. `None` for a mesh
+    /// that is already quadratic or two-dimensional.
+    pub fn to_quadratic(&self) -> Option<Self> {
+        let kind = match self.kind {
+            ElementKind::Hex8 => ElementKind::Hex20,
+            ElementKind::Tet4 => ElementKind::Tet10,
+            _ => return None,
+        };
+        let edges: &[[usize; 3]] = match kind {
+            ElementKind::Hex20 => &HEX20_EDGES,
+            _ => &TET10_EDGES,
+        };
+        let mut nodes = self.nodes.clone();
+        let mut mid: std::collections::HashMap<(usize, usize), usize> = Default::default();
+        let mut connectivity = Vec::with_capacity(self.num_elements() * kind.nodes());
+        for e in 0..self.num_elements() {
+            let el = self.element(e);
+            connectivity.extend_from_slice(el);
+            for &[a, b, _] in edges {
+                let key = (el[a].min(el[b]), el[a].max(el[b]));
+                let m = *mid.entry(key).or_insert_with(|| {
+                    let (p, q) = (self.nodes[key.0], self.nodes[key.1]);
+                    nodes.push(std::array::from_fn(|d| 0.5 * (p[d] + q[d])));
+                    nodes.len() - 1
+                });
+                connectivity.push(m);
+            }
+        }
+        let mut sets = self.sets.clone();
+        for members in sets.node_sets.values_mut() {
+            let has: std::collections::HashSet<usize> = members.iter().copied().collect();
+            members.extend(
+                mid.iter()
+                    .filter(|((a, b), _)| has.contains(a) && has.contains(b))
+                    .map(|(_, &m)| m),
+            );
+            members.sort_unstable();
+        }
+        Some(FeMesh {
+            nodes,
+            kind,
+            connectivity,
+            sets,
+        })
     }
 }

@@ -105,7 +105,22 @@ pub fn corner<const D: usize>(
 ) -> (f64, f64) {
     let frame = kind.corner_frames()[c];
     let x = nodes[el[c]];
-    let v: [Point<D>; D] = std::array::from_fn(|k| sub(nodes[el[frame[k]]], x));
+    let v: [Point<D>; D] = match kind {
+        // The tangent at the corner of the quadratic edge through the corner x, the mid-edge
+        // node m and the other corner y, per unit of the edge parameter: 4 m - 3 x - y (y - x
+        // when m is the midpoint).
+        super::ElementKind::Hex20 | super::ElementKind::Tet10 => std::array::from_fn(|k| {
+            let y = nodes[el[frame[k]]];
+            match kind.mid_node(c, frame[k]) {
+                Some(m) => {
+                    let m = nodes[el[m]];
+                    std::array::from_fn(|d| 4.0 * m[d] - 3.0 * x[d] - y[d])
+                }
+                None => sub(y, x),
+            }
+        }),
+        _ => std::array::from_fn(|k| sub(nodes[el[frame[k]]], x)),
+    };
     let j = det(&v);
     let l: f64 = v.iter().map(|e| norm(*e)).product();
     let sj = if l > 0.0 {
@@ -203,6 +218,50 @@ pub fn distribution<const D: usize>(mesh: &FeMesh<D>, q: &[ElementQuality]) -> Q
 mod tests {
     use super::*;
     use crate::fe::ElementKind;
+
+    #[test]
+    fn straight_quadratic_elements_measure_as_linear_ones_and_a_bent_edge_inverts() {
+        let cube = FeMesh::<3> {
+            nodes: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ],
+            kind: ElementKind::Hex8,
+            connectivity: (0..8).collect(),
+            sets: Default::default(),
+        };
+        let mut hex20 = cube.to_quadratic().unwrap();
+        let q = element_quality(&hex20, 0);
+        assert!((q.scaled_jacobian_min - 1.0).abs() < 1e-12, "{q:?}");
+        assert!((q.jacobian_min - 1.0).abs() < 1e-12, "{q:?}");
+        // The mid-edge node of edge 0-1 pulled back past corner 0: the edge's tangent at
+        // corner 0 points backwards.
+        let m = hex20.connectivity[ElementKind::Hex20.mid_node(0, 1).unwrap()];
+        hex20.nodes[m] = [-0.2, 0.0, 0.0];
+        assert!(element_quality(&hex20, 0).jacobian_min < 0.0);
+        let tet = FeMesh::<3> {
+            nodes: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            kind: ElementKind::Tet4,
+            connectivity: vec![0, 1, 2, 3],
+            sets: Default::default(),
+        };
+        let linear = element_quality(&tet, 0);
+        let tet10 = tet.to_quadratic().unwrap();
+        let quadratic = element_quality(&tet10, 0);
+        assert!((linear.scaled_jacobian_min - quadratic.scaled_jacobian_min).abs() < 1e-12);
+        assert!((linear.jacobian_min - quadratic.jacobian_min).abs() < 1e-12);
+    }
 
     #[test]
     fn unit_square_has_scaled_jacobian_one() {

@@ -269,7 +269,7 @@ impl SetsConfig {
             if s.facing.is_some() {
                 for f in &faces {
                     if facing(s, f)? {
-                        for &n in &f.nodes {
+                        for &n in f.nodes.iter().chain(&f.mids) {
                             if region(s, &mesh.nodes[n])? {
                                 members.push(n);
                             }
@@ -329,8 +329,10 @@ pub struct BoundaryFace<const D: usize> {
     pub element: usize,
     /// Local face number ([`ElementKind::faces`]).
     pub face: u8,
-    /// Its nodes, outward order.
+    /// Its corner nodes, outward order.
     pub nodes: Vec<usize>,
+    /// Its mid-edge nodes (quadratic elements; empty otherwise), in the order of its edges.
+    pub mids: Vec<usize>,
     /// Unit outward normal.
     pub normal: Point<D>,
     pub centroid: Point<D>,
@@ -379,10 +381,15 @@ pub fn boundary_faces<const D: usize>(mesh: &FeMesh<D>) -> Vec<BoundaryFace<D>> 
             if n > 0.0 {
                 normal = normal.map(|v| v / n);
             }
+            let mids = mesh.kind.face_nodes(fi)[nodes.len()..]
+                .iter()
+                .map(|&k| el[k])
+                .collect();
             out.push(BoundaryFace {
                 element: e,
                 face: fi as u8,
                 nodes,
+                mids,
                 normal,
                 centroid,
             });

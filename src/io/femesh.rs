@@ -176,7 +176,7 @@ pub fn read_inp(path: &Path) -> Result<InpDeck> {
                             path,
                             ln,
                             format!(
-                                "element type {t:?} is not supported; atlasmesh reads C3D8 (and R, H, I variants), C3D4, CPS4/CPE4/CAX4 and CPS3/CPE3/CAX3"
+                                "element type {t:?} is not supported; atlasmesh reads C3D8 (and R, H, I variants), C3D20, C3D4, C3D10 (and M), CPS4/CPE4/CAX4 and CPS3/CPE3/CAX3"
                             ),
                         )
                     })?;
@@ -875,8 +875,9 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
             ));
         }
         let e = conn.len() / k.nodes();
-        for &n in tags {
-            conn.push(node(el, n)?);
+        // Gmsh numbers the mid-edge nodes of quadratic elements its own way.
+        for &g in k.gmsh_order() {
+            conn.push(node(el, tags[g])?);
         }
         for p in phys {
             let name = names
@@ -897,11 +898,23 @@ pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
             face_of.insert(key, (e, f as u8));
         }
     }
-    for (dim, _, tags, phys, _) in &elements {
+    for (dim, t, tags, phys, _) in &elements {
         if phys.is_empty() || *dim == top {
             continue;
         }
-        let ids: Vec<usize> = tags.iter().map(|&n| node(el, n)).collect::<Result<_>>()?;
+        let mut ids: Vec<usize> = tags.iter().map(|&n| node(el, n)).collect::<Result<_>>()?;
+        // A face of a quadratic element (3-node line, 6-node triangle, 8- or 9-node
+        // quadrangle) is matched by its corners, which Gmsh lists first; a node set takes
+        // all of its nodes.
+        let corners = match t {
+            8 => 2,
+            9 => 3,
+            16 | 10 => 4,
+            _ => ids.len(),
+        };
+        if *dim + 1 == top {
+            ids.truncate(corners);
+        }
         for p in phys {
             let name = names
                 .get(&(*dim, *p))

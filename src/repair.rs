@@ -437,6 +437,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_folded_quadratic_mesh_is_repaired() {
+        let mut m = FeMesh::block(4).to_quadratic().unwrap();
+        // The interior corner node (2, 2, 2) pushed down through the face below it (the
+        // mid-edge nodes around it stay: its edges fold back).
+        let n = 2 + 5 * (2 + 5 * 2);
+        m.nodes[n][2] -= 1.6;
+        let q = mesh_quality(&m);
+        assert!(summarize(&q).inverted_elements > 0);
+        let r = repair(&mut m, None, &RepairParams::default()).unwrap();
+        assert!(r.inverted_before > 0, "{r:?}");
+        assert_eq!(r.inverted_after, 0, "{r:?}");
+        assert!(r.scaled_jacobian_min >= 0.2, "{r:?}");
+        assert_eq!(summarize(&mesh_quality(&m)).inverted_elements, 0);
+    }
+
+    #[test]
     fn a_node_pushed_through_its_opposite_face_is_repaired() {
         let mut m = FeMesh::block(4);
         // The interior node (2, 2, 2) pushed down through the face below it.

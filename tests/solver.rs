@@ -89,13 +89,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
         return;
     };
     let dir = common::temp_dir("solver-femur");
-    let femur = |k: usize| {
-        data.join(format!(
-            "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
-        ))
-        .display()
-        .to_string()
-    };
+    let femur = |k: usize| femur_path(&data, k);
     let sets = dir.join("sets.toml");
     std::fs::write(&sets, SETS).unwrap();
     let s = |p: &Path| p.display().to_string();
@@ -312,34 +306,28 @@ print(json.dumps(out))
     );
 }
 
-/// Round trip: a template `.inp` with sets (a femur's morphed mesh) as the atlas's FE mesh,
-/// morphed to three femurs; the sets have the same members in every output format.
-#[test]
-fn template_inp_with_sets_morphed_to_three_femurs() {
-    let Some(data) = common::data_dir("template_inp_with_sets_morphed_to_three_femurs") else {
-        return;
-    };
-    let dir = common::temp_dir("solver-template");
-    let femur = |k: usize| {
-        data.join(format!(
-            "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
-        ))
-        .display()
-        .to_string()
-    };
+/// `S{k:03}_Femur.ply` of the femur data under `data`.
+fn femur_path(data: &Path, k: usize) -> String {
+    data.join(format!(
+        "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
+    ))
+    .display()
+    .to_string()
+}
+
+/// A template FE mesh in S001's frame: an atlas of S002-S012 with an automatic hex mesh of
+/// `element_size`, fitted to S001 with the sets of `sets`, written as `.inp` in `dir`.
+fn femur_template(data: &Path, dir: &Path, sets: &Path, element_size: &str) -> PathBuf {
     let s = |p: &Path| p.display().to_string();
-    let sets = dir.join("sets.toml");
-    std::fs::write(&sets, SETS).unwrap();
-    // The template: an automatic mesh morphed to S001, written as .inp with the sets.
     let a0 = dir.join("a0.safetensors");
     let mut args = vec!["build".to_string(), "--shapes".into()];
-    args.extend((2..=12).map(femur));
+    args.extend((2..=12).map(|k| femur_path(data, k)));
     args.extend(
         [
             "--modes",
             "8",
             "--element-size",
-            "0.05",
+            element_size,
             "--no-plots",
             "--out",
         ]
@@ -353,16 +341,32 @@ fn template_inp_with_sets_morphed_to_three_femurs() {
         "--atlas",
         &s(&a0),
         "--subject",
-        &femur(1),
+        &femur_path(data, 1),
         "--sets",
-        &s(&sets),
+        &s(sets),
         "--format",
         "inp",
         "--no-plots",
         "--out",
         &s(&t),
     ]);
-    let template = t.join("S001_Femur/S001_Femur_mesh.inp");
+    t.join("S001_Femur/S001_Femur_mesh.inp")
+}
+
+/// Round trip: a template `.inp` with sets (a femur's morphed mesh) as the atlas's FE mesh,
+/// morphed to three femurs; the sets have the same members in every output format.
+#[test]
+fn template_inp_with_sets_morphed_to_three_femurs() {
+    let Some(data) = common::data_dir("template_inp_with_sets_morphed_to_three_femurs") else {
+        return;
+    };
+    let dir = common::temp_dir("solver-template");
+    let femur = |k: usize| femur_path(&data, k);
+    let s = |p: &Path| p.display().to_string();
+    let sets = dir.join("sets.toml");
+    std::fs::write(&sets, SETS).unwrap();
+    // The template: an automatic mesh morphed to S001, written as .inp with the sets.
+    let template = femur_template(&data, &dir, &sets, "0.05");
     let tm: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(&template).unwrap();
     assert!(!tm.sets.node_sets.is_empty() && !tm.sets.surfaces.is_empty());
     // The atlas with that template mesh (S001 first), then three other femurs.
@@ -419,57 +423,15 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
         return;
     };
     let dir = common::temp_dir("solver-quadratic");
-    let femur = |k: usize| {
-        data.join(format!(
-            "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
-        ))
-        .display()
-        .to_string()
-    };
+    let femur = |k: usize| femur_path(&data, k);
     let s = |p: &Path| p.display().to_string();
     let sets = dir.join("sets.toml");
     std::fs::write(&sets, SETS).unwrap();
     // Hex20: a coarse hex mesh morphed to S001 (with the sets), made quadratic.
-    let a0 = dir.join("a0.safetensors");
-    let mut args = vec!["build".to_string(), "--shapes".into()];
-    args.extend((2..=12).map(femur));
-    args.extend(
-        [
-            "--modes",
-            "8",
-            "--element-size",
-            "0.06",
-            "--no-plots",
-            "--out",
-        ]
-        .map(String::from),
-    );
-    args.push(s(&a0));
-    atlasmesh(&args.iter().map(String::as_str).collect::<Vec<_>>());
-    let t = dir.join("t");
-    atlasmesh(&[
-        "fit",
-        "--atlas",
-        &s(&a0),
-        "--subject",
-        &femur(1),
-        "--sets",
-        &s(&sets),
-        "--format",
-        "inp",
-        "--no-plots",
-        "--out",
-        &s(&t),
-    ]);
-    let linear: FeMesh<3> =
-        atlasmesh::io::femesh::read_fe_mesh(&t.join("S001_Femur/S001_Femur_mesh.inp")).unwrap();
+    let template = femur_template(&data, &dir, &sets, "0.06");
+    let linear: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(&template).unwrap();
     let t20 = dir.join("t20.inp");
-    atlasmesh(&[
-        "convert",
-        &s(&t.join("S001_Femur/S001_Femur_mesh.inp")),
-        &s(&t20),
-        "--quadratic",
-    ]);
+    atlasmesh(&["convert", &s(&template), &s(&t20), "--quadratic"]);
     let hex20: FeMesh<3> = atlasmesh::io::femesh::read_fe_mesh(&t20).unwrap();
     assert_eq!(hex20.kind, atlasmesh::fe::ElementKind::Hex20);
     assert_eq!(hex20.num_elements(), linear.num_elements());

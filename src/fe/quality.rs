@@ -221,21 +221,7 @@ mod tests {
 
     #[test]
     fn straight_quadratic_elements_measure_as_linear_ones_and_a_bent_edge_inverts() {
-        let cube = FeMesh::<3> {
-            nodes: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [1.0, 0.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [0.0, 1.0, 1.0],
-            ],
-            kind: ElementKind::Hex8,
-            connectivity: (0..8).collect(),
-            sets: Default::default(),
-        };
+        let cube = FeMesh::<3>::block(1);
         let mut hex20 = cube.to_quadratic().unwrap();
         let q = element_quality(&hex20, 0);
         assert!((q.scaled_jacobian_min - 1.0).abs() < 1e-12, "{q:?}");

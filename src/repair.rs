@@ -438,24 +438,14 @@ mod tests {
 
     #[test]
     fn a_folded_quadratic_mesh_is_repaired() {
-        let mut m = FeMesh::block(4).to_quadratic().unwrap();
-        // The interior corner node (2, 2, 2) pushed down through the face below it (the
-        // mid-edge nodes around it stay: its edges fold back).
-        let n = 2 + 5 * (2 + 5 * 2);
-        m.nodes[n][2] -= 1.6;
-        let q = mesh_quality(&m);
-        assert!(summarize(&q).inverted_elements > 0);
-        let r = repair(&mut m, None, &RepairParams::default()).unwrap();
-        assert!(r.inverted_before > 0, "{r:?}");
-        assert_eq!(r.inverted_after, 0, "{r:?}");
-        assert!(r.scaled_jacobian_min >= 0.2, "{r:?}");
+        // (The mid-edge nodes around the pushed corner stay: its edges fold back.)
+        let m = folded_and_repaired(FeMesh::block(4).to_quadratic().unwrap());
         assert_eq!(summarize(&mesh_quality(&m)).inverted_elements, 0);
     }
 
-    #[test]
-    fn a_node_pushed_through_its_opposite_face_is_repaired() {
-        let mut m = FeMesh::block(4);
-        // The interior node (2, 2, 2) pushed down through the face below it.
+    /// `m` (a 4 × 4 × 4 block) with its interior node (2, 2, 2) pushed down through the face
+    /// below it, repaired: untangled and at or above the bound.
+    fn folded_and_repaired(mut m: FeMesh<3>) -> FeMesh<3> {
         let n = 2 + 5 * (2 + 5 * 2);
         m.nodes[n][2] -= 1.6;
         let q = mesh_quality(&m);
@@ -465,6 +455,12 @@ mod tests {
         assert_eq!(r.inverted_after, 0, "{r:?}");
         assert!(r.scaled_jacobian_min >= 0.2, "{r:?}");
         assert_eq!(r.below_bound_after, 0);
+        m
+    }
+
+    #[test]
+    fn a_node_pushed_through_its_opposite_face_is_repaired() {
+        let m = folded_and_repaired(FeMesh::block(4));
         // The boundary did not move (no surface given: boundary nodes are fixed).
         let fresh = FeMesh::block(4);
         for f in boundary_faces(&fresh) {

@@ -9,10 +9,15 @@
 //!    vertex on its boundary is manifold (no two cubes meeting only along an edge or at a
 //!    corner), so that the boundary is a closed quad surface.
 //! 3. Pillow: every boundary node gets a partner at its closest point on the surface, and
-//!    every boundary quad becomes a hexahedron between the quad and its partners. No hexahedron has two faces on the surface.
+//!    every boundary quad becomes a hexahedron between the quad and its partners. No
+//!    hexahedron has two faces on the surface. A boundary node nearer the surface than
+//!    `PILLOW_MIN` cube edges along the staircase's normal first moves inwards to that
+//!    depth, so that no pillow hexahedron is a sliver.
 //! 4. Smoothing: surface nodes move toward the average of their surface neighbours and back
 //!    onto the surface; inner nodes toward the average of their neighbours. A move is kept
-//!    only when the smallest scaled Jacobian of the hexahedra around the node does not drop.
+//!    only when the worst quality of the hexahedra around the node does not drop: the
+//!    smaller of the scaled Jacobian and `EDGE_RATIO_WEIGHT` over the edge ratio (a flat
+//!    hexahedron can have square corners).
 //!
 //! Lengths in the surface's units; the surface must be closed and oriented outwards.
 
@@ -512,8 +517,9 @@ const HEX_EDGES: [(usize, usize); 12] = [
 ];
 
 /// Laplacian smoothing with a guard: a node moves to the mean of its edge neighbours (surface
-/// nodes: of their surface neighbours, then back onto the surface) only if the smallest
-/// scaled Jacobian of its hexahedra does not drop.
+/// nodes: of their surface neighbours, then back onto the surface) only if the worst quality
+/// of its hexahedra (scaled Jacobian, or `EDGE_RATIO_WEIGHT` over the edge ratio when less)
+/// does not drop.
 fn smooth(
     mesh: &mut FeMesh<3>,
     on_surface: &[bool],

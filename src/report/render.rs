@@ -205,7 +205,7 @@ pub fn signed_color(max: f64) -> impl Fn(f64) -> [u8; 3] {
     move |v: f64| c(v + max)
 }
 
-/// A colour bar for [`annotate`]: the map, the values at its two ends and their labels.
+/// A colour bar for [`annotated`]: the map, the values at its two ends and their labels.
 pub struct Legend<'a> {
     pub color: ColorMap<'a>,
     pub lo: f64,

@@ -131,7 +131,8 @@ enum Command {
         #[arg(long, value_name = "TOML")]
         sets: Option<PathBuf>,
         /// Write quadratic elements (hex8 to hex20, tet4 to tet10: a node in the middle of
-        /// every edge; an atlas whose mean mesh is quadratic morphs them along, curved).
+        /// every edge). As a template (`--template-mesh`) the mid-edge nodes are morphed with
+        /// the rest, so the edges follow the subject.
         #[arg(long)]
         quadratic: bool,
     },

@@ -1,7 +1,7 @@
 //! Reading FE meshes that users bring as templates, with their sets: Abaqus/CalculiX `.inp`,
 //! Gmsh `.msh` (2.2 and 4.1, ASCII), VTU and legacy VTK (ASCII `UNSTRUCTURED_GRID`). One
-//! element type per mesh (tri3, quad4, tet4, hex8); node ordering as in
-//! [`crate::fe::ElementKind`].
+//! element type per mesh (tri3, quad4, tet4, hex8, tet10, hex20); node ordering as in
+//! [`crate::fe::ElementKind`] (Gmsh's mid-edge nodes reordered to it).
 //!
 //! Sets: `.inp` `*NSET`, `*ELSET` (lists, `GENERATE` ranges, other sets by name) and
 //! `*SURFACE, TYPE=ELEMENT` (`element or element set, Sk`); `.msh` physical groups (of the

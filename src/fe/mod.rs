@@ -262,10 +262,10 @@ impl ElementKind {
     /// Scale of the scaled Jacobian: 1 for the ideal element's corners (square, cube,
     /// equilateral triangle and tetrahedron).
     pub fn scaled_jacobian_factor(self) -> f64 {
-        match self.linear() {
-            ElementKind::Quad4 | ElementKind::Hex8 => 1.0,
+        match self {
+            ElementKind::Quad4 | ElementKind::Hex8 | ElementKind::Hex20 => 1.0,
             ElementKind::Tri3 => 2.0 / 3f64.sqrt(),
-            _ => std::f64::consts::SQRT_2,
+            ElementKind::Tet4 | ElementKind::Tet10 => std::f64::consts::SQRT_2,
         }
     }
     /// The usual acceptance bound on the scaled Jacobian (hexahedra 0.5, quadrilaterals 0.3,
@@ -282,9 +282,9 @@ impl ElementKind {
     /// linear kind, the edge vectors then being the edges' tangents at the corner
     /// (`4 mid - 3 corner - other corner`, see [`crate::fe::quality`]).
     pub fn corner_frames(self) -> &'static [&'static [usize]] {
-        match self.linear() {
+        match self {
             ElementKind::Quad4 => &[&[1, 3], &[2, 0], &[3, 1], &[0, 2]],
-            ElementKind::Hex8 => &[
+            ElementKind::Hex8 | ElementKind::Hex20 => &[
                 &[1, 3, 4],
                 &[2, 0, 5],
                 &[3, 1, 6],
@@ -295,7 +295,9 @@ impl ElementKind {
                 &[6, 4, 3],
             ],
             ElementKind::Tri3 => &[&[1, 2], &[2, 0], &[0, 1]],
-            _ => &[&[1, 2, 3], &[2, 0, 3], &[0, 1, 3], &[0, 2, 1]],
+            ElementKind::Tet4 | ElementKind::Tet10 => {
+                &[&[1, 2, 3], &[2, 0, 3], &[0, 1, 3], &[0, 2, 1]]
+            }
         }
     }
     /// Name used in files and reports.

@@ -106,19 +106,9 @@ pub fn corner<const D: usize>(
     let frame = kind.corner_frames()[c];
     let x = nodes[el[c]];
     let v: [Point<D>; D] = match kind {
-        // The tangent at the corner of the quadratic edge through the corner x, the mid-edge
-        // node m and the other corner y, per unit of the edge parameter: 4 m - 3 x - y (y - x
-        // when m is the midpoint).
-        super::ElementKind::Hex20 | super::ElementKind::Tet10 => std::array::from_fn(|k| {
-            let y = nodes[el[frame[k]]];
-            match kind.mid_node(c, frame[k]) {
-                Some(m) => {
-                    let m = nodes[el[m]];
-                    std::array::from_fn(|d| 4.0 * m[d] - 3.0 * x[d] - y[d])
-                }
-                None => sub(y, x),
-            }
-        }),
+        super::ElementKind::Hex20 | super::ElementKind::Tet10 => {
+            quadratic_frame(kind, el, nodes, c)
+        }
         _ => std::array::from_fn(|k| sub(nodes[el[frame[k]]], x)),
     };
     let j = det(&v);
@@ -129,6 +119,32 @@ pub fn corner<const D: usize>(
         -1.0
     };
     (j, sj)
+}
+
+/// The edge vectors at corner `c` of a quadratic element: the tangent at the corner of the
+/// quadratic edge through the corner x, the mid-edge node m and the other corner y, per unit
+/// of the edge parameter: 4 m - 3 x - y (y - x when m is the midpoint). Out of line: the
+/// linear kinds' corners are the hot path.
+#[cold]
+#[inline(never)]
+fn quadratic_frame<const D: usize>(
+    kind: super::ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+    c: usize,
+) -> [Point<D>; D] {
+    let frame = kind.corner_frames()[c];
+    let x = nodes[el[c]];
+    std::array::from_fn(|k| {
+        let y = nodes[el[frame[k]]];
+        match kind.mid_node(c, frame[k]) {
+            Some(m) => {
+                let m = nodes[el[m]];
+                std::array::from_fn(|d| 4.0 * m[d] - 3.0 * x[d] - y[d])
+            }
+            None => sub(y, x),
+        }
+    })
 }
 
 /// Per-element corner measures of a whole mesh.

@@ -340,7 +340,7 @@ enum Scaling {
     Lattice,
 }
 
-/// `E_smooth` of a control point set (see [`smoothing_matrix`]); lengths in units of `unit`.
+/// `E_smooth` of a control point set (the quadratic form of the private `smoothing_matrix`); lengths in units of `unit`.
 pub fn smoothing_energy<const D: usize>(
     lattice: &Lattice<D>,
     control: &[Point<D>],

@@ -327,7 +327,7 @@ impl SetsConfig {
 #[derive(Clone, Debug)]
 pub struct BoundaryFace<const D: usize> {
     pub element: usize,
-    /// Local face number ([`ElementKind::faces`]).
+    /// Local face number ([`crate::fe::ElementKind::faces`]).
     pub face: u8,
     /// Its corner nodes, outward order.
     pub nodes: Vec<usize>,

@@ -666,6 +666,7 @@ impl<const D: usize> FfdSystem<D> {
             .map_err(|e| {
                 Error::Numerical(format!("FFD normal matrix is not positive definite: {e:?}"))
             })?;
+        crate::clear_simd_upper_state();
         Ok(FfdFit {
             lattice: self.lattice,
             unit: self.unit,
@@ -797,6 +798,7 @@ impl<const D: usize> FfdFit<D> {
             par,
             MemStack::new(&mut scratch),
         );
+        crate::clear_simd_upper_state();
         let control = (0..n)
             .map(|i| std::array::from_fn(|d| o[d] + rhs[(i, d)] * self.unit))
             .collect();

@@ -608,6 +608,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
         subject_index: &ClosestPointIndex<D>,
         params: &FitParams,
     ) -> Result<FitResult<D>> {
+        crate::clear_simd_upper_state();
         let (subj, coarse, full) = self.prepare(subject, subject_index, params)?;
         // The pre-alignment needs only the rough layout.
         let rough_model = self.model(Level::Coarse, params);
@@ -1094,6 +1095,7 @@ impl<'a, const D: usize> Fitter<'a, D> {
             .llt(faer::Side::Lower)
             .map_err(|_| Error::Numerical("the system of eq. 5 is singular".into()))?;
         let z = llt.solve(&g);
+        crate::clear_simd_upper_state();
         let mut dz: Vec<f64> = (0..p).map(|i| z[(i, 0)]).collect();
         if dz.iter().any(|v| !v.is_finite()) {
             return Err(Error::Numerical(format!(

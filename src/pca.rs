@@ -59,6 +59,7 @@ pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Resu
         Ok,
     )?;
     let keep = ns - 1;
+    crate::clear_simd_upper_state();
     let s = svd.S().column_vector();
     let eigenvalues: Vec<f64> = (0..keep).map(|k| s[k] * s[k] / (ns - 1) as f64).collect();
     if eigenvalues.first().is_none_or(|&l| l <= 0.0) {

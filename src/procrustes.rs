@@ -76,6 +76,7 @@ fn optimal_rotation<const D: usize>(h: &[[f64; D]; D]) -> ([[f64; D]; D], f64) {
     let Ok(svd) = m.svd() else {
         return (Similarity::<D>::identity().r, 0.0);
     };
+    crate::clear_simd_upper_state();
     let (u, sv, v) = (svd.U(), svd.S(), svd.V());
     let det = |x: faer::MatRef<f64>| -> f64 {
         // 3x3 determinant (D = 3 is the only other supported dimension).

@@ -166,6 +166,7 @@ pub fn repair_with_quality<const D: usize>(
     params: &RepairParams,
     quality: &[ElementQuality],
 ) -> Result<(RepairReport, Vec<ElementQuality>)> {
+    crate::clear_simd_upper_state();
     let kind = mesh.kind;
     let k = kind.nodes();
     let bound = params.bound.unwrap_or_else(|| default_bound(kind));

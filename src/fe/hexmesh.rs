@@ -56,6 +56,7 @@ pub struct HexMesh {
 /// its cubes made 5 % smaller or larger, and the mesh made again: the first valid one is
 /// returned.
 pub fn hex_mesh(surface: &Shape<3>, params: &HexMeshParams) -> Result<HexMesh> {
+    crate::clear_simd_upper_state();
     let mut last = None;
     for (shift, factor) in [
         (0.0, 1.0),

@@ -42,8 +42,9 @@ pub fn edge_ratio<const D: usize>(
     nodes: &[Point<D>],
 ) -> f64 {
     let (mut lo, mut hi) = (f64::INFINITY, 0.0_f64);
+    // Every edge is in the frames of both its corners: taken once, from its lower one.
     for (c, frame) in kind.corner_frames().iter().enumerate() {
-        for &o in frame.iter() {
+        for &o in frame.iter().filter(|&&o| o > c) {
             let l = crate::geometry::dist2(nodes[el[c]], nodes[el[o]]);
             lo = lo.min(l);
             hi = hi.max(l);

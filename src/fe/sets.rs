@@ -381,10 +381,14 @@ pub fn boundary_faces<const D: usize>(mesh: &FeMesh<D>) -> Vec<BoundaryFace<D>> 
             if n > 0.0 {
                 normal = normal.map(|v| v / n);
             }
-            let mids = mesh.kind.face_nodes(fi)[nodes.len()..]
-                .iter()
-                .map(|&k| el[k])
-                .collect();
+            let mids = if mesh.kind.linear() == mesh.kind {
+                Vec::new()
+            } else {
+                mesh.kind.face_nodes(fi)[nodes.len()..]
+                    .iter()
+                    .map(|&k| el[k])
+                    .collect()
+            };
             out.push(BoundaryFace {
                 element: e,
                 face: fi as u8,

@@ -5,10 +5,10 @@
 //! 200 seeded synthetic surfaces of the 3D demo (7200 vertices) stand in. Peak memory is
 //! measured outside (`/usr/bin/time -v atlasmesh fit ...`, see the README).
 
-use atlasmesh::batch::{BatchOptions, fit_batch};
 use atlasmesh::geometry::{Shape, Similarity};
 use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
-use atlasmesh::pipeline::RunParams;
+use atlasmesh::study::RunParams;
+use atlasmesh::study::batch::{BatchOptions, fit_batch};
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{RngExt, SeedableRng};
 
@@ -19,12 +19,12 @@ fn population() -> (Vec<Shape<3>>, &'static str) {
             .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
             .collect();
         return (
-            atlasmesh::pipeline::load_surfaces(&paths).expect("femur data"),
+            atlasmesh::study::load_surfaces(&paths).expect("femur data"),
             "femurs",
         );
     }
     (
-        atlasmesh::pipeline::demo_population_3d(100, 60, 3).expect("synthetic"),
+        atlasmesh::study::demo_population_3d(100, 60, 3).expect("synthetic"),
         "synthetic",
     )
 }
@@ -55,7 +55,7 @@ fn bench(c: &mut Criterion) {
         moved.points.iter_mut().for_each(|p| *p = motion.apply(p));
         for (name, shape) in [(s.name.clone(), s), (format!("{}_moved", s.name), &moved)] {
             let p = subjects.join(format!("{name}.ply"));
-            atlasmesh::io::surface::write_ply(&p, shape).expect("write subject");
+            atlasmesh::formats::write_ply(&p, shape).expect("write subject");
             files.push(p);
         }
     }
@@ -64,7 +64,7 @@ fn bench(c: &mut Criterion) {
         ..RunParams::default()
     };
     let load = |p: &std::path::Path| -> atlasmesh::Result<Vec<Shape<3>>> {
-        Ok(vec![atlasmesh::io::surface::read_surface(p)?])
+        Ok(vec![atlasmesh::formats::read_surface(p)?])
     };
     let mut g = c.benchmark_group("issue7");
     g.sample_size(10);
@@ -83,9 +83,9 @@ fn bench(c: &mut Criterion) {
                 &out,
                 &BatchOptions {
                     resume: false,
-                    quiet: true,
                     shard: None,
                 },
+                &atlasmesh::study::Silent,
             )
             .expect("batch");
             assert_eq!(r.summary.failed, 0);

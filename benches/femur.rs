@@ -11,14 +11,14 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use atlasmesh::fe::hexmesh::{HexMeshParams, hex_mesh};
-use atlasmesh::fe::quality::{mesh_quality, summarize};
+use atlasmesh::mesh::hex_mesh::{HexMeshParams, hex_mesh};
+use atlasmesh::mesh::quality::{mesh_quality, summarize};
 use atlasmesh::ffd::FfdParams;
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::ClosestPointIndex;
 use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
-use atlasmesh::morph::Morpher;
-use atlasmesh::pipeline::load_surfaces;
+use atlasmesh::mesh::Morpher;
+use atlasmesh::study::load_surfaces;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn bench(c: &mut Criterion) {
@@ -34,7 +34,7 @@ fn bench(c: &mut Criterion) {
         None => {
             // 7322 vertices, about the femurs' 7313 (and above their landmark indices).
             eprintln!("ATLASMESH_DATA is not set: synthetic surfaces stand in for the femurs");
-            atlasmesh::pipeline::demo_population_3d(30, 61, 5).expect("synthetic")
+            atlasmesh::study::demo_population_3d(30, 61, 5).expect("synthetic")
         }
     };
     let params = AtlasParams {
@@ -76,10 +76,10 @@ fn bench(c: &mut Criterion) {
     let fit = fitter
         .fit(subject, &index, &FitParams::default())
         .expect("fit");
-    let morpher = Morpher::new(&atlas, &FfdParams::default()).expect("morpher");
+    let morpher = atlas.morpher(&FfdParams::default()).expect("morpher");
     g.bench_function("femur_morph_and_jacobians", |b| {
         b.iter(|| {
-            let m = morpher.morph(&fit).expect("morph");
+            let m = morpher.morph(&fit.correspondence()).expect("morph");
             summarize(&mesh_quality(&m.mesh))
         })
     });
@@ -95,10 +95,10 @@ fn bench(c: &mut Criterion) {
     .expect("hex mesh")
     .mesh;
     eprintln!("fine mesh: {} hexahedra", fine.mesh.num_elements());
-    let fine_morpher = Morpher::new(&fine, &FfdParams::default()).expect("morpher");
+    let fine_morpher = fine.morpher(&FfdParams::default()).expect("morpher");
     g.bench_function("morph_and_jacobians_100k_hex", |b| {
         b.iter(|| {
-            let m = fine_morpher.morph(&fit).expect("morph");
+            let m = fine_morpher.morph(&fit.correspondence()).expect("morph");
             summarize(&mesh_quality(&m.mesh))
         })
     });
@@ -127,7 +127,7 @@ fn bench(c: &mut Criterion) {
     )
     .expect("hex mesh")
     .mesh;
-    let boundary: std::collections::HashSet<usize> = atlasmesh::fe::sets::boundary_faces(&mesh)
+    let boundary: std::collections::HashSet<usize> = atlasmesh::mesh::boundary_faces(&mesh)
         .iter()
         .flat_map(|f| f.nodes.clone())
         .collect();
@@ -157,7 +157,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("repair_femur_hex_1pct", |b| {
         b.iter(|| {
             let mut m = spoiled.clone();
-            atlasmesh::repair::repair(&mut m, None, &Default::default()).expect("repair")
+            atlasmesh::mesh::repair::repair(&mut m, None, &Default::default()).expect("repair")
         })
     });
     g.finish();
@@ -166,12 +166,12 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("atlas_from_30_raw_femurs_2_cores", |b| {
         b.iter(|| {
-            let (corresponded, _) = atlasmesh::pipeline::register_population(
+            let (corresponded, _) = atlasmesh::study::register_population(
                 &raw,
                 None,
                 &atlasmesh::register::RegisterParams::for_dimension(3),
                 0,
-                true,
+                &atlasmesh::study::Silent,
             )
             .expect("registration");
             Atlas::build(&corresponded, &params).expect("atlas")
@@ -181,7 +181,7 @@ fn bench(c: &mut Criterion) {
 }
 
 /// Elements below the hexahedra's repair bound 0.2.
-fn summarize_below(m: &atlasmesh::fe::FeMesh<3>) -> usize {
+fn summarize_below(m: &atlasmesh::mesh::FeMesh<3>) -> usize {
     mesh_quality(m)
         .iter()
         .filter(|q| q.scaled_jacobian_min < 0.2)

@@ -5,10 +5,10 @@
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::{ClosestPointIndex, Shape};
 use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
-use atlasmesh::pipeline::{
+use atlasmesh::register::resample_corresponding;
+use atlasmesh::study::{
     PopulationOptions, RunParams, demo_population, leave_one_out, load_population,
 };
-use atlasmesh::resample::resample_corresponding;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn hands() -> (Vec<Shape<2>>, bool) {
@@ -100,7 +100,9 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.measurement_time(std::time::Duration::from_secs(60));
     g.bench_function(format!("hands_loo_40_{label}"), |b| {
-        b.iter(|| leave_one_out(&shapes, label, &run, &out, 0, true).expect("loo"))
+        b.iter(|| {
+            leave_one_out(&shapes, label, &run, &out, 0, &atlasmesh::study::Silent).expect("loo")
+        })
     });
     g.finish();
 }

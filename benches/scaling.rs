@@ -74,14 +74,14 @@ fn femurs() -> Option<Vec<Shape<3>>> {
     let paths: Vec<_> = (1..=21)
         .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
         .collect();
-    Some(atlasmesh::pipeline::load_surfaces(&paths).expect("femur data"))
+    Some(atlasmesh::study::load_surfaces(&paths).expect("femur data"))
 }
 
 /// (family, shapes) at each size, atlas and subject together; `femurs` as given.
 fn populations(femurs: Option<&[Shape<3>]>) -> Vec<(&'static str, Vec<Shape<3>>)> {
     let mut out = Vec::new();
     for rings in [22, 39, 71, 122, 224] {
-        let shapes = atlasmesh::pipeline::demo_population_3d(21, rings, 11).expect("synthetic");
+        let shapes = atlasmesh::study::demo_population_3d(21, rings, 11).expect("synthetic");
         out.push(("synthetic", shapes));
     }
     if let Some(femurs) = femurs {
@@ -179,7 +179,7 @@ fn bench(c: &mut Criterion) {
     {
         Some((f, s)) => (f, s),
         None => {
-            fallback = atlasmesh::pipeline::demo_population_3d(31, 71, 11).expect("synthetic");
+            fallback = atlasmesh::study::demo_population_3d(31, 71, 11).expect("synthetic");
             ("synthetic", &fallback)
         }
     };

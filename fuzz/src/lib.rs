@@ -13,6 +13,6 @@ pub fn file(data: &[u8], ext: &str) -> PathBuf {
 }
 
 /// A block of 2 × 2 × 2 unit hexahedra.
-pub fn block() -> atlasmesh::fe::FeMesh<3> {
-    atlasmesh::fe::FeMesh::block(2)
+pub fn block() -> atlasmesh::mesh::FeMesh<3> {
+    atlasmesh::mesh::FeMesh::block(2)
 }

@@ -252,7 +252,7 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
         );
     }
     let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");
-    crate::io::write_atomic(path, h.as_bytes())
+    crate::formats::write_atomic(path, h.as_bytes())
 }
 
 fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, pictures: bool) {

@@ -66,7 +66,7 @@ impl View {
     /// The view of `points` along their smallest principal axis, the largest horizontal,
     /// tilted by 20° about the horizontal so the relief shows.
     pub fn fitting(points: &[Point<3>]) -> Self {
-        let axes = crate::register::principal_axes_of(points);
+        let axes = crate::geometry::principal_axes_of(points);
         let c = crate::geometry::centroid(points);
         let tilt = 20f64.to_radians();
         let (s, co) = tilt.sin_cos();
@@ -285,12 +285,12 @@ pub fn jacobian_color(s: f64) -> [u8; 3] {
 /// The boundary of a volume mesh as triangles (each quadrilateral face split in two), with
 /// the scaled Jacobian of the element each face belongs to.
 pub fn boundary_triangles(
-    mesh: &crate::fe::FeMesh<3>,
+    mesh: &crate::mesh::FeMesh<3>,
     element_value: &[f64],
 ) -> (Vec<[usize; 3]>, Vec<f64>) {
     let mut tris = Vec::new();
     let mut values = Vec::new();
-    for f in crate::fe::sets::boundary_faces(mesh) {
+    for f in crate::mesh::boundary_faces(mesh) {
         let v = element_value.get(f.element).copied().unwrap_or(f64::NAN);
         for t in 1..f.nodes.len().saturating_sub(1) {
             tris.push([f.nodes[0], f.nodes[t], f.nodes[t + 1]]);

@@ -1,0 +1,182 @@
+//! The arguments that several commands share: the population (`--shapes` and how to read,
+//! register and model it) and the run (fit, morph, outputs).
+
+use atlasmesh::model::ModeSelection;
+use atlasmesh::study::RunParams;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct PopArgs {
+    /// Shape files: 2D outlines as long CSV (shape,point,x,y), text (x y per line) or legacy
+    /// VTK with LINES; 3D surfaces as PLY, STL, OBJ, VTP or legacy VTK with POLYGONS.
+    #[arg(long, num_args = 1.., required = true)]
+    pub shapes: Vec<PathBuf>,
+    /// 3D: template volume meshes (.inp, .msh, .vtu or .vtk; hexahedra or tetrahedra, one
+    /// connectivity, with their sets), one per shape
+    /// in the order of --shapes (or, for `build`, one for the first shape); their mean is the
+    /// atlas's FE mesh instead of the automatic one.
+    #[arg(long, num_args = 1.., value_name = "VTU")]
+    pub template_mesh: Vec<PathBuf>,
+    /// The shapes are not in correspondence: register a template to each (FFD, eq. 2) first.
+    #[arg(long)]
+    pub register: bool,
+    /// FFD control points of the registration along the shape's longest axis (default: 20
+    /// in 2D as the paper, 16 in 3D).
+    #[arg(long, value_name = "N", requires = "register")]
+    pub register_grid: Option<usize>,
+    /// The registration's template, by shape name (default: the shape nearest to the others).
+    #[arg(long, value_name = "NAME", requires = "register")]
+    pub template: Option<String>,
+    /// Landmark files: one CSV for all shapes (shape,landmark,x,y[,z] or shape,landmark,index),
+    /// or one Scalismo JSON / .pts per shape in the order of --shapes.
+    #[arg(long, num_args = 1..)]
+    pub landmarks: Vec<PathBuf>,
+    /// Outlines are open (the hands: the wrist is not part of the outline).
+    #[arg(long, conflicts_with = "closed")]
+    pub open: bool,
+    /// Outlines are closed (default).
+    #[arg(long)]
+    pub closed: bool,
+    /// Resample every outline to N points along a smooth curve through its points.
+    #[arg(long, value_name = "N")]
+    pub resample: Option<usize>,
+    /// Keep M modes.
+    #[arg(long, value_name = "M", conflicts_with = "variance")]
+    pub modes: Option<usize>,
+    /// Keep the fewest modes explaining this share of the variance (default 0.985).
+    #[arg(long, value_name = "P")]
+    pub variance: Option<f64>,
+    /// Element edge length of the mean mesh, as a share of the mean's largest extent.
+    #[arg(long, default_value_t = 0.015)]
+    pub element_size: f64,
+}
+
+#[derive(Args)]
+pub struct RunArgs {
+    /// FFD control points per axis for the morph (paper: 20).
+    #[arg(long, default_value_t = 20)]
+    pub grid: usize,
+    /// FFD smoothing weight of the morph (paper: 50).
+    #[arg(long, default_value_t = 50.0)]
+    pub alpha: f64,
+    /// Use only the one-way (instance to subject) closest points in the fit, as the paper.
+    #[arg(long)]
+    pub one_way: bool,
+    /// Starting rotations tried by the pre-alignment.
+    #[arg(long, default_value_t = 8)]
+    pub starts: usize,
+    /// Subjects may miss parts (paper, fig. 21-22): fit only the subject's points to the
+    /// model, and morph with the model points that have a partner on the subject.
+    #[arg(long)]
+    pub partial: bool,
+    /// Also measure the paper's baselines (fig. 12/20): normal correlations of the
+    /// correspondences by similarity ICP and by FFD registration (report.json:
+    /// normal_correlation_icp, normal_correlation_ffd).
+    #[arg(long)]
+    pub baselines: bool,
+    /// Skip the PNG plots.
+    #[arg(long)]
+    pub no_plots: bool,
+    /// Formats of every subject's FE mesh, comma-separated: vtu, vtk, inp (Abaqus/CalculiX),
+    /// msh (Gmsh 4.1), feb (FEBio 4.0, 3D).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "vtu",
+        value_name = "FORMATS"
+    )]
+    pub format: Vec<String>,
+    /// Node sets, element sets and surfaces defined on the mean mesh (TOML; see
+    /// docs/guide.md), carried to every subject's mesh.
+    #[arg(long, value_name = "TOML")]
+    pub sets: Option<PathBuf>,
+    /// Repair every morphed mesh where an element is inverted or below the scaled-Jacobian
+    /// bound (hexahedra 0.2, quadrilaterals 0.3): on or off.
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub repair: String,
+    /// The scaled-Jacobian bound of the repair (default by element kind).
+    #[arg(long, value_name = "SJ")]
+    pub repair_bound: Option<f64>,
+    /// An Abaqus/CalculiX deck built around the atlas's mean mesh (`atlasmesh convert ATLAS
+    /// mean.inp`): every subject gets a copy with its node coordinates, NAME_deck.inp.
+    #[arg(long, value_name = "INP")]
+    pub deck: Option<PathBuf>,
+    /// A subject whose fit stays farther from it than this share of its bounding-box
+    /// diagonal (two-way RMS) did not converge: refused, no mesh written (exit 5).
+    #[arg(long, value_name = "SHARE", default_value_t = 0.05)]
+    pub max_misfit: f64,
+}
+
+impl RunArgs {
+    pub fn params(&self) -> anyhow::Result<RunParams> {
+        let formats = self
+            .format
+            .iter()
+            .map(|f| {
+                atlasmesh::formats::MeshFormat::parse(f).ok_or_else(|| {
+                    atlasmesh::Error::Parameter(format!(
+                        "--format {f}: use vtu, vtk, inp, msh or feb"
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let mut p = RunParams {
+            formats,
+            ..RunParams::default()
+        };
+        if let Some(f) = &self.sets {
+            p.sets = Some(atlasmesh::mesh::SetsConfig::read(f)?);
+        }
+        if let Some(f) = &self.deck {
+            p.deck = Some(std::sync::Arc::new(atlasmesh::formats::read_inp(f)?));
+        }
+        p.morph.grid = self.grid;
+        p.morph.alpha = self.alpha;
+        p.fit.symmetric = !self.one_way;
+        p.fit.starts = self.starts;
+        p.fit.partial = self.partial;
+        p.plots = !self.no_plots;
+        p.baselines = self.baselines;
+        if self.max_misfit.is_nan() || self.max_misfit <= 0.0 {
+            return Err(atlasmesh::Error::Parameter(format!(
+                "--max-misfit {}: a positive share of the diagonal, e.g. 0.05",
+                self.max_misfit
+            ))
+            .into());
+        }
+        p.max_misfit = self.max_misfit;
+        p.repair = (self.repair == "on").then_some(atlasmesh::mesh::RepairParams {
+            bound: self.repair_bound,
+            ..Default::default()
+        });
+        Ok(p)
+    }
+}
+
+/// The data set's name in reports: the files, or for more than three their folder and count.
+pub fn dataset_name(paths: &[PathBuf]) -> String {
+    if paths.len() <= 3 {
+        return paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" ");
+    }
+    let parent = |p: &PathBuf| p.parent().map(|d| d.to_path_buf()).unwrap_or_default();
+    let first = parent(&paths[0]);
+    if paths.iter().all(|p| parent(p) == first) {
+        format!("{} ({} files)", first.display(), paths.len())
+    } else {
+        format!("{} files ({} ...)", paths.len(), paths[0].display())
+    }
+}
+
+pub fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
+    p.atlas.modes = match (pop.modes, pop.variance) {
+        (Some(m), _) => ModeSelection::Count(m),
+        (None, Some(v)) => ModeSelection::Variance(v),
+        (None, None) => ModeSelection::Variance(0.985),
+    };
+    p.atlas.element_size = pop.element_size;
+}

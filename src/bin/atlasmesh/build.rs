@@ -1,0 +1,79 @@
+//! `atlasmesh build`: an atlas (shape model and mean mesh) from a population, saved.
+
+use crate::args::{PopArgs, RunArgs};
+use crate::population::{corresponded, outlines_and_params, surfaces_and_params};
+use crate::terminal::Terminal;
+use atlasmesh::geometry::Shape;
+use atlasmesh::mesh::FeMesh;
+use atlasmesh::study::{self, Progress, RunParams};
+use clap::Args;
+use std::path::PathBuf;
+
+/// Arguments of `atlasmesh build`.
+#[derive(Args)]
+pub struct BuildArgs {
+    #[command(flatten)]
+    pop: PopArgs,
+    #[command(flatten)]
+    run: RunArgs,
+    /// Atlas file to write (safetensors).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also measure the model's compactness, generalization and specificity (up to 30
+    /// modes; 1000 random instances): ATLAS.measures.json and ATLAS.measures.png.
+    #[arg(long)]
+    measures: bool,
+}
+
+/// Runs `atlasmesh build`.
+pub fn run(a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
+    if study::inputs_are_surfaces(&a.pop.shapes)? {
+        let (shapes, params, meshes) = surfaces_and_params(&a.pop, &a.run)?;
+        build(&a, &shapes, meshes.as_deref(), &params, term)
+    } else {
+        let (shapes, params) = outlines_and_params(&a.pop, &a.run)?;
+        build(&a, &shapes, None, &params, term)
+    }
+}
+
+/// `atlasmesh build` on shapes of either dimension.
+fn build<const D: usize>(
+    a: &BuildArgs,
+    shapes: &[Shape<D>],
+    meshes: Option<&[FeMesh<D>]>,
+    params: &RunParams,
+    term: &Terminal,
+) -> anyhow::Result<()> {
+    let shapes = corresponded(&a.pop, shapes, 0, term)?;
+    let step = "atlas (GPA, PCA, mesh of the mean)";
+    term.step_started(step);
+    let atlas = study::build_with_meshes(&shapes, meshes, params, &a.out)?;
+    term.step_finished(step);
+    if a.measures {
+        let step = "compactness, generalization, specificity (1000 instances per mode count)";
+        term.step_started(step);
+        let (m, json) = study::write_model_measures(&shapes, &a.out, params.plots)?;
+        term.step_finished(step);
+        let k = m.modes.len().min(atlas.num_modes()).max(1) - 1;
+        println!(
+            "measures ({} modes): compactness {:.4}, generalization {:.4} ± {:.4}, specificity {:.4} ± {:.4} (shape units): {}",
+            k + 1,
+            m.compactness[k],
+            m.generalization[k],
+            m.generalization_sd[k],
+            m.specificity[k],
+            m.specificity_sd[k],
+            json.display()
+        );
+    }
+    let m = atlas.num_modes();
+    println!(
+        "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, mean mesh {} elements)",
+        a.out.display(),
+        shapes.len(),
+        atlas.mean.len(),
+        atlas.cumulative_variance[m - 1],
+        atlas.mesh.num_elements()
+    );
+    Ok(())
+}

@@ -1,0 +1,22 @@
+//! Measures of a fit and a morphed mesh (section 5): `E_d` (eq. 6), the two-way RMS surface
+//! distance, the correlation of normals (eq. 10-13), and the shape model's compactness,
+//! generalization and specificity. Corner Jacobians (section 5.3) are in
+//! [`crate::mesh::quality`].
+//!
+//! | file | what it computes |
+//! |---|---|
+//! | `distance` | [`e_d`] (eq. 6), [`two_way_rms`] |
+//! | `normal_correlation` | [`normal_correlation`] (eq. 10-13), [`normals_at`] |
+//! | `model_measures` | [`shape_model_measures`] |
+
+mod distance;
+mod model_measures;
+mod normal_correlation;
+
+pub use distance::{e_d, two_way_rms};
+pub(crate) use model_measures::standard_normal;
+pub use model_measures::{ShapeModelMeasures, shape_model_measures};
+pub use normal_correlation::{normal_correlation, normals_at};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,35 @@
+//! Fitting the atlas to a subject: shape instantiation and projection (section 3,
+//! Algorithm 1, eq. 5-8).
+//!
+//! Frames: the model lives in the atlas's reference frame; the subject in its own frame
+//! (its file's units). `t_{R,T,s}` maps reference to subject.
+//!
+//! | file | what it holds |
+//! |---|---|
+//! | `params` | [`FitParams`] and the constants of the schedule |
+//! | `fitter` | [`Fitter`]: starts, the schedule of `gamma`, the loop of Algorithm 1 |
+//! | `update` | one update: closest points, eq. 5-8 linearized along the normals |
+//! | `resolution` | the model at one resolution (all points or a coarse subset) |
+//! | `state` | what a fit carries from one update to the next |
+//! | `scratch` | buffers reused by the updates, apart from the maths |
+//! | `result` | [`FitResult`] |
+
+mod fitter;
+mod params;
+mod resolution;
+mod result;
+mod scratch;
+mod state;
+mod update;
+
+pub use fitter::Fitter;
+pub(crate) use fitter::*;
+pub use params::FitParams;
+pub(crate) use params::*;
+pub(crate) use resolution::*;
+pub use result::FitResult;
+pub(crate) use scratch::*;
+pub(crate) use state::*;
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,264 @@
+//! One update of the shape parameters and the pose: eq. 5-8 linearized along the normals.
+
+use super::*;
+use crate::error::{Error, Result};
+use crate::geometry::{Point, QueryMemo, REFERENCE_POINTS, add, dot, scale, sub};
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+
+/// Number of rotation parameters in `D` dimensions.
+pub(super) const fn rotation_params(d: usize) -> usize {
+    d * (d - 1) / 2
+}
+
+/// `G_k x`: the `k`-th infinitesimal rotation applied to `x` (2D: `(-x_1, x_0)`; 3D:
+/// `e_k × x`).
+#[inline]
+pub(super) fn generator<const D: usize>(k: usize, x: &Point<D>) -> Point<D> {
+    let mut out = [0.0; D];
+    match D {
+        2 => {
+            out[0] = -x[1];
+            out[1] = x[0];
+        }
+        3 => {
+            let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+            out[a] = -x[b];
+            out[b] = x[a];
+        }
+        _ => unreachable!("atlasmesh supports D = 2 and D = 3"),
+    }
+    out
+}
+
+impl<const D: usize> Fitter<'_, D> {
+    /// One correspondence update: (i) closest points at the current state, (ii) one
+    /// Gauss-Newton step of eq. 5 (all pose parameters, and `w` unless `gamma` is `None`),
+    /// (iii) the new state.
+    ///
+    /// Linearization, in the reference frame: with `x = S_bar + Ψ w`, the update
+    /// `t' = t ∘ (x ↦ (1 + δs)(I + Σ δω_k G_k) x + δt)`, `w' = w + δw`, the residual of a
+    /// pair along its unit normal `ñ` (reference frame) is
+    /// `ñ · (x - t^{-1}(c) + δs x + Σ δω_k G_k x + δt + Ψ δw)`.
+    pub(super) fn update(
+        &self,
+        level: Level,
+        subj: &Subject<D>,
+        st: &mut State<D>,
+        sampling: &Sampling,
+        gamma: Option<f64>,
+        scratches: &mut Scratches<D>,
+    ) -> Result<Step> {
+        let model = match level {
+            Level::Coarse => scratches.coarse_model(self),
+            Level::Full => &self.full,
+        };
+        let scratch = match level {
+            Level::Coarse if !std::ptr::eq(model, &self.full) => &mut scratches.coarse,
+            _ => &mut scratches.full,
+        };
+        let m = self.m;
+        let r = rotation_params(D);
+        let pose = 1 + r + D;
+        let p = if gamma.is_some() { pose + m } else { pose };
+        let cols = p + 1;
+        let sim = st.sim;
+        scratch.set_weights(self, model, &st.w, true);
+        let x = &scratch.x;
+        let buf = &mut scratch.rows;
+        buf.clear();
+        // One allocation for all the rows, not a doubling series.
+        buf.reserve(cols * (sampling.forward.len() + sampling.backward.len()));
+        if st.memos_for != Some(sampling.pass) {
+            st.forward_memo.clear();
+            st.forward_memo
+                .resize(sampling.forward.len(), QueryMemo::default());
+            st.backward_memo.clear();
+            st.backward_memo
+                .resize(sampling.backward.len(), QueryMemo::default());
+            st.memos_for = Some(sampling.pass);
+        }
+        // Appends the row of the model point combination `(ids, bw)` with unit normal `nr`
+        // and target `z` (both in the reference frame), scaled by `sw` (root of its weight).
+        let push =
+            |buf: &mut Vec<f64>, ids: &[usize], bw: &[f64], nr: Point<D>, z: Point<D>, sw: f64| {
+                let at = buf.len();
+                buf.resize(at + cols, 0.0);
+                let row = &mut buf[at..];
+                let mut xc = [0.0; D];
+                for (&i, &b) in ids.iter().zip(bw) {
+                    xc = add(xc, scale(x[i], b));
+                }
+                row[0] = sw * dot(nr, xc);
+                for k in 0..r {
+                    row[1 + k] = sw * dot(nr, generator(k, &xc));
+                }
+                for d in 0..D {
+                    row[1 + r + d] = sw * nr[d];
+                }
+                if p > pose {
+                    let rw = &mut row[pose..pose + m];
+                    for (&i, &b) in ids.iter().zip(bw) {
+                        if b == 0.0 {
+                            continue;
+                        }
+                        for d in 0..D {
+                            let f = sw * b * nr[d];
+                            let pr = &model.psi[(i * D + d) * m..(i * D + d + 1) * m];
+                            for (o, v) in rw.iter_mut().zip(pr) {
+                                *o += f * v;
+                            }
+                        }
+                    }
+                }
+                row[p] = sw * dot(nr, sub(xc, z));
+            };
+        // Forward pairs: model point -> closest point on the subject (subject frame).
+        let mut forward = 0.0;
+        for (&j, memo) in sampling.forward.iter().zip(&mut st.forward_memo) {
+            let c = subj.index.closest_memo(&sim.apply(&x[j]), memo);
+            forward += c.dist2;
+            // From the index, which the search has just read.
+            let Some(n) = subj.index.normal_at(&c) else {
+                continue;
+            };
+            let n = scale(n, subj.sign);
+            let nr = sim.rotate_inverse(&n);
+            let cw = compatibility(dot(nr, scratch.normals[j]));
+            if cw == 0.0 {
+                continue;
+            }
+            push(buf, &[j], &[1.0], nr, sim.apply_inverse(&c.point), cw);
+        }
+        // Backward pairs: subject vertex -> closest point on the instance, searched in the
+        // reference frame (a similarity keeps closest points), so the instance's index
+        // changes only with `w`.
+        let mut backward = 0.0;
+        if !sampling.backward.is_empty() {
+            // Backward pairs weigh as much as the forward ones together; alone (a partial
+            // subject), as much as both directions would (so that `gamma` acts alike).
+            let total = if sampling.forward.is_empty() {
+                2.0
+            } else {
+                1.0
+            };
+            let sw = (total * sampling.pairs() as f64 / sampling.backward.len() as f64).sqrt();
+            for (&i, memo) in sampling.backward.iter().zip(&mut st.backward_memo) {
+                let z = sim.apply_inverse(&subj.shape.points[i]);
+                let c = scratch.index.closest_memo(&z, memo);
+                backward += c.dist2 * sim.s * sim.s;
+                let (Some(n), Some(f)) = (
+                    scratch.index.normal_at(&c),
+                    scratch.index.facet_vertices(&c),
+                ) else {
+                    continue;
+                };
+                let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
+                if cw == 0.0 {
+                    continue;
+                }
+                push(buf, &f, &c.weights, n, z, sw * cw);
+            }
+        }
+        let two_way_ms = if sampling.backward.is_empty() {
+            forward / sampling.forward.len() as f64
+        } else if sampling.forward.is_empty() {
+            backward / sampling.backward.len() as f64
+        } else {
+            0.5 * (forward / sampling.forward.len() as f64
+                + backward / sampling.backward.len() as f64)
+        };
+        let nrows = buf.len() / cols;
+        let a = faer::MatRef::from_row_major_slice(buf, nrows, cols);
+        let ata = a.transpose() * a;
+        let mut h = Mat::<f64>::zeros(p, p);
+        let mut g = Mat::<f64>::zeros(p, 1);
+        for i in 0..p {
+            for j in 0..p {
+                h[(i, j)] = ata[(i, j)];
+            }
+            g[(i, 0)] = -ata[(i, p)];
+        }
+        if let Some(gamma) = gamma {
+            for k in 0..m {
+                h[(pose + k, pose + k)] += gamma * self.lambda_inv[k];
+                g[(pose + k, 0)] -= gamma * self.lambda_inv[k] * st.w[k];
+            }
+        }
+        // A tiny ridge, relative to each diagonal entry (they span many orders of magnitude
+        // when a mode's eigenvalue is near zero), keeps the system solvable on degenerate
+        // input (a straight outline, or no pair left).
+        let floor = 1e-12 * (0..pose).map(|i| h[(i, i)]).fold(0.0, f64::max) + 1e-300;
+        for i in 0..p {
+            h[(i, i)] += 1e-12 * h[(i, i)] + floor;
+        }
+        let llt = h
+            .llt(faer::Side::Lower)
+            .map_err(|_| Error::Numerical("the system of eq. 5 is singular".into()))?;
+        let z = llt.solve(&g);
+        crate::clear_simd_upper_state();
+        let mut dz: Vec<f64> = (0..p).map(|i| z[(i, 0)]).collect();
+        if dz.iter().any(|v| !v.is_finite()) {
+            return Err(Error::Numerical(format!(
+                "the fit of {} diverged (NaN in the pose or the mode weights)",
+                subj.shape.name
+            )));
+        }
+        // A trust region for the first updates, far from the subject: at most 0.2 in scale
+        // and rotation, 0.1 of the unit box in translation, 1 sigma per mode.
+        let mut shrink: f64 = 1.0;
+        let big = |v: f64, lim: f64| if v > lim { lim / v } else { 1.0 };
+        shrink = shrink.min(big(
+            dz[..1 + r].iter().fold(0.0, |a, v| a.max(v.abs())),
+            0.2,
+        ));
+        shrink = shrink.min(big(
+            dz[1 + r..pose].iter().map(|v| v * v).sum::<f64>().sqrt(),
+            0.1,
+        ));
+        if p > pose {
+            let maha = dz[pose..]
+                .iter()
+                .zip(&self.lambda_inv)
+                .map(|(v, li)| v * v * li)
+                .sum::<f64>()
+                .sqrt();
+            shrink = shrink.min(big(maha, 1.0));
+        }
+        dz.iter_mut().for_each(|v| *v *= shrink);
+        // (iii) the new state.
+        let dt: Point<D> = std::array::from_fn(|d| dz[1 + r + d]);
+        let mut new = st.sim;
+        new.t = add(sim.t, scale(sim.rotate(&dt), sim.s));
+        new.s = sim.s * dz[0].exp();
+        let rot = crate::geometry::rotation_exp::<D>(&dz[1..1 + r]);
+        new.r = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..D).map(|k| sim.r[i][k] * rot[k][j]).sum::<f64>())
+        });
+        st.sim = new;
+        let mut weight_change = 0.0;
+        if p > pose {
+            for k in 0..m {
+                st.w[k] += dz[pose + k];
+                weight_change += dz[pose + k] * dz[pose + k];
+            }
+        }
+        // The modes are orthonormal over all `D n` coordinates, so `||Δw||` is the root of
+        // the sum of the squared point moves: the same move of the shape gives a larger
+        // `||Δw||` the more points the atlas has. Measured as for the paper's 2001 points
+        // (the root mean square move times the root of 2001), the tolerance means the same
+        // at every resolution.
+        let weight_change =
+            (weight_change * REFERENCE_POINTS / self.atlas.mean.len() as f64).sqrt();
+        Ok(Step {
+            forward: if sampling.forward.is_empty() {
+                backward
+            } else {
+                forward
+            },
+            two_way_ms,
+            pose_change: dz[..pose].iter().fold(0.0, |a, v| a.max(v.abs())),
+            weight_change,
+        })
+    }
+}

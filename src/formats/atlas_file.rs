@@ -1,0 +1,332 @@
+//! The atlas file: one safetensors file with the shape model, the mean mesh and its sets,
+//! a format version and a checksum.
+
+use crate::error::{Error, Result};
+use crate::geometry::Point;
+use crate::mesh::{ElementKind, FeMesh};
+use crate::model::{Atlas, AtlasParams};
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Version of the atlas file format written by this build.
+pub const ATLAS_FORMAT_VERSION: &str = "2";
+
+/// The data section of a safetensors file (after the 8-byte header length and the header).
+pub(crate) fn data_section(bytes: &[u8]) -> Option<&[u8]> {
+    let n = u64::from_le_bytes(bytes.get(..8)?.try_into().ok()?);
+    let start = usize::try_from(n).ok()?.checked_add(8)?;
+    bytes.get(start..)
+}
+
+/// CRC-32 of an atlas: its tensors' bytes, then every metadata entry but the checksum, in
+/// key order (`key=value;`).
+pub(crate) fn atlas_checksum(data: &[u8], meta: &HashMap<String, String>) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    h.update(data);
+    let mut keys: Vec<&String> = meta.keys().filter(|k| *k != "checksum_crc32").collect();
+    keys.sort();
+    for k in keys {
+        h.update(k.as_bytes());
+        h.update(b"=");
+        h.update(meta[k].as_bytes());
+        h.update(b";");
+    }
+    h.finalize()
+}
+
+/// The dimension an atlas file declares, read from its header only (the safetensors header:
+/// an 8-byte length, then JSON with the `__metadata__` that [`Atlas::save`] writes).
+pub fn atlas_dimension(path: &Path) -> Result<usize> {
+    use std::io::Read as _;
+    let bad = |m: String| Error::Atlas {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut len = [0u8; 8];
+    f.read_exact(&mut len)
+        .map_err(|_| bad("not a safetensors file (too short)".into()))?;
+    let n = u64::from_le_bytes(len);
+    if n > 100_000_000 {
+        return Err(bad(format!("a header of {n} bytes: not an atlas")));
+    }
+    let mut header = vec![0u8; n as usize];
+    f.read_exact(&mut header)
+        .map_err(|_| bad("the header is truncated".into()))?;
+    let json: serde_json::Value = serde_json::from_slice(&header)
+        .map_err(|e| bad(format!("the header is not JSON ({e})")))?;
+    json["__metadata__"]["dimension"]
+        .as_str()
+        .and_then(|d| d.parse().ok())
+        .filter(|d| *d == 2 || *d == 3)
+        .ok_or_else(|| {
+            bad("no dimension in the metadata; write atlases with `atlasmesh build`".into())
+        })
+}
+
+impl<const D: usize> Atlas<D> {
+    /// Saves the atlas as safetensors: tensors `mean [N, D]`, `modes [N·D, m]`,
+    /// `eigenvalues [m]`, `cumulative_variance [n_s-1]`, `facets [F, D]` (i64),
+    /// `landmarks [L]` (i64), `mesh_nodes [#nodes, D]`, `mesh_elements [#el, k]` (i64); metadata
+    /// `format`, `format_version`, `dimension`, `element_kind`, `params` (JSON), `mesh_sets`
+    /// (JSON: node sets, element sets, surfaces of the mean mesh),
+    /// `training_shapes`. Written to a temporary name, then renamed.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        use safetensors::{Dtype, tensor::TensorView};
+        let f64s = |v: Vec<f64>| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+        let i64s = |v: Vec<usize>| -> Vec<u8> {
+            v.iter().flat_map(|&x| (x as i64).to_le_bytes()).collect()
+        };
+        let n = self.mean.len();
+        let m = self.num_modes();
+        let k = self.mesh.kind.nodes();
+        let modes: Vec<f64> = (0..n * D)
+            .flat_map(|r| (0..m).map(move |c| (r, c)))
+            .map(|(r, c)| self.modes[(r, c)])
+            .collect();
+        let bufs: Vec<(&str, Dtype, Vec<usize>, Vec<u8>)> = vec![
+            (
+                "mean",
+                Dtype::F64,
+                vec![n, D],
+                f64s(self.mean.iter().flatten().copied().collect()),
+            ),
+            ("modes", Dtype::F64, vec![n * D, m], f64s(modes)),
+            (
+                "eigenvalues",
+                Dtype::F64,
+                vec![m],
+                f64s(self.eigenvalues.clone()),
+            ),
+            (
+                "cumulative_variance",
+                Dtype::F64,
+                vec![self.cumulative_variance.len()],
+                f64s(self.cumulative_variance.clone()),
+            ),
+            (
+                "facets",
+                Dtype::I64,
+                vec![self.facets.len(), D],
+                i64s(self.facets.iter().flatten().copied().collect()),
+            ),
+            (
+                "landmarks",
+                Dtype::I64,
+                vec![self.landmarks.len()],
+                i64s(self.landmarks.clone()),
+            ),
+            (
+                "mesh_nodes",
+                Dtype::F64,
+                vec![self.mesh.nodes.len(), D],
+                f64s(self.mesh.nodes.iter().flatten().copied().collect()),
+            ),
+            (
+                "mesh_elements",
+                Dtype::I64,
+                vec![self.mesh.num_elements(), k],
+                i64s(self.mesh.connectivity.clone()),
+            ),
+        ];
+        let mut views = Vec::new();
+        for (name, dt, shape, data) in &bufs {
+            views.push((
+                *name,
+                TensorView::new(*dt, shape.clone(), data)
+                    .map_err(|e| Error::Numerical(format!("atlas tensor {name}: {e}")))?,
+            ));
+        }
+        let mut meta = HashMap::new();
+        meta.insert("format".to_string(), "atlasmesh-atlas".to_string());
+        meta.insert(
+            "format_version".to_string(),
+            ATLAS_FORMAT_VERSION.to_string(),
+        );
+        meta.insert("dimension".to_string(), D.to_string());
+        meta.insert(
+            "element_kind".to_string(),
+            self.mesh.kind.name().to_string(),
+        );
+        meta.insert(
+            "training_shapes".to_string(),
+            self.training_shapes.to_string(),
+        );
+        meta.insert(
+            "params".to_string(),
+            serde_json::to_string(&self.params).unwrap_or_default(),
+        );
+        meta.insert(
+            "mesh_sets".to_string(),
+            serde_json::to_string(&self.mesh.sets).unwrap_or_default(),
+        );
+        // The checksum covers the tensors' bytes and the other metadata: serialize once to
+        // learn the data section, then again with the checksum in the header.
+        let first = safetensors::serialize(views.clone(), Some(meta.clone()))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
+        let crc = atlas_checksum(data_section(&first).unwrap_or_default(), &meta);
+        meta.insert("checksum_crc32".to_string(), format!("{crc:08x}"));
+        let bytes = safetensors::serialize(views, Some(meta))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
+        crate::formats::write_atomic(path, &bytes)
+    }
+
+    /// Loads an atlas written by [`Atlas::save`], checking format, version, dimension and
+    /// shapes of every tensor.
+    pub fn load(path: &Path) -> Result<Self> {
+        use safetensors::{Dtype, SafeTensors};
+        let bad = |m: String| Error::Atlas {
+            path: path.to_path_buf(),
+            message: m,
+        };
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let (_, meta) = SafeTensors::read_metadata(&bytes)
+            .map_err(|e| bad(format!("not a safetensors file ({e})")))?;
+        let meta = meta.metadata().clone().unwrap_or_default();
+        if meta.get("format").map(String::as_str) != Some("atlasmesh-atlas") {
+            return Err(bad(
+                "no atlasmesh metadata; write atlases with `atlasmesh build`".into(),
+            ));
+        }
+        let version = meta.get("format_version").cloned().unwrap_or_default();
+        if version != ATLAS_FORMAT_VERSION {
+            return Err(bad(format!(
+                "format version {version:?}, this build reads version {ATLAS_FORMAT_VERSION}; rebuild the atlas"
+            )));
+        }
+        let stored = meta.get("checksum_crc32").cloned().unwrap_or_default();
+        let mut rest = meta.clone();
+        rest.remove("checksum_crc32");
+        let crc = atlas_checksum(data_section(&bytes).unwrap_or_default(), &rest);
+        if stored != format!("{crc:08x}") {
+            return Err(bad(format!(
+                "checksum mismatch (stored {stored:?}, computed {crc:08x}): the file is corrupted \
+                 or was changed after it was written; rebuild the atlas or copy it again"
+            )));
+        }
+        let dim: usize = meta
+            .get("dimension")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        if dim != D {
+            return Err(bad(format!("the atlas is {dim}D, {D}D was expected")));
+        }
+        let kind = meta
+            .get("element_kind")
+            .and_then(|s| ElementKind::from_name(s))
+            .ok_or_else(|| bad("unknown element kind".into()))?;
+        let params: AtlasParams = meta
+            .get("params")
+            .and_then(|s| serde_json::from_str(s).ok())
+            .ok_or_else(|| bad("missing or malformed params".into()))?;
+        let sets: crate::mesh::MeshSets = match meta.get("mesh_sets") {
+            None => Default::default(),
+            Some(j) => serde_json::from_str(j)
+                .map_err(|e| bad(format!("malformed mesh_sets metadata: {e}")))?,
+        };
+        let training_shapes = meta
+            .get("training_shapes")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        let st = SafeTensors::deserialize(&bytes).map_err(|e| bad(format!("{e}")))?;
+        let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
+            let t = st
+                .tensor(name)
+                .map_err(|_| bad(format!("tensor {name} is missing")))?;
+            if t.dtype() != dt {
+                return Err(bad(format!(
+                    "tensor {name} has type {:?}, {dt:?} expected",
+                    t.dtype()
+                )));
+            }
+            if let Some(c) = cols
+                && (t.shape().len() != 2 || t.shape()[1] != c)
+            {
+                return Err(bad(format!(
+                    "tensor {name} has shape {:?}, [_, {c}] expected",
+                    t.shape()
+                )));
+            }
+            Ok((t.shape().to_vec(), t.data().to_vec()))
+        };
+        let f64v = |b: &[u8]| -> Vec<f64> {
+            b.chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                .collect()
+        };
+        let idxv = |b: &[u8], limit: usize, what: &str| -> Result<Vec<usize>> {
+            b.chunks_exact(8)
+                .map(|c| {
+                    let v = i64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
+                    if v < 0 || v as usize >= limit {
+                        Err(bad(format!("{what} index {v} out of range")))
+                    } else {
+                        Ok(v as usize)
+                    }
+                })
+                .collect()
+        };
+        let (ms, mb) = get("mean", Dtype::F64, Some(D))?;
+        let n = ms[0];
+        let mean: Vec<Point<D>> = f64v(&mb)
+            .chunks_exact(D)
+            .map(|c| std::array::from_fn(|d| c[d]))
+            .collect();
+        let (es, eb) = get("eigenvalues", Dtype::F64, None)?;
+        let m = es.first().copied().unwrap_or(0);
+        let (mds, mdb) = get("modes", Dtype::F64, Some(m))?;
+        if mds[0] != n * D {
+            return Err(bad(format!(
+                "modes have {} rows, {} expected",
+                mds[0],
+                n * D
+            )));
+        }
+        let mv = f64v(&mdb);
+        let modes = Mat::from_fn(n * D, m, |r, c| mv[r * m + c]);
+        let (_, cvb) = get("cumulative_variance", Dtype::F64, None)?;
+        let (_, fb) = get("facets", Dtype::I64, Some(D))?;
+        let facets = idxv(&fb, n, "facet")?
+            .chunks_exact(D)
+            .map(|c| std::array::from_fn(|d| c[d]))
+            .collect();
+        let (_, lb) = get("landmarks", Dtype::I64, None)?;
+        let (_, nb) = get("mesh_nodes", Dtype::F64, Some(D))?;
+        let nodes: Vec<Point<D>> = f64v(&nb)
+            .chunks_exact(D)
+            .map(|c| std::array::from_fn(|d| c[d]))
+            .collect();
+        let (_, elb) = get("mesh_elements", Dtype::I64, Some(kind.nodes()))?;
+        let connectivity = idxv(&elb, nodes.len(), "mesh node")?;
+        sets.check(kind, nodes.len(), connectivity.len() / kind.nodes())
+            .map_err(|m| bad(format!("mesh sets: {m}")))?;
+        let all: Vec<f64> = mean
+            .iter()
+            .flatten()
+            .chain(nodes.iter().flatten())
+            .copied()
+            .chain(mv.iter().copied())
+            .collect();
+        if all.iter().any(|x| !x.is_finite()) {
+            return Err(bad("contains NaN or infinite values".into()));
+        }
+        Ok(Atlas {
+            mean,
+            modes,
+            eigenvalues: f64v(&eb),
+            cumulative_variance: f64v(&cvb),
+            facets,
+            landmarks: idxv(&lb, n, "landmark")?,
+            mesh: FeMesh {
+                nodes,
+                kind,
+                connectivity,
+                sets,
+            },
+            params,
+            training_shapes,
+        })
+    }
+}

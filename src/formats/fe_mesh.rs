@@ -1,0 +1,186 @@
+//! FE meshes in and out: the format from the extension, the checks every reader shares.
+
+use super::*;
+use crate::error::{Error, Result};
+use crate::geometry::Point;
+use crate::mesh::quality::ElementQuality;
+use crate::mesh::{ElementKind, FeMesh, MeshSets};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Reads an FE mesh of dimension `D` (format from the extension).
+pub fn read_fe_mesh<const D: usize>(path: &Path) -> Result<FeMesh<D>> {
+    to_dimension(path, read_fe_mesh_raw(path)?)
+}
+
+/// Reads an FE mesh with 3D node coordinates, whatever its elements' dimension
+/// (`mesh.kind.dimension()` tells; [`to_dimension`] converts).
+pub fn read_fe_mesh_raw(path: &Path) -> Result<FeMesh<3>> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "inp" => Ok(read_inp(path)?.mesh),
+        "msh" => read_msh(path),
+        "vtu" => super::vtk_xml::read_vtu(path),
+        "vtk" => read_vtk_unstructured(path),
+        _ => Err(Error::parse(
+            path,
+            0,
+            "unknown FE mesh format; use .inp, .msh, .vtu or .vtk",
+        )),
+    }
+}
+
+/// A 3D-coordinate mesh as a mesh of dimension `D` (2D: elements must be 2D and `z` zero).
+pub fn to_dimension<const D: usize>(path: &Path, m: FeMesh<3>) -> Result<FeMesh<D>> {
+    if m.kind.dimension() != D {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "the mesh has {} elements ({}D) but a {D}D mesh is needed",
+                m.kind.name(),
+                m.kind.dimension()
+            ),
+        ));
+    }
+    if D == 2
+        && let Some(i) = m.nodes.iter().position(|p| p[2] != 0.0)
+    {
+        return Err(Error::parse(
+            path,
+            0,
+            format!("node {} of a 2D mesh has z = {}", i + 1, m.nodes[i][2]),
+        ));
+    }
+    let nodes: Vec<Point<D>> = m
+        .nodes
+        .iter()
+        .map(|p| std::array::from_fn(|d| p[d]))
+        .collect();
+    check_mesh(path, &nodes, m.kind, &m.connectivity, &m.sets)?;
+    Ok(FeMesh {
+        nodes,
+        kind: m.kind,
+        connectivity: m.connectivity,
+        sets: m.sets,
+    })
+}
+
+pub(crate) fn check_mesh<const D: usize>(
+    path: &Path,
+    nodes: &[Point<D>],
+    kind: ElementKind,
+    conn: &[usize],
+    sets: &MeshSets,
+) -> Result<()> {
+    if conn.is_empty() {
+        return Err(Error::parse(path, 0, "the mesh has no elements"));
+    }
+    if let Some(i) = nodes.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+        return Err(Error::parse(
+            path,
+            0,
+            format!("node {} has a NaN or infinite coordinate", i + 1),
+        ));
+    }
+    sets.check(kind, nodes.len(), conn.len() / kind.nodes())
+        .map_err(|m| Error::parse(path, 0, m))
+}
+
+/// The FE mesh formats written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum MeshFormat {
+    Vtu,
+    Vtk,
+    Inp,
+    Msh,
+    Feb,
+}
+
+impl MeshFormat {
+    /// All formats.
+    pub const ALL: [MeshFormat; 5] = [
+        MeshFormat::Vtu,
+        MeshFormat::Vtk,
+        MeshFormat::Inp,
+        MeshFormat::Msh,
+        MeshFormat::Feb,
+    ];
+
+    /// File extension.
+    pub fn extension(self) -> &'static str {
+        match self {
+            MeshFormat::Vtu => "vtu",
+            MeshFormat::Vtk => "vtk",
+            MeshFormat::Inp => "inp",
+            MeshFormat::Msh => "msh",
+            MeshFormat::Feb => "feb",
+        }
+    }
+
+    /// The format of a file name's extension.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let e = path.extension()?.to_string_lossy().to_ascii_lowercase();
+        Self::ALL.into_iter().find(|f| f.extension() == e)
+    }
+
+    /// The format named `s` (an extension).
+    pub fn parse(s: &str) -> Option<Self> {
+        let s = s.trim().trim_start_matches('.').to_ascii_lowercase();
+        Self::ALL.into_iter().find(|f| f.extension() == s)
+    }
+}
+
+/// Writes `mesh` to `path` in the format of its extension; `reference` (the mean mesh) gives
+/// the displacement and `quality` the per-element Jacobians where the format carries data
+/// (VTU, VTK).
+pub fn write_mesh<const D: usize>(
+    path: &Path,
+    mesh: &FeMesh<D>,
+    reference: Option<&FeMesh<D>>,
+    quality: &[ElementQuality],
+) -> Result<()> {
+    let format = MeshFormat::from_path(path).ok_or_else(|| {
+        Error::Parameter(format!(
+            "{}: unknown mesh format; use .vtu, .vtk, .inp, .msh or .feb",
+            path.display()
+        ))
+    })?;
+    if mesh.kind.dimension() != D {
+        return Err(Error::Mesh(format!(
+            "{}: {} elements in a {D}D mesh",
+            path.display(),
+            mesh.kind.name()
+        )));
+    }
+    let text = match format {
+        MeshFormat::Vtu => return super::write_vtu_with_quality(path, mesh, reference, quality),
+        MeshFormat::Vtk => vtk(mesh, reference, quality),
+        MeshFormat::Inp => inp(mesh, path),
+        MeshFormat::Msh => msh(mesh),
+        MeshFormat::Feb => feb(mesh, path)?,
+    };
+    crate::formats::write_atomic(path, text.as_bytes())
+}
+
+pub(crate) fn xyz<const D: usize>(p: &Point<D>) -> [f64; 3] {
+    [p[0], p[1], if D > 2 { p[2] } else { 0.0 }]
+}
+
+/// Comma-separated 1-based ids, `per_line` per line (Abaqus allows 16 per data line).
+pub(crate) fn id_lines(out: &mut String, ids: impl IntoIterator<Item = usize>, per_line: usize) {
+    let mut k = 0;
+    for i in ids {
+        if k > 0 {
+            out.push_str(if k % per_line == 0 { ",\n" } else { ", " });
+        }
+        let _ = write!(out, "{}", i + 1);
+        k += 1;
+    }
+    if k > 0 {
+        out.push('\n');
+    }
+}

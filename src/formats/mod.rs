@@ -1,0 +1,71 @@
+//! Files in and out, one file per format: each holds its reader (from the file's bytes or
+//! text), its writer and its element-type table. Every output is written atomically (a
+//! temporary name, then a rename: [`write_atomic`]).
+//!
+//! | file | format |
+//! |---|---|
+//! | `outline`, `outline_csv`, `outline_text` | 2D outlines: the dispatch, long CSV tables, plain text |
+//! | `surface`, `ply`, `stl`, `obj` | 3D surfaces: the dispatch and checks, PLY, STL, OBJ |
+//! | `vtk_legacy` | legacy VTK: POLYDATA outlines and surfaces, UNSTRUCTURED_GRID meshes |
+//! | `vtk_xml` | VTK XML: VTP shapes, VTU meshes |
+//! | `fe_mesh` | FE meshes: the format by extension ([`MeshFormat`]), shared checks |
+//! | `abaqus` | Abaqus/CalculiX `.inp` meshes and decks |
+//! | `gmsh` | Gmsh `.msh` |
+//! | `febio` | FEBio `.feb` |
+//! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
+//! | `atlas_file` | the atlas file (safetensors) |
+//! | `atomic` | output folders and atomic writes |
+
+pub mod abaqus;
+pub mod atlas_file;
+mod atomic;
+pub mod fe_mesh;
+pub mod febio;
+pub mod gmsh;
+pub mod landmarks;
+pub mod obj;
+pub mod outline;
+pub mod outline_csv;
+pub mod outline_text;
+pub mod ply;
+pub mod stl;
+pub mod surface;
+pub mod vtk_legacy;
+pub mod vtk_xml;
+
+pub use abaqus::{InpDeck, read_inp};
+pub use atlas_file::{ATLAS_FORMAT_VERSION, atlas_dimension};
+pub(crate) use atomic::MAX_COUNT;
+pub use atomic::{create_dir, write_atomic};
+pub use fe_mesh::{MeshFormat, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh};
+pub use gmsh::read_msh;
+pub use outline::read_outlines;
+pub(crate) use outline::*;
+pub use outline_csv::read_long_csv;
+pub use outline_text::read_text_outlines;
+pub use ply::write_ply;
+pub use stl::write_stl;
+pub use surface::read_surface;
+pub(crate) use surface::*;
+pub use vtk_legacy::{VtkPolyData, read_vtk_outline, read_vtk_polydata, read_vtk_unstructured};
+pub use vtk_xml::{read_vtp, read_vtu, write_vtp, write_vtu, write_vtu_with_quality};
+
+use abaqus::inp;
+use fe_mesh::{check_mesh, id_lines, xyz};
+use febio::feb;
+use gmsh::msh;
+use obj::{parse_obj, xyz_after_keyword};
+use ply::parse_ply;
+use stl::parse_stl;
+use vtk_legacy::vtk;
+
+#[cfg(test)]
+mod fe_mesh_tests;
+#[cfg(test)]
+mod outline_tests;
+#[cfg(test)]
+mod round_trip_tests;
+#[cfg(test)]
+mod surface_tests;
+#[cfg(test)]
+mod vtk_xml_tests;

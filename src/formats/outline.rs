@@ -1,0 +1,82 @@
+//! Reading 2D outlines: the format by extension, and the checks every reader shares.
+
+use super::*;
+use crate::error::{Error, Result};
+use crate::geometry::Shape;
+use std::path::Path;
+
+/// Reads the outlines in `path` (format from the extension: `.csv`, `.vtk`, else text).
+/// `closed` applies to CSV and text files; VTK files carry their own topology.
+pub fn read_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    let shapes = match ext.as_str() {
+        "csv" => read_long_csv(path, closed)?,
+        "vtk" => vec![read_vtk_outline(path)?],
+        _ => read_text_outlines(path, closed)?,
+    };
+    if shapes.is_empty() {
+        return Err(Error::parse(path, 0, "the file holds no shape"));
+    }
+    for s in &shapes {
+        check_finite(path, s)?;
+    }
+    Ok(shapes)
+}
+
+pub(crate) fn check_finite(path: &Path, s: &Shape<2>) -> Result<()> {
+    if let Some(i) = s
+        .points
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite()))
+    {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "shape {}: point {i} has a NaN or infinite coordinate",
+                s.name
+            ),
+        ));
+    }
+    if s.points.len() < 3 {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "shape {} has {} point(s); an outline needs at least 3",
+                s.name,
+                s.points.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+pub(crate) fn read_text(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    String::from_utf8(bytes).map_err(|_| Error::parse(path, 0, "not a text file (invalid UTF-8)"))
+}
+
+pub(crate) fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "shape".into())
+}
+
+pub(crate) fn parse_f64(path: &Path, line: usize, tok: &str) -> Result<f64> {
+    let v: f64 = tok
+        .trim()
+        .parse()
+        .map_err(|_| Error::parse(path, line, format!("{:?} is not a number", tok.trim())))?;
+    if !v.is_finite() {
+        return Err(Error::parse(
+            path,
+            line,
+            format!("coordinate {:?} is NaN or infinite", tok.trim()),
+        ));
+    }
+    Ok(v)
+}

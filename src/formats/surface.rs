@@ -1,0 +1,78 @@
+//! Reading 3D surfaces: the format by extension (PLY, STL, OBJ, VTP, legacy VTK), then the
+//! checks and orientation every surface gets.
+
+use super::*;
+use crate::error::{Error, Result};
+use crate::geometry::{Point, Shape, prepare_surface};
+use std::path::Path;
+
+/// Reads a triangle surface; the format comes from the extension (`.ply`, `.stl`, `.obj`,
+/// legacy `.vtk` POLYDATA with POLYGONS, `.vtp` with ASCII arrays).
+/// The surface is checked and oriented by [`prepare_surface`].
+pub fn read_surface(path: &Path) -> Result<Shape<3>> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let (points, polys) = match ext.as_str() {
+        "ply" => parse_ply(path, &bytes)?,
+        "stl" => parse_stl(path, &bytes)?,
+        "obj" => parse_obj(path, &bytes)?,
+        "vtp" => super::vtk_xml::read_vtp(path)?,
+        "vtk" => {
+            let v = super::read_vtk_polydata(path)?;
+            if v.polygons.is_empty() {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    "no POLYGONS: a surface needs polygons (an outline has LINES)",
+                ));
+            }
+            (v.points, v.polygons)
+        }
+        _ => {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("unknown surface format '.{ext}' (use .ply, .stl, .obj, .vtk or .vtp)"),
+            ));
+        }
+    };
+    let mut facets = Vec::with_capacity(polys.len());
+    for (k, poly) in polys.iter().enumerate() {
+        if poly.len() < 3 {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("face {k} has {} vertices; at least 3 needed", poly.len()),
+            ));
+        }
+        if let Some(&i) = poly.iter().find(|&&i| i >= points.len()) {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "face {k} refers to vertex {i}, but the file has {} vertices",
+                    points.len()
+                ),
+            ));
+        }
+        for j in 1..poly.len() - 1 {
+            facets.push([poly[0], poly[j], poly[j + 1]]);
+        }
+    }
+    let shape = Shape {
+        name,
+        points,
+        facets,
+        landmarks: Vec::new(),
+    };
+    prepare_surface(shape).map_err(|e| Error::parse(path, 0, e.to_string()))
+}
+
+pub(crate) type Parsed = (Vec<Point<3>>, Vec<Vec<usize>>);

@@ -1,0 +1,66 @@
+//! Points and vectors in `D` dimensions, with the vector operations the algorithms use.
+
+/// A point (or vector) in `D` dimensions.
+pub type Point<const D: usize> = [f64; D];
+
+/// Axis-aligned bounding box `(min, max)` of a non-empty point list.
+pub fn bounding_box<const D: usize>(points: &[Point<D>]) -> (Point<D>, Point<D>) {
+    let mut lo = [f64::INFINITY; D];
+    let mut hi = [f64::NEG_INFINITY; D];
+    for p in points {
+        for d in 0..D {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    (lo, hi)
+}
+
+#[inline]
+pub fn sub<const D: usize>(a: Point<D>, b: Point<D>) -> Point<D> {
+    std::array::from_fn(|d| a[d] - b[d])
+}
+#[inline]
+pub fn add<const D: usize>(a: Point<D>, b: Point<D>) -> Point<D> {
+    std::array::from_fn(|d| a[d] + b[d])
+}
+#[inline]
+pub fn scale<const D: usize>(a: Point<D>, s: f64) -> Point<D> {
+    std::array::from_fn(|d| a[d] * s)
+}
+#[inline]
+pub fn dot<const D: usize>(a: Point<D>, b: Point<D>) -> f64 {
+    (0..D).map(|d| a[d] * b[d]).sum()
+}
+#[inline]
+pub fn norm<const D: usize>(a: Point<D>) -> f64 {
+    dot(a, a).sqrt()
+}
+#[inline]
+pub fn dist2<const D: usize>(a: Point<D>, b: Point<D>) -> f64 {
+    let d = sub(a, b);
+    dot(d, d)
+}
+/// `a / |a|`, or zero for the zero vector.
+#[inline]
+pub fn normalize<const D: usize>(a: Point<D>) -> Point<D> {
+    let n = norm(a);
+    if n > 0.0 { scale(a, 1.0 / n) } else { a }
+}
+
+/// Centroid of a non-empty point list.
+pub fn centroid<const D: usize>(points: &[Point<D>]) -> Point<D> {
+    let mut c = [0.0; D];
+    for p in points {
+        for d in 0..D {
+            c[d] += p[d];
+        }
+    }
+    scale(c, 1.0 / points.len().max(1) as f64)
+}
+
+/// Converts between `[f64; D]` and `[f64; E]` when `D == E` (a no-op used to call
+/// dimension-specific code from generic code).
+pub fn same_dim<const D: usize, const E: usize>(p: &Point<D>) -> Point<E> {
+    std::array::from_fn(|d| p[d])
+}

@@ -1,0 +1,84 @@
+//! The boundary faces of a mesh (faces shared by no other element), outward.
+
+use super::FeMesh;
+use crate::geometry::Point;
+use std::collections::HashMap;
+
+/// A face on the boundary of a mesh (shared by no other element).
+#[derive(Clone, Debug)]
+pub struct BoundaryFace<const D: usize> {
+    pub element: usize,
+    /// Local face number ([`crate::mesh::ElementKind::faces`]).
+    pub face: u8,
+    /// Its corner nodes, outward order.
+    pub nodes: Vec<usize>,
+    /// Its mid-edge nodes (quadratic elements; empty otherwise), in the order of its edges.
+    pub mids: Vec<usize>,
+    /// Unit outward normal.
+    pub normal: Point<D>,
+    pub centroid: Point<D>,
+}
+
+/// The faces (edges in 2D) of `mesh` that belong to one element only.
+pub fn boundary_faces<const D: usize>(mesh: &FeMesh<D>) -> Vec<BoundaryFace<D>> {
+    let faces = mesh.kind.faces();
+    let mut count: HashMap<Vec<usize>, u32> = HashMap::new();
+    for e in 0..mesh.num_elements() {
+        let el = mesh.element(e);
+        for f in faces {
+            let mut key: Vec<usize> = f.iter().map(|&k| el[k]).collect();
+            key.sort_unstable();
+            *count.entry(key).or_default() += 1;
+        }
+    }
+    let mut out = Vec::new();
+    for e in 0..mesh.num_elements() {
+        let el = mesh.element(e);
+        for (fi, f) in faces.iter().enumerate() {
+            let nodes: Vec<usize> = f.iter().map(|&k| el[k]).collect();
+            let mut key = nodes.clone();
+            key.sort_unstable();
+            if count.get(&key) != Some(&1) {
+                continue;
+            }
+            let p: Vec<Point<D>> = nodes.iter().map(|&n| mesh.nodes[n]).collect();
+            let centroid: Point<D> =
+                std::array::from_fn(|d| p.iter().map(|q| q[d]).sum::<f64>() / p.len() as f64);
+            let mut normal = [0.0; D];
+            if D == 2 {
+                // Edge a -> b of a counter-clockwise element: outward is its right side.
+                normal[0] = p[1][1] - p[0][1];
+                normal[1] = -(p[1][0] - p[0][0]);
+            } else {
+                // Newell's normal of the (possibly non-planar) polygon.
+                for k in 0..p.len() {
+                    let (a, b) = (p[k], p[(k + 1) % p.len()]);
+                    normal[0] += (a[1] - b[1]) * (a[2] + b[2]);
+                    normal[1] += (a[2] - b[2]) * (a[0] + b[0]);
+                    normal[2] += (a[0] - b[0]) * (a[1] + b[1]);
+                }
+            }
+            let n = normal.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if n > 0.0 {
+                normal = normal.map(|v| v / n);
+            }
+            let mids = if mesh.kind.linear() == mesh.kind {
+                Vec::new()
+            } else {
+                mesh.kind.face_nodes(fi)[nodes.len()..]
+                    .iter()
+                    .map(|&k| el[k])
+                    .collect()
+            };
+            out.push(BoundaryFace {
+                element: e,
+                face: fi as u8,
+                nodes,
+                mids,
+                normal,
+                centroid,
+            });
+        }
+    }
+    out
+}

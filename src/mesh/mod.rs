@@ -1,0 +1,39 @@
+//! Finite element meshes: element kinds, the mesh type and its sets, automatic meshing of the
+//! mean shape (section 2.4), the morph by a B-spline FFD (eq. 9), element quality by corner
+//! Jacobians (section 5.3), and the repair of poor elements.
+//!
+//! | file | what it computes |
+//! |---|---|
+//! | `element` | [`ElementKind`]: node numbering (diagrams), faces, corner frames |
+//! | `fe_mesh` | [`FeMesh`] and [`MeshSets`] |
+//! | `boundary` | the boundary faces of a mesh, outward |
+//! | `quad_mesh` | quadrilateral mesh of a 2D outline |
+//! | `hex_mesh` | hexahedral mesh of a closed surface |
+//! | `mean_mesh` | the mesh of the mean shape, by dimension |
+//! | `quality` | corner Jacobians, scaled Jacobians, edge ratios (section 5.3) |
+//! | `sets` | node sets, element sets and surfaces from a TOML description |
+//! | `morph` | [`Morpher`]: the mesh carried by boundary correspondences (eq. 9) |
+//! | `repair` | untangling and improving poor elements |
+
+mod boundary;
+mod element;
+mod fe_mesh;
+pub mod hex_mesh;
+mod mean_mesh;
+mod morph;
+pub mod quad_mesh;
+pub mod quality;
+pub mod repair;
+pub mod sets;
+
+pub use boundary::{BoundaryFace, boundary_faces};
+pub use element::ElementKind;
+pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
+pub use fe_mesh::{FeMesh, HexMesh, MeshSets, QuadMesh};
+pub use hex_mesh::{HexMeshParams, hex_mesh};
+pub use mean_mesh::mesh_mean_shape;
+pub use morph::{Correspondence, MAX_STIFFENINGS, Morph, Morpher, STIFFEN_FACTOR};
+pub use quad_mesh::{QuadMeshParams, quad_mesh};
+pub use quality::{ElementQuality, QualityDistribution, QualitySummary, mesh_quality, summarize};
+pub use repair::{RepairParams, RepairReport, repair, repair_with_quality};
+pub use sets::SetsConfig;

@@ -1,0 +1,481 @@
+//! Repair of a morphed mesh (after section 4; the paper has none): where an element is
+//! inverted or its scaled Jacobian is below a bound, nodes are moved to untangle it and then
+//! to raise the worst scaled Jacobian, locally around the bad elements first.
+//!
+//! Interior nodes move freely; boundary nodes that lie on the subject's surface (outline)
+//! slide on it (each trial position is projected to its closest point on the surface), so
+//! the surface fit is kept; other boundary nodes (an open outline's closing chord, the cut
+//! ends of a tube, a crease the fit did not reach) slide on the mesh's own boundary as it
+//! was, which keeps its shape. Each node in turn maximizes the worst scaled Jacobian of the
+//! elements around it (ties broken by their mean), by a compass search that also tries the
+//! centroid of its neighbours: derivative-free, so inverted elements (negative scaled
+//! Jacobians) are handled like bad ones. Sweeps run over the nodes of the elements still
+//! below the bound and their neighbours, and widen to two and three rings of neighbours when
+//! a sweep gains nothing.
+//!
+//! Units: positions in the mesh's units; the bound is on the scaled Jacobian (unitless).
+
+use super::boundary_faces;
+use crate::error::Result;
+use crate::geometry::{ClosestPointIndex, Point, dist2};
+use crate::mesh::quality::{ElementQuality, corner, element_quality_at, mesh_quality, summarize};
+use crate::mesh::{ElementKind, FeMesh};
+
+/// Parameters of the repair.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RepairParams {
+    /// Scaled Jacobian below which an element is repaired; `None`: the default of its kind
+    /// ([`default_bound`]).
+    pub bound: Option<f64>,
+    /// Largest number of sweeps over the active nodes.
+    pub max_sweeps: usize,
+    /// A boundary node within this share of the median edge length of the surface slides
+    /// on it; farther ones stay.
+    pub on_surface: f64,
+}
+
+impl Default for RepairParams {
+    fn default() -> Self {
+        RepairParams {
+            bound: None,
+            max_sweeps: 60,
+            on_surface: 0.25,
+        }
+    }
+}
+
+/// The default bounds: 0.2 for hexahedra (and simplices), 0.3 for quadrilaterals.
+pub fn default_bound(kind: ElementKind) -> f64 {
+    match kind {
+        ElementKind::Quad4 => 0.3,
+        _ => 0.2,
+    }
+}
+
+/// What a repair did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RepairReport {
+    /// Elements with a non-positive corner Jacobian before.
+    pub inverted_before: usize,
+    /// Smallest scaled Jacobian before.
+    pub scaled_jacobian_min_before: f64,
+    /// Elements below the bound before.
+    pub below_bound_before: usize,
+    /// The same after.
+    pub inverted_after: usize,
+    pub scaled_jacobian_min: f64,
+    pub below_bound_after: usize,
+    /// The bound used.
+    pub bound: f64,
+    /// Nodes moved.
+    pub moved_nodes: usize,
+    /// The largest increase of a boundary node's distance to the surface (mesh units; 0 when
+    /// nothing moved off it, negative never: sliding nodes end on the surface).
+    pub surface_distance_change: f64,
+    /// Sweeps run.
+    pub sweeps: usize,
+    /// The median edge length of the mesh (mesh units), the scale of the steps and of
+    /// `surface_distance_change`.
+    pub median_edge: f64,
+}
+
+/// Sharpness of the soft minimum: a corner 0.1 below another weighs `e^2` times more.
+const KAPPA: f64 = 20.0;
+
+/// Mean ratio of a corner below which a collapsing edge is penalized.
+const MEAN_RATIO_BOUND: f64 = 0.05;
+
+/// The penalty of one corner: `exp(-KAPPA (sj - bound))` on the scaled Jacobian `sj`, plus
+/// the same on its mean ratio `D j^(2/D) / Σ|e_k|²` (`j` the corner Jacobian, `e_k` its
+/// edges) against [`MEAN_RATIO_BOUND`]: the scaled Jacobian of a corner whose edge collapses
+/// stays fine (it sees only the angles), and a repair that traded angles for a collapsed edge
+/// would leave an element of near-zero volume.
+fn corner_penalty<const D: usize>(
+    kind: ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+    c: usize,
+    j: f64,
+    sj: f64,
+    bound: f64,
+) -> f64 {
+    let frame = kind.corner_frames()[c];
+    let x = nodes[el[c]];
+    let edges: f64 = frame.iter().map(|&m| dist2(nodes[el[m]], x)).sum();
+    let mean_ratio = if j > 0.0 && edges > 0.0 {
+        D as f64 * j.powf(2.0 / D as f64) / edges
+    } else {
+        0.0
+    };
+    (-KAPPA * (sj - bound)).exp() + (-KAPPA * (mean_ratio - MEAN_RATIO_BOUND)).exp()
+}
+
+/// The objective of a node's elements: (worst scaled Jacobian, soft-min penalty
+/// `Σ_corners exp(-KAPPA (sj - bound))`, inverted corners) over the corners that depend on
+/// the node (`corners`: element and corner), plus `fixed`, the same over the corners of its
+/// elements that do not.
+fn score<const D: usize>(
+    kind: ElementKind,
+    conn: &[usize],
+    corners: &[(usize, usize)],
+    nodes: &[Point<D>],
+    bound: f64,
+    fixed: (f64, f64, usize),
+) -> (f64, f64, usize) {
+    let k = kind.nodes();
+    let (mut worst, mut penalty, mut inverted) = fixed;
+    for &(e, c) in corners {
+        let el = &conn[e * k..(e + 1) * k];
+        let (j, sj) = corner(kind, el, nodes, c);
+        worst = worst.min(sj);
+        penalty += corner_penalty(kind, el, nodes, c, j, sj, bound);
+        if j <= 0.0 {
+            inverted += 1;
+        }
+    }
+    (worst, penalty, inverted)
+}
+
+/// Whether `a` improves on `b`: a lower penalty (the sum over all corners of the mesh falls
+/// with it), by a meaningful amount (smaller gains are rounding, or a node creeping along a
+/// curved surface), with no more inverted corners and never inverting one where none was.
+fn better(a: (f64, f64, usize), b: (f64, f64, usize)) -> bool {
+    a.2 <= b.2 && (a.0 > 0.0 || a.0 >= b.0) && a.1 < b.1 * (1.0 - 1e-6)
+}
+
+/// Trial positions per node and sweep at most.
+const MAX_TRIALS: usize = 600;
+
+/// Repairs `mesh` in place (see the module doc). `surface` is the subject's shape (its
+/// closest-point index): boundary nodes on it slide on it. Returns what was done; the mesh
+/// may still hold elements below the bound when no node move raises them (then
+/// `below_bound_after > 0`).
+pub fn repair<const D: usize>(
+    mesh: &mut FeMesh<D>,
+    surface: Option<&ClosestPointIndex<D>>,
+    params: &RepairParams,
+) -> Result<RepairReport> {
+    let quality = mesh_quality(mesh);
+    repair_with_quality(mesh, surface, params, &quality).map(|(r, _)| r)
+}
+
+/// [`repair`] with the mesh's element quality at hand; also returns the quality after.
+pub fn repair_with_quality<const D: usize>(
+    mesh: &mut FeMesh<D>,
+    surface: Option<&ClosestPointIndex<D>>,
+    params: &RepairParams,
+    quality: &[ElementQuality],
+) -> Result<(RepairReport, Vec<ElementQuality>)> {
+    crate::clear_simd_upper_state();
+    let kind = mesh.kind;
+    let k = kind.nodes();
+    let bound = params.bound.unwrap_or_else(|| default_bound(kind));
+    let before = summarize(quality);
+    let below = |q: &[ElementQuality]| q.iter().filter(|e| e.scaled_jacobian_min < bound).count();
+    let mut report = RepairReport {
+        inverted_before: before.inverted_elements,
+        scaled_jacobian_min_before: before.scaled_jacobian_min,
+        below_bound_before: below(quality),
+        bound,
+        ..Default::default()
+    };
+    let mut q: Vec<f64> = quality.iter().map(|e| e.scaled_jacobian_min).collect();
+    if report.below_bound_before == 0 {
+        report.inverted_after = before.inverted_elements;
+        report.scaled_jacobian_min = before.scaled_jacobian_min;
+        return Ok((report, quality.to_vec()));
+    }
+    let nn = mesh.nodes.len();
+    let ne = mesh.num_elements();
+    // Incidence and neighbours.
+    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nn];
+    for e in 0..ne {
+        for &n in mesh.element(e) {
+            incident[n].push(e);
+        }
+    }
+    let neighbours = |n: usize, conn: &[usize]| -> Vec<usize> {
+        let mut v: Vec<usize> = incident[n]
+            .iter()
+            .flat_map(|&e| conn[e * k..(e + 1) * k].iter().copied())
+            .filter(|&m| m != n)
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    // Node roles: 0 free, 1 sliding on the surface, 2 fixed.
+    let mut role = vec![0u8; nn];
+    let faces = boundary_faces(mesh);
+    let median_edge = {
+        let mut l: Vec<f64> = (0..ne.min(2000))
+            .flat_map(|e| {
+                let el = mesh.element(e);
+                kind.corner_frames()
+                    .iter()
+                    .enumerate()
+                    .map(move |(c, f)| (el[c], el[f[0]]))
+            })
+            .map(|(a, b)| dist2(mesh.nodes[a], mesh.nodes[b]).sqrt())
+            .collect();
+        l.sort_by(f64::total_cmp);
+        l.get(l.len() / 2).copied().unwrap_or(1.0)
+    };
+    report.median_edge = median_edge;
+    let mut distance_before = vec![0.0; nn];
+    for f in &faces {
+        for &n in f.nodes.iter().chain(&f.mids) {
+            if role[n] != 0 {
+                continue;
+            }
+            role[n] = match surface {
+                Some(s) => {
+                    let d = s.closest(&mesh.nodes[n]).dist2.sqrt();
+                    distance_before[n] = d;
+                    if d <= params.on_surface * median_edge {
+                        1
+                    } else {
+                        2
+                    }
+                }
+                None => 2,
+            };
+        }
+    }
+    // The mesh's own boundary as it was (segments in 2D, triangles in 3D): boundary nodes off
+    // the subject's surface slide on it, so that the boundary keeps its shape.
+    let own: Vec<[usize; D]> = faces
+        .iter()
+        .flat_map(|f| {
+            (1..f.nodes.len() + 2 - D)
+                .map(|t| {
+                    std::array::from_fn(|k| {
+                        if k == 0 {
+                            f.nodes[0]
+                        } else {
+                            f.nodes[t + k - 1]
+                        }
+                    })
+                })
+                .collect::<Vec<[usize; D]>>()
+        })
+        .collect();
+    let own_index = ClosestPointIndex::new(&mesh.nodes, &own);
+    let conn = mesh.connectivity.clone();
+    let original = mesh.nodes.clone();
+    let mut moved = vec![false; nn];
+    let mut ring = 1;
+    for sweep in 0..params.max_sweeps {
+        report.sweeps = sweep + 1;
+        let bad: Vec<usize> = (0..ne).filter(|&e| q[e] < bound).collect();
+        if bad.is_empty() {
+            break;
+        }
+        // Active nodes: those of the bad elements, widened by `ring - 1` rings.
+        let mut active: Vec<usize> = bad
+            .iter()
+            .flat_map(|&e| conn[e * k..(e + 1) * k].iter().copied())
+            .collect();
+        for _ in 1..ring {
+            let more: Vec<usize> = active.iter().flat_map(|&n| neighbours(n, &conn)).collect();
+            active.extend(more);
+        }
+        active.sort_unstable();
+        active.dedup();
+        // Worst first.
+        active.sort_by(|&a, &b| {
+            let wa = incident[a]
+                .iter()
+                .map(|&e| q[e])
+                .fold(f64::INFINITY, f64::min);
+            let wb = incident[b]
+                .iter()
+                .map(|&e| q[e])
+                .fold(f64::INFINITY, f64::min);
+            wa.total_cmp(&wb)
+        });
+        let worst_before = bad.iter().map(|&e| q[e]).fold(f64::INFINITY, f64::min);
+        let mut gained = false;
+        for &n in &active {
+            let x0 = mesh.nodes[n];
+            // The corners that move with node n, and the rest of its elements' corners.
+            let mut moving = Vec::new();
+            let mut fixed = (f64::INFINITY, 0.0, 0usize);
+            for &e in &incident[n] {
+                let el = &conn[e * k..(e + 1) * k];
+                for (c, frame) in kind.corner_frames().iter().enumerate() {
+                    // (A quadratic element's corner moves with the mid-edge nodes of its
+                    // frame's edges too.)
+                    if el[c] == n
+                        || frame.iter().any(|&m| {
+                            el[m] == n || kind.mid_node(c, m).is_some_and(|mid| el[mid] == n)
+                        })
+                    {
+                        moving.push((e, c));
+                    } else {
+                        let (j, sj) = corner(kind, el, &mesh.nodes, c);
+                        fixed.0 = f64::min(fixed.0, sj);
+                        fixed.1 += corner_penalty(kind, el, &mesh.nodes, c, j, sj, bound);
+                        fixed.2 += usize::from(j <= 0.0);
+                    }
+                }
+            }
+            let mut best = score(kind, &conn, &moving, &mesh.nodes, bound, fixed);
+            let mut bx = x0;
+            let place = |p: Point<D>| -> Point<D> {
+                match (role[n], surface) {
+                    (1, Some(s)) => s.closest(&p).point,
+                    (2, _) => own_index.closest(&p).point,
+                    _ => p,
+                }
+            };
+            let nb = neighbours(n, &conn);
+            // The first step: a third of the median distance to the neighbours (not the
+            // least: a node next to a collapsed edge must be able to move far).
+            let h0 = {
+                let mut d: Vec<f64> = nb
+                    .iter()
+                    .map(|&m| dist2(mesh.nodes[m], x0).sqrt())
+                    .collect();
+                d.sort_by(f64::total_cmp);
+                d.get(d.len() / 2)
+                    .copied()
+                    .unwrap_or(median_edge)
+                    .min(median_edge)
+                    * 0.3
+            };
+            // The centroid of the neighbours first (untangles folded stars).
+            let c: Point<D> = std::array::from_fn(|d| {
+                nb.iter().map(|&m| mesh.nodes[m][d]).sum::<f64>() / nb.len().max(1) as f64
+            });
+            let trial = |p: Point<D>,
+                         nodes: &mut [Point<D>],
+                         best: &mut (f64, f64, usize),
+                         bx: &mut Point<D>| {
+                let p = place(p);
+                nodes[n] = p;
+                let s = score(kind, &conn, &moving, nodes, bound, fixed);
+                if better(s, *best) {
+                    *best = s;
+                    *bx = p;
+                    true
+                } else {
+                    nodes[n] = *bx;
+                    false
+                }
+            };
+            trial(c, &mut mesh.nodes, &mut best, &mut bx);
+            let mut h = h0;
+            let mut trials = 0;
+            while h > 1e-2 * h0 && h > 0.0 && trials < MAX_TRIALS {
+                trials += 3usize.pow(D as u32) - 1;
+                let mut improved = false;
+                // The axes and the diagonals (3^D - 1 directions), normalized to length h.
+                for code in 0..3usize.pow(D as u32) {
+                    let dir: [f64; D] =
+                        std::array::from_fn(|d| (code / 3usize.pow(d as u32) % 3) as f64 - 1.0);
+                    let len = dir.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    if len == 0.0 {
+                        continue;
+                    }
+                    let p: Point<D> = std::array::from_fn(|d| bx[d] + h * dir[d] / len);
+                    if trial(p, &mut mesh.nodes, &mut best, &mut bx) {
+                        improved = true;
+                    }
+                }
+                if !improved {
+                    h *= 0.5;
+                }
+            }
+            mesh.nodes[n] = bx;
+            if bx != x0 {
+                moved[n] = true;
+                gained = true;
+                for &e in &incident[n] {
+                    q[e] = element_quality_at(kind, &conn[e * k..(e + 1) * k], &mesh.nodes)
+                        .scaled_jacobian_min;
+                }
+            }
+        }
+        let worst_after = (0..ne)
+            .filter(|&e| q[e] < bound)
+            .map(|e| q[e])
+            .fold(f64::INFINITY, f64::min);
+        if !gained || worst_after <= worst_before + 1e-9 {
+            if ring >= 3 && !gained {
+                break;
+            }
+            ring = (ring + 1).min(3);
+        }
+    }
+    let mut after = mesh_quality(mesh);
+    let mut s = summarize(&after);
+    // Never worse than before: the penalty descent may trade the worst element for many
+    // better ones; then the mesh goes back as it was.
+    if s.inverted_elements > before.inverted_elements
+        || s.scaled_jacobian_min < before.scaled_jacobian_min
+    {
+        mesh.nodes = original;
+        moved.iter_mut().for_each(|m| *m = false);
+        after = quality.to_vec();
+        s = before;
+    }
+    report.inverted_after = s.inverted_elements;
+    report.scaled_jacobian_min = s.scaled_jacobian_min;
+    report.below_bound_after = below(&after);
+    report.moved_nodes = moved.iter().filter(|m| **m).count();
+    if let Some(surf) = surface {
+        report.surface_distance_change = (0..nn)
+            .filter(|&n| moved[n] && role[n] == 1)
+            .map(|n| surf.closest(&mesh.nodes[n]).dist2.sqrt() - distance_before[n])
+            .fold(0.0, f64::max);
+    }
+    Ok((report, after))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folded_quadratic_mesh_is_repaired() {
+        // (The mid-edge nodes around the pushed corner stay: its edges fold back.)
+        let m = folded_and_repaired(FeMesh::block(4).to_quadratic().unwrap());
+        assert_eq!(summarize(&mesh_quality(&m)).inverted_elements, 0);
+    }
+
+    /// `m` (a 4 × 4 × 4 block) with its interior node (2, 2, 2) pushed down through the face
+    /// below it, repaired: untangled and at or above the bound.
+    fn folded_and_repaired(mut m: FeMesh<3>) -> FeMesh<3> {
+        let n = 2 + 5 * (2 + 5 * 2);
+        m.nodes[n][2] -= 1.6;
+        let q = mesh_quality(&m);
+        assert!(summarize(&q).inverted_elements > 0);
+        let r = repair(&mut m, None, &RepairParams::default()).unwrap();
+        assert!(r.inverted_before > 0, "{r:?}");
+        assert_eq!(r.inverted_after, 0, "{r:?}");
+        assert!(r.scaled_jacobian_min >= 0.2, "{r:?}");
+        assert_eq!(r.below_bound_after, 0);
+        m
+    }
+
+    #[test]
+    fn a_node_pushed_through_its_opposite_face_is_repaired() {
+        let m = folded_and_repaired(FeMesh::block(4));
+        // The boundary did not move (no surface given: boundary nodes are fixed).
+        let fresh = FeMesh::block(4);
+        for f in boundary_faces(&fresh) {
+            for &b in &f.nodes {
+                assert_eq!(m.nodes[b], fresh.nodes[b]);
+            }
+        }
+    }
+
+    #[test]
+    fn a_valid_mesh_is_left_alone() {
+        let mut m = FeMesh::block(2);
+        let r = repair(&mut m, None, &RepairParams::default()).unwrap();
+        assert_eq!(r.moved_nodes, 0);
+        assert_eq!(m.nodes, FeMesh::block(2).nodes);
+    }
+}

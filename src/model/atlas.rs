@@ -1,0 +1,277 @@
+//! The statistical atlas: the shape model (mean `S_bar`, modes `Psi`, eigenvalues `Lambda`,
+//! sections 2.2-2.3) and the FE mesh of the mean (section 2.4).
+
+use super::{generalized_procrustes, pca};
+use crate::error::{Error, Result};
+use crate::geometry::{Point, Shape, bounding_box, scale};
+use crate::mesh::FeMesh;
+use crate::mesh::mesh_mean_shape;
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+
+/// How many modes the model keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ModeSelection {
+    /// A fixed number of modes.
+    Count(usize),
+    /// The fewest modes explaining at least this share of the variance (paper: 0.985).
+    Variance(f64),
+}
+
+/// Parameters of atlas construction.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AtlasParams {
+    pub modes: ModeSelection,
+    /// Target element edge length of the mean mesh, in reference-frame units (the mean's
+    /// largest bounding-box side is 1).
+    pub element_size: f64,
+    /// Smoothing passes of the mean mesh.
+    pub smoothing_passes: usize,
+}
+
+impl Default for AtlasParams {
+    fn default() -> Self {
+        AtlasParams {
+            modes: ModeSelection::Variance(0.985),
+            element_size: 0.015,
+            smoothing_passes: 8,
+        }
+    }
+}
+
+/// A statistical atlas in `D` dimensions.
+#[derive(Clone, Debug)]
+pub struct Atlas<const D: usize> {
+    /// Mean shape `S_bar`, `N` points, reference frame.
+    pub mean: Vec<Point<D>>,
+    /// Modes `Psi`: `N·D × m`, orthonormal columns.
+    pub modes: Mat<f64>,
+    /// Eigenvalues `lambda_1..lambda_m` (reference-frame units squared).
+    pub eigenvalues: Vec<f64>,
+    /// Cumulative variance share of all `n_s - 1` modes of the training PCA.
+    pub cumulative_variance: Vec<f64>,
+    /// Boundary facets of the shapes (shared by all, they correspond).
+    pub facets: Vec<[usize; D]>,
+    /// Landmark indices.
+    pub landmarks: Vec<usize>,
+    /// FE mesh of the mean shape (reference frame).
+    pub mesh: FeMesh<D>,
+    /// Parameters used to build it.
+    pub params: AtlasParams,
+    /// Number of training shapes.
+    pub training_shapes: usize,
+}
+
+impl<const D: usize> Atlas<D> {
+    /// Builds the atlas from shapes in point correspondence (same count, same facets): GPA
+    /// with tangent projection, PCA, mode selection, and the FE mesh of the mean.
+    pub fn build(shapes: &[Shape<D>], params: &AtlasParams) -> Result<Self> {
+        Self::build_meshed(shapes, params, |mean| {
+            mesh_mean_shape(mean, params.element_size, params.smoothing_passes)
+        })
+    }
+
+    /// Builds the atlas with a template FE mesh instead of the automatic one: `meshes[i]` is
+    /// a volume mesh of `shapes[i]` in that shape's frame, all with one connectivity (as in
+    /// SynthAorta, or one subject meshed by hand and its morphs). Each is brought to the
+    /// reference frame by the similarity that best maps its shape onto the mean (Umeyama),
+    /// and their node positions are averaged: the mean FE mesh. Pass one shape's mesh alone
+    /// with that shape listed first to use it as is.
+    pub fn build_with_meshes(
+        shapes: &[Shape<D>],
+        params: &AtlasParams,
+        meshes: &[FeMesh<D>],
+    ) -> Result<Self> {
+        if meshes.is_empty() || meshes.len() > shapes.len() {
+            return Err(Error::Population(format!(
+                "{} template meshes for {} shapes; give one per shape (or one for the first)",
+                meshes.len(),
+                shapes.len()
+            )));
+        }
+        for (k, m) in meshes.iter().enumerate() {
+            if m.kind != meshes[0].kind
+                || m.connectivity != meshes[0].connectivity
+                || m.nodes.len() != meshes[0].nodes.len()
+            {
+                return Err(Error::Mesh(format!(
+                    "template mesh {k} ({}) does not share the first one's connectivity",
+                    shapes[k].name
+                )));
+            }
+            if m.nodes.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+                return Err(Error::Mesh(format!(
+                    "template mesh {k} ({}) has a NaN or infinite node",
+                    shapes[k].name
+                )));
+            }
+        }
+        Self::build_meshed(shapes, params, |mean| {
+            let mut nodes = vec![[0.0; D]; meshes[0].nodes.len()];
+            for (m, s) in meshes.iter().zip(shapes) {
+                let t = crate::model::fit_similarity(&s.points, &mean.points, None);
+                for (acc, p) in nodes.iter_mut().zip(&m.nodes) {
+                    let q = t.apply(p);
+                    for d in 0..D {
+                        acc[d] += q[d] / meshes.len() as f64;
+                    }
+                }
+            }
+            let mesh = meshes[0].with_nodes(nodes);
+            let q = crate::mesh::quality::summarize(&crate::mesh::quality::mesh_quality(&mesh));
+            if q.inverted_elements > 0 {
+                return Err(Error::Mesh(format!(
+                    "the mean of the template meshes has {} inverted elements",
+                    q.inverted_elements
+                )));
+            }
+            Ok(mesh)
+        })
+    }
+
+    fn build_meshed(
+        shapes: &[Shape<D>],
+        params: &AtlasParams,
+        mesher: impl FnOnce(&Shape<D>) -> Result<FeMesh<D>>,
+    ) -> Result<Self> {
+        if shapes.len() < 3 {
+            return Err(Error::Population(format!(
+                "{} shape(s); an atlas needs at least 3 (two give a single mode and no way to check it)",
+                shapes.len()
+            )));
+        }
+        for s in shapes {
+            s.validate()?;
+            if s.points.len() != shapes[0].points.len() {
+                return Err(Error::Population(format!(
+                    "shape {} has {} points but shape {} has {}; use --resample",
+                    s.name,
+                    s.points.len(),
+                    shapes[0].name,
+                    shapes[0].points.len()
+                )));
+            }
+        }
+        let gpa =
+            generalized_procrustes(&shapes.iter().map(|s| s.points.clone()).collect::<Vec<_>>())?;
+        let (lo, hi) = bounding_box(&gpa.mean);
+        let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+        let c = 1.0 / ext;
+        let mean: Vec<Point<D>> = gpa.mean.iter().map(|p| scale(*p, c)).collect();
+        let aligned: Vec<Vec<Point<D>>> = gpa
+            .aligned
+            .iter()
+            .map(|s| s.iter().map(|p| scale(*p, c)).collect())
+            .collect();
+        let p = pca(&aligned, &mean)?;
+        // Identical shapes (after alignment): nothing to model. In the reference frame (largest
+        // side 1) the total variance of real populations is far above rounding (hands ~1e-3).
+        let total: f64 = p.eigenvalues.iter().sum();
+        if total.is_nan() || total <= 1e-20 * mean.len() as f64 {
+            return Err(Error::Population(format!(
+                "the {} shapes are identical after alignment (total variance {total:.1e}): there \
+                 is no variance to model; give shapes that differ",
+                shapes.len()
+            )));
+        }
+        let m = match params.modes {
+            ModeSelection::Count(m) => {
+                if m == 0 || m > p.eigenvalues.len() {
+                    return Err(Error::Parameter(format!(
+                        "--modes {m}: the population of {} shapes has {} modes",
+                        shapes.len(),
+                        p.eigenvalues.len()
+                    )));
+                }
+                m
+            }
+            ModeSelection::Variance(v) => {
+                if !(v > 0.0 && v <= 1.0) {
+                    return Err(Error::Parameter(format!(
+                        "--variance {v} must be in (0, 1]"
+                    )));
+                }
+                p.modes_for_variance(v)
+            }
+        };
+        let mean_shape = Shape {
+            name: "mean".into(),
+            points: mean.clone(),
+            facets: shapes[0].facets.clone(),
+            landmarks: Vec::new(),
+        };
+        let mesh = mesher(&mean_shape)?;
+        Ok(Atlas {
+            mean,
+            modes: p.modes.subcols(0, m).to_owned(),
+            eigenvalues: p.eigenvalues[..m].to_vec(),
+            cumulative_variance: p.cumulative_variance(),
+            facets: shapes[0].facets.clone(),
+            landmarks: shapes[0].landmarks.clone(),
+            mesh,
+            params: *params,
+            training_shapes: shapes.len(),
+        })
+    }
+
+    /// The morph of the mean mesh by the mean shape's points (eq. 9), factorized once for
+    /// every subject: [`crate::mesh::Morpher::new`].
+    pub fn morpher(&self, params: &crate::ffd::FfdParams) -> Result<crate::mesh::Morpher<D>> {
+        crate::mesh::Morpher::new(&self.mean, &self.mesh, params)
+    }
+
+    /// Number of modes `m`.
+    pub fn num_modes(&self) -> usize {
+        self.eigenvalues.len()
+    }
+
+    /// The mean as a shape.
+    pub fn mean_shape(&self) -> Shape<D> {
+        Shape {
+            name: "mean".into(),
+            points: self.mean.clone(),
+            facets: self.facets.clone(),
+            landmarks: self.landmarks.clone(),
+        }
+    }
+
+    /// `S_tilde = S_bar + Psi w` (eq. 4), reference frame. `w.len() == m`.
+    #[track_caller]
+    pub fn instance(&self, w: &[f64]) -> Vec<Point<D>> {
+        assert_eq!(w.len(), self.num_modes(), "instance: one weight per mode");
+        let mut out = self.mean.clone();
+        for (k, &wk) in w.iter().enumerate() {
+            if wk == 0.0 {
+                continue;
+            }
+            let col = self.modes.col(k);
+            for (i, p) in out.iter_mut().enumerate() {
+                for d in 0..D {
+                    p[d] += wk * col[i * D + d];
+                }
+            }
+        }
+        out
+    }
+
+    /// `Psi^T (x - S_bar)`: the weights of the projection of `x` (reference frame, `N` points
+    /// in correspondence) into the model.
+    #[track_caller]
+    pub fn coefficients(&self, x: &[Point<D>]) -> Vec<f64> {
+        assert_eq!(
+            x.len(),
+            self.mean.len(),
+            "coefficients: one point per model point"
+        );
+        (0..self.num_modes())
+            .map(|k| {
+                let col = self.modes.col(k);
+                x.iter()
+                    .zip(&self.mean)
+                    .enumerate()
+                    .map(|(i, (p, m))| (0..D).map(|d| col[i * D + d] * (p[d] - m[d])).sum::<f64>())
+                    .sum()
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,26 @@
+//! The shape model (sections 2.2-2.3): generalized Procrustes analysis into the tangent space
+//! of the mean, principal component analysis, and the atlas that holds the model with the FE
+//! mesh of the mean (section 2.4).
+//!
+//! Reference frame: the GPA frame, centred at the mean's centroid and scaled so that the
+//! mean's bounding box has largest side 1 (as the paper's hands in the unit box), so that the
+//! paper's parameters (gamma, alpha) keep their meaning whatever the units of the data.
+//!
+//! | file | what it computes |
+//! |---|---|
+//! | `procrustes` | similarity fits and GPA (section 2.2, eq. 3) |
+//! | `pca` | eigenmodes and variances of the aligned shapes (section 2.3) |
+//! | `atlas` | [`Atlas`]: build, `mean_shape`, `instance` (eq. 4), `coefficients` |
+//!
+//! The atlas file (save, load) is in [`crate::formats::atlas_file`].
+
+mod atlas;
+mod pca;
+mod procrustes;
+
+pub use atlas::{Atlas, AtlasParams, ModeSelection};
+pub use pca::{Pca, pca};
+pub use procrustes::{Gpa, align_to_mean, fit_similarity, generalized_procrustes};
+
+#[cfg(test)]
+pub(crate) mod tests;

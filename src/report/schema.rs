@@ -1,0 +1,223 @@
+//! The schema of `report.json` (fixed field names, for scripts) and of the shape-model
+//! measures file, and their writing.
+
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Per-subject figures.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SubjectReport {
+    pub name: String,
+    /// Correspondence updates of Algorithm 1.
+    pub iterations: usize,
+    /// Wall time of the fit (seconds).
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub fit_seconds: f64,
+    /// `E_d` (eq. 6) at the end of the fit, subject units squared.
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub e_d: f64,
+    /// Two-way RMS distance between the fitted instance and the subject (subject units).
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub rms_distance: f64,
+    /// `rms_distance` / the subject's bounding-box diagonal.
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub rms_distance_relative: f64,
+    /// Correlation of normals between mean and subject at corresponding points (eq. 13).
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub normal_correlation: f64,
+    /// Baseline (with `--baselines`): normal correlation of the similarity-ICP correspondence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_correlation_icp: Option<f64>,
+    /// Baseline (with `--baselines`): normal correlation of the FFD-registration
+    /// correspondence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_correlation_ffd: Option<f64>,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub jacobian_min: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub scaled_jacobian_min: f64,
+    pub inverted_elements: usize,
+    /// Before the repair (`repair`): inverted elements and the smallest scaled Jacobian.
+    pub inverted_before_repair: usize,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub scaled_jacobian_min_before_repair: f64,
+    /// How far the repair moved boundary nodes off the subject's surface: the largest
+    /// increase of a node's distance to it (subject units; 0 without repair).
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub surface_distance_change: f64,
+    /// `surface_distance_change` over the mesh's median edge length.
+    #[serde(default)]
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub surface_distance_change_edges: f64,
+    /// The scaled Jacobian bound of the repair (0 without repair); `repaired`: whether any
+    /// element was below it before the repair (then nodes were moved).
+    #[serde(default)]
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub repair_bound: f64,
+    #[serde(default)]
+    pub repaired: bool,
+    /// The `alpha` of eq. 9 the morph used (the requested one unless that inverted an
+    /// element; see `Morpher::morph`).
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub morph_alpha: f64,
+    /// Counts of the elements' smallest corner scaled Jacobians in 40 bins of width 0.05
+    /// from -1 to 1 (bin `k` covers `[-1 + 0.05 k, -1 + 0.05 (k + 1))`, the last includes 1).
+    #[serde(default)]
+    pub scaled_jacobian_histogram: Vec<u32>,
+    /// 1st and 5th percentiles of the elements' scaled Jacobians.
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub scaled_jacobian_p01: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub scaled_jacobian_p05: f64,
+    /// The largest element edge ratio (longest edge over shortest) of the mesh written.
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub edge_ratio_max: f64,
+    /// Elements below the usual acceptance bound of their kind (hexahedra 0.5,
+    /// quadrilaterals 0.3, simplices 0.2).
+    pub elements_below_bound: usize,
+    /// `rms_distance_relative < 0.01` and no inverted element.
+    pub success: bool,
+    /// Whether the last inner loop of Algorithm 1 met its tolerance.
+    pub converged: bool,
+    /// `E_d` at every iteration.
+    pub e_d_history: Vec<f64>,
+    /// Output files of this subject, relative to the report.
+    pub files: Vec<String>,
+}
+
+/// Figures over all subjects.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Summary {
+    pub subjects: usize,
+    pub succeeded: usize,
+    pub meshes_valid: usize,
+    /// Subjects that failed (batch fit: see `failed` in the report), and subjects skipped
+    /// because their outputs were complete (resume).
+    #[serde(default)]
+    pub failed: usize,
+    #[serde(default)]
+    pub resumed: usize,
+    /// Subjects whose mesh needed repair, and those still below the repair bound after it.
+    #[serde(default)]
+    pub repaired: usize,
+    #[serde(default)]
+    pub below_repair_bound: usize,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub median_fit_seconds: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub median_rms_distance_relative: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub median_normal_correlation: f64,
+}
+
+/// The mean mesh's figures.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MeanMeshReport {
+    pub nodes: usize,
+    pub elements: usize,
+    pub element_kind: String,
+    pub scaled_jacobian_min: f64,
+    pub jacobian_min: f64,
+    /// The largest element edge ratio (longest edge over shortest).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub edge_ratio_max: f64,
+}
+
+/// `report.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Report {
+    pub dataset: String,
+    pub dimension: usize,
+    pub modes: usize,
+    /// Cumulative variance share, one value per kept mode.
+    pub variance_explained: Vec<f64>,
+    /// Every parameter of the run (enough to repeat it).
+    pub parameters: serde_json::Value,
+    pub mean_mesh: Option<MeanMeshReport>,
+    pub subjects: Vec<SubjectReport>,
+    pub summary: Summary,
+    /// Batch fit: the subjects that failed, with the reason.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub failed: Vec<FailedSubject>,
+    /// Batch fit: the shard (`I/N`) this report covers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<String>,
+    pub atlasmesh_version: String,
+}
+
+/// JSON has no NaN: serde_json writes it as `null`; read `null` back as NaN (a median of no
+/// subjects, a measure that could not be taken).
+fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+impl Summary {
+    /// Summary of the subjects' figures; `failed` subjects that have no report.
+    pub fn of(subjects: &[SubjectReport], failed: usize) -> Self {
+        Summary {
+            subjects: subjects.len() + failed,
+            failed,
+            resumed: 0,
+            succeeded: subjects.iter().filter(|s| s.success).count(),
+            meshes_valid: subjects.iter().filter(|s| s.inverted_elements == 0).count(),
+            repaired: subjects.iter().filter(|s| s.repaired).count(),
+            below_repair_bound: subjects
+                .iter()
+                .filter(|s| s.scaled_jacobian_min < s.repair_bound)
+                .count(),
+            median_fit_seconds: median(subjects.iter().map(|s| s.fit_seconds).collect()),
+            median_rms_distance_relative: median(
+                subjects.iter().map(|s| s.rms_distance_relative).collect(),
+            ),
+            median_normal_correlation: median(
+                subjects.iter().map(|s| s.normal_correlation).collect(),
+            ),
+        }
+    }
+}
+
+impl Report {
+    /// Writes the report as pretty JSON (atomically). NaN becomes null.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let s = serde_json::to_string_pretty(self)
+            .map_err(|e| Error::Numerical(format!("report: {e}")))?;
+        crate::formats::write_atomic(path, s.as_bytes())
+    }
+}
+
+/// A subject that failed: its name, its input file and why.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FailedSubject {
+    pub name: String,
+    pub input: String,
+    pub error: String,
+    /// The exit code of the error's class (2 bad input, 3 I/O, 4 numerics or invalid mesh).
+    pub exit_code: u8,
+}
+
+use crate::eval::ShapeModelMeasures;
+
+impl ShapeModelMeasures {
+    /// Writes the measures as JSON (temporary name, then rename).
+    pub fn write(&self, path: &std::path::Path) -> crate::error::Result<()> {
+        let bytes = serde_json::to_vec_pretty(self)
+            .map_err(|e| crate::error::Error::io(path, std::io::Error::other(e.to_string())))?;
+        crate::formats::write_atomic(path, &bytes)
+    }
+}

@@ -1,0 +1,125 @@
+//! The leave-one-out experiment (section 6.1).
+
+use super::*;
+use crate::error::{Error, Result};
+use crate::fit::Fitter;
+use crate::formats::create_dir;
+use crate::geometry::Shape;
+use crate::mesh::FeMesh;
+use crate::report::{Report, SubjectReport};
+use rayon::prelude::*;
+use std::path::Path;
+
+/// The paper's leave-one-out experiment (section 6.1): for every shape, the atlas from the
+/// others, a fit of the held-out shape (its known correspondence unused: it is fitted as an
+/// outline), the morphed mesh and the measures. Writes `out/report.json`, each subject's VTU,
+/// VTP and plot, and the population plots. `jobs` threads (0 = all cores).
+pub fn leave_one_out<const D: usize>(
+    shapes: &[Shape<D>],
+    dataset: &str,
+    params: &RunParams,
+    out: &Path,
+    jobs: usize,
+    progress: &dyn Progress,
+) -> Result<Report> {
+    leave_one_out_of(shapes, shapes, None, dataset, params, out, jobs, progress)
+}
+
+/// Leave-one-out where the atlas of fold `k` is built from `corresponded` without entry `k`
+/// (with `meshes`, one template volume mesh per shape, the mean of the training ones as its
+/// FE mesh), and `subjects[k]` (the same shape as given, before registration) is the one
+/// fitted.
+#[allow(clippy::too_many_arguments)]
+pub fn leave_one_out_of<const D: usize>(
+    corresponded: &[Shape<D>],
+    subjects: &[Shape<D>],
+    meshes: Option<&[FeMesh<D>]>,
+    dataset: &str,
+    params: &RunParams,
+    out: &Path,
+    jobs: usize,
+    progress: &dyn Progress,
+) -> Result<Report> {
+    let shapes = corresponded;
+    if subjects.len() != shapes.len() {
+        return Err(Error::Population(format!(
+            "{} subjects for {} corresponded shapes",
+            subjects.len(),
+            shapes.len()
+        )));
+    }
+    if let Some(m) = meshes
+        && m.len() != shapes.len()
+    {
+        return Err(Error::Population(format!(
+            "leave-one-out with template meshes needs one per shape: {} meshes, {} shapes",
+            m.len(),
+            shapes.len()
+        )));
+    }
+    if shapes.len() < 4 {
+        return Err(Error::Population(format!(
+            "leave-one-out needs at least 4 shapes, got {}",
+            shapes.len()
+        )));
+    }
+    create_dir(out)?;
+    // The full atlas, for the variance figures and to check the population once.
+    let step = "atlas of all shapes (GPA, PCA, mesh of the mean)";
+    progress.step_started(step);
+    let full = atlas_of(shapes, meshes, params)?;
+    progress.step_finished(step);
+    let label = "leave-one-out";
+    progress.items_started(label, shapes.len());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| Error::Parameter(format!("--jobs: {e}")))?;
+    let results: Vec<Result<SubjectReport>> = pool.install(|| {
+        (0..shapes.len())
+            .into_par_iter()
+            .map(|k| {
+                let training: Vec<Shape<D>> = shapes
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i != k)
+                    .map(|(_, s)| s.clone())
+                    .collect();
+                let training_meshes: Option<Vec<FeMesh<D>>> = meshes.map(|m| {
+                    m.iter()
+                        .enumerate()
+                        .filter(|(i, _)| *i != k)
+                        .map(|(_, x)| x.clone())
+                        .collect()
+                });
+                let atlas = atlas_of(&training, training_meshes.as_deref(), params)?;
+                let fitter = Fitter::new(&atlas);
+                let morpher = atlas.morpher(&params.morph)?;
+                let r = process_subject(&atlas, &fitter, &morpher, &subjects[k], out, params);
+                progress.item_done(label, &subjects[k].name);
+                r
+            })
+            .collect()
+    });
+    progress.items_finished(label);
+    let subjects = results.into_iter().collect::<Result<Vec<_>>>()?;
+    // Compactness, generalization and specificity of the population's model, for the HTML
+    // report (up to 10 modes, 200 random instances).
+    let measures = if params.plots {
+        crate::eval::shape_model_measures(shapes, 10, 200, 0).ok()
+    } else {
+        None
+    };
+    finish_report(
+        out,
+        dataset,
+        &full,
+        subjects,
+        params,
+        Some(mean_mesh_report(&full)),
+        crate::study::batch::BatchFacts {
+            measures,
+            ..Default::default()
+        },
+    )
+}

@@ -1,0 +1,52 @@
+//! The stages strung together into studies: loading a population, building an atlas, one
+//! subject's fit, morph, repair and measures as a value ([`fit_subject`]) and its writing
+//! ([`write_subject`]) as a separate step, the leave-one-out experiment (section 6.1),
+//! batches of subjects (parallel, resumable, shardable), and the built-in demo. The command
+//! line calls these.
+//!
+//! | file | what it does |
+//! |---|---|
+//! | `params` | [`RunParams`]: every parameter of a run |
+//! | `progress` | [`Progress`]: the callback through which long work reports progress |
+//! | `population` | loading outlines and surfaces, landmarks, registration to a template |
+//! | `build` | the atlas of a population, written with its mean mesh |
+//! | `sets` | sets and decks on the atlas's mean mesh |
+//! | `subject` | [`fit_subject`]: one subject's fit, morph, repair and measures |
+//! | `baselines` | the paper's ICP and FFD baselines (fig. 12/20) |
+//! | `write_subject` | [`write_subject`]: a subject's meshes, deck, surface, pictures |
+//! | `report_files` | the population plots, `report.json` and `report.html` |
+//! | `leave_one_out` | the leave-one-out experiment |
+//! | `batch` | batches of subjects from files or memory |
+//! | `mesh_file` | quality, conversion and repair of mesh files |
+//! | `register_pair` | one registration, written out |
+//! | `demo` | the built-in demo |
+
+mod baselines;
+pub mod batch;
+mod build;
+mod demo;
+mod leave_one_out;
+mod mesh_file;
+mod params;
+mod population;
+mod progress;
+mod register_pair;
+mod report_files;
+mod sets;
+mod subject;
+mod write_subject;
+
+pub use baselines::*;
+pub use batch::{BatchFacts, BatchOptions, fit_batch, fit_shapes};
+pub use build::*;
+pub use demo::*;
+pub use leave_one_out::*;
+pub use mesh_file::*;
+pub use params::*;
+pub use population::*;
+pub use progress::{Progress, Silent};
+pub use register_pair::{PairRegistration, register_pair};
+pub use report_files::*;
+pub use sets::*;
+pub use subject::*;
+pub use write_subject::*;

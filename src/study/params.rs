@@ -1,0 +1,59 @@
+//! All parameters of a run.
+
+use super::*;
+use crate::ffd::FfdParams;
+use crate::fit::FitParams;
+use crate::model::AtlasParams;
+use rayon::prelude::*;
+
+/// All parameters of a run.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RunParams {
+    pub atlas: AtlasParams,
+    pub fit: FitParams,
+    pub morph: FfdParams,
+    /// Write PNG plots.
+    pub plots: bool,
+    /// Also measure the paper's baselines (fig. 12/20): the normal correlation of the
+    /// correspondence by a similarity ICP and by an FFD registration of the mean to the
+    /// subject.
+    pub baselines: bool,
+    /// Formats of every subject's FE mesh (`NAME_mesh.EXT`).
+    pub formats: Vec<crate::formats::MeshFormat>,
+    /// Sets defined on the mean mesh (added to those the atlas carries).
+    #[serde(skip)]
+    pub sets: Option<crate::mesh::sets::SetsConfig>,
+    /// A whole Abaqus/CalculiX deck around the atlas's mean mesh: every subject gets a copy
+    /// with its node coordinates (`NAME_deck.inp`).
+    #[serde(skip)]
+    pub deck: Option<std::sync::Arc<crate::formats::InpDeck>>,
+    /// Repair of every morphed mesh (untangling and quality; `None`: off).
+    pub repair: Option<crate::mesh::repair::RepairParams>,
+    /// A fit whose two-way RMS distance to its subject (eq. 6 both ways) exceeds this share
+    /// of the subject's bounding-box diagonal did not converge: the subject is refused
+    /// ([`Error::NotConverged`]) and no mesh is written for it. A good fit is below 0.01. With
+    /// `fit.partial` the distance is the subject's to the instance only.
+    #[serde(default = "default_max_misfit")]
+    pub max_misfit: f64,
+}
+
+fn default_max_misfit() -> f64 {
+    0.05
+}
+
+impl Default for RunParams {
+    fn default() -> Self {
+        RunParams {
+            baselines: false,
+            formats: vec![crate::formats::MeshFormat::Vtu],
+            sets: None,
+            deck: None,
+            repair: Some(crate::mesh::repair::RepairParams::default()),
+            max_misfit: default_max_misfit(),
+            atlas: AtlasParams::default(),
+            fit: FitParams::default(),
+            morph: FfdParams::default(),
+            plots: true,
+        }
+    }
+}

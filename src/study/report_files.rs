@@ -1,0 +1,86 @@
+//! The population-level plots, `report.json` and `report.html` of a run.
+
+use super::*;
+use crate::error::Result;
+use crate::model::Atlas;
+use crate::report::{
+    JACOBIAN_BINS, MeanMeshReport, Report, SubjectReport, Summary, plot_cumulative_variance,
+    plot_e_d, plot_jacobian_histogram,
+};
+use rayon::prelude::*;
+use std::path::Path;
+
+/// Writes the population-level plots and the report.
+pub(crate) fn finish_report<const D: usize>(
+    out: &Path,
+    dataset: &str,
+    atlas_for_variance: &Atlas<D>,
+    subjects: Vec<SubjectReport>,
+    params: &RunParams,
+    mean_mesh: Option<MeanMeshReport>,
+    batch: crate::study::batch::BatchFacts,
+) -> Result<Report> {
+    let crate::study::batch::BatchFacts {
+        failed,
+        shard,
+        resumed,
+        measures,
+    } = batch;
+    let m = atlas_for_variance.num_modes();
+    if params.plots {
+        plot_cumulative_variance(
+            &out.join("cumulative_variance.png"),
+            &atlas_for_variance.cumulative_variance,
+            m,
+        )?;
+        let hist: Vec<(String, Vec<f64>)> = subjects
+            .iter()
+            .map(|s| (s.name.clone(), s.e_d_history.clone()))
+            .collect();
+        plot_e_d(&out.join("e_d.png"), &hist)?;
+        let mut counts = vec![0u32; JACOBIAN_BINS];
+        for s in &subjects {
+            for (c, v) in counts.iter_mut().zip(&s.scaled_jacobian_histogram) {
+                *c += v;
+            }
+        }
+        plot_jacobian_histogram(&out.join("scaled_jacobians.png"), &counts)?;
+    }
+    let report = Report {
+        dataset: dataset.to_string(),
+        dimension: D,
+        modes: m,
+        variance_explained: atlas_for_variance.cumulative_variance[..m].to_vec(),
+        parameters: serde_json::to_value(params).unwrap_or_default(),
+        mean_mesh,
+        summary: Summary {
+            resumed,
+            ..Summary::of(&subjects, failed.len())
+        },
+        failed,
+        shard,
+        subjects,
+        atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
+    };
+    report.write(&out.join("report.json"))?;
+    if params.plots {
+        let mut pictures = crate::report::html::Pictures::default();
+        if let Some(m) = &measures {
+            crate::report::plot_shape_model_measures(&out.join("measures.png"), m, "")?;
+            pictures.measures = Some("measures.png".into());
+        }
+        if report
+            .subjects
+            .iter()
+            .any(|s| s.normal_correlation_icp.is_some())
+        {
+            crate::report::plot_baselines(&out.join("baselines.png"), &report.subjects)?;
+        }
+        if atlas_for_variance.num_modes() > 0 {
+            crate::report::plot_modes(&out.join("modes.png"), atlas_for_variance)?;
+            pictures.modes = Some("modes.png".into());
+        }
+        crate::report::html::write(&out.join("report.html"), &report, out, &pictures)?;
+    }
+    Ok(report)
+}

@@ -1,0 +1,144 @@
+//! One subject: fit (Algorithm 1), morph (eq. 9), repair and the measures of section 5, as a
+//! value; nothing is written here.
+
+use super::{RunParams, baseline_correlations};
+use crate::error::{Error, Result};
+use crate::eval::{e_d, normal_correlation, normals_at, two_way_rms};
+use crate::fit::{FitResult, Fitter};
+use crate::geometry::{ClosestPointIndex, Shape};
+use crate::mesh::quality::{ElementQuality, distribution, summarize};
+use crate::mesh::{FeMesh, Morpher, repair_with_quality};
+use crate::model::Atlas;
+use crate::report::{SubjectReport, jacobian_histogram};
+use std::time::Instant;
+
+/// What one subject's fit, morph and repair produced, in memory.
+#[derive(Clone)]
+pub struct SubjectOutcome<const D: usize> {
+    /// The fit (Algorithm 1): weights, pose, instance and its projection (subject frame).
+    pub fit: FitResult<D>,
+    /// The subject's FE mesh: the mean mesh morphed and repaired (subject frame and units).
+    pub mesh: FeMesh<D>,
+    /// Corner Jacobians of every element of `mesh` (section 5.3).
+    pub quality: Vec<ElementQuality>,
+    /// The subject's closest-point index (the pictures measure distances with it).
+    pub index: ClosestPointIndex<D>,
+    /// The measures of `report.json` (`files` empty until the subject is written).
+    pub report: SubjectReport,
+}
+
+/// Fits `subject` with the atlas (Algorithm 1), morphs the mean mesh onto it (eq. 9), repairs
+/// the morphed mesh and takes the measures of section 5; writes nothing
+/// ([`write_subject`](super::write_subject) does).
+///
+/// # Errors
+/// [`Error::NotConverged`] when the fitted instance stays farther from the subject than
+/// `params.max_misfit` of its bounding-box diagonal; the errors of the fit, the morph and the
+/// repair.
+pub fn fit_subject<const D: usize>(
+    atlas: &Atlas<D>,
+    fitter: &Fitter<D>,
+    morpher: &Morpher<D>,
+    subject: &Shape<D>,
+    params: &RunParams,
+) -> Result<SubjectOutcome<D>> {
+    let index = ClosestPointIndex::from_shape(subject);
+    let t0 = Instant::now();
+    let fit = fitter.fit(subject, &index, &params.fit)?;
+    let fit_seconds = t0.elapsed().as_secs_f64();
+    let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
+    let rel = rms / subject.bbox_diagonal();
+    // A partial subject (`--partial`) misses parts of the model: only its own points' distance
+    // to the instance can tell whether the fit converged.
+    let misfit = if params.fit.partial {
+        let on_instance = ClosestPointIndex::new(&fit.instance, &atlas.facets);
+        let ms = subject
+            .points
+            .iter()
+            .map(|p| on_instance.closest(p).dist2)
+            .sum::<f64>()
+            / subject.points.len().max(1) as f64;
+        ms.sqrt() / subject.bbox_diagonal()
+    } else {
+        rel
+    };
+    if misfit.is_nan() || misfit > params.max_misfit {
+        return Err(Error::NotConverged {
+            name: subject.name.clone(),
+            message: format!(
+                "the fitted model instance stays {:.4} (RMS distance; {:.1} % of the subject's \
+                 bounding-box diagonal) from the subject, above the bound of {:.1} % \
+                 (--max-misfit): the subject lies outside what the model can represent",
+                misfit * subject.bbox_diagonal(),
+                100.0 * misfit,
+                100.0 * params.max_misfit
+            ),
+        });
+    }
+    let morph = morpher.morph(&fit.correspondence())?;
+    let mut mesh = morph.mesh;
+    let mut per_element = morph.quality;
+    let unrepaired = summarize(&per_element);
+    let mut repair = None;
+    if let Some(rp) = &params.repair {
+        let (r, q) = repair_with_quality(&mut mesh, Some(&index), rp, &per_element)?;
+        per_element = q;
+        repair = Some(r);
+    }
+    let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
+    let q = summarize(&per_element);
+    let dist = distribution(&mesh, &per_element);
+    let mean_normals = atlas.mean_shape().vertex_normals();
+    let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
+    let baselines = if params.baselines {
+        Some(baseline_correlations(
+            atlas,
+            subject,
+            &index,
+            &mean_normals,
+        )?)
+    } else {
+        None
+    };
+    let report = SubjectReport {
+        name: subject.name.clone(),
+        iterations: fit.iterations,
+        fit_seconds,
+        e_d: e_d(&fit.instance, &index),
+        rms_distance: rms,
+        rms_distance_relative: rel,
+        normal_correlation: nc,
+        normal_correlation_icp: baselines.map(|b| b.0),
+        normal_correlation_ffd: baselines.map(|b| b.1),
+        jacobian_min: q.jacobian_min,
+        scaled_jacobian_min: q.scaled_jacobian_min,
+        inverted_elements: q.inverted_elements,
+        inverted_before_repair: unrepaired.inverted_elements,
+        scaled_jacobian_min_before_repair: unrepaired.scaled_jacobian_min,
+        surface_distance_change,
+        surface_distance_change_edges: repair.map_or(0.0, |r| {
+            r.surface_distance_change / r.median_edge.max(f64::MIN_POSITIVE)
+        }),
+        repair_bound: repair.map_or(0.0, |r| r.bound),
+        repaired: repair.is_some_and(|r| r.below_bound_before > 0),
+        morph_alpha: morph.alpha,
+        scaled_jacobian_histogram: jacobian_histogram(
+            per_element.iter().map(|e| e.scaled_jacobian_min),
+        ),
+        scaled_jacobian_p01: dist.scaled_jacobian_p01,
+        scaled_jacobian_p05: dist.scaled_jacobian_p05,
+        edge_ratio_max: dist.edge_ratio_max,
+        elements_below_bound: dist.elements_below_bound,
+        success: rel < 0.01 && q.inverted_elements == 0,
+        converged: fit.converged,
+        e_d_history: fit.e_d_history.clone(),
+        files: Vec::new(),
+    };
+    Ok(SubjectOutcome {
+        fit,
+        mesh,
+        quality: per_element,
+        index,
+        report,
+    })
+}

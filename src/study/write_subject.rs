@@ -1,0 +1,202 @@
+//! Writing one subject: its meshes in every format, its deck, its fitted surface and its
+//! pictures, beside the measures that [`fit_subject`](super::fit_subject) took.
+
+use super::{RunParams, SubjectOutcome};
+use crate::error::Result;
+use crate::fit::Fitter;
+use crate::formats::{write_atomic, write_mesh, write_vtp};
+use crate::geometry::{Point, Shape, same_dim};
+use crate::mesh::{FeMesh, Morpher};
+use crate::model::Atlas;
+use crate::report::{SubjectReport, plot_subject};
+use std::path::Path;
+
+/// [`fit_subject`](super::fit_subject), then [`write_subject`]: one subject fitted, morphed,
+/// repaired, measured and written into `out`.
+pub fn process_subject<const D: usize>(
+    atlas: &Atlas<D>,
+    fitter: &Fitter<D>,
+    morpher: &Morpher<D>,
+    subject: &Shape<D>,
+    out: &Path,
+    params: &RunParams,
+) -> Result<SubjectReport> {
+    let outcome = super::fit_subject(atlas, fitter, morpher, subject, params)?;
+    write_subject(atlas, subject, outcome, out, params)
+}
+
+/// Writes what [`fit_subject`](super::fit_subject) made of `subject` into `out`: the mesh in
+/// every `params.formats` (`NAME_mesh.EXT`, with the mean mesh in the subject's frame beside
+/// it for the displacement), the deck (`NAME_deck.inp`), the fitted surface or outline
+/// (`NAME_fit.vtp`) and, with `params.plots`, its pictures. Returns the subject's report with
+/// the files written (relative to `out`).
+pub fn write_subject<const D: usize>(
+    atlas: &Atlas<D>,
+    subject: &Shape<D>,
+    outcome: SubjectOutcome<D>,
+    out: &Path,
+    params: &RunParams,
+) -> Result<SubjectReport> {
+    let SubjectOutcome {
+        fit,
+        mesh,
+        quality: per_element,
+        index,
+        mut report,
+    } = outcome;
+    let base = file_name(&subject.name);
+    let mut files = Vec::new();
+    let mean_in_subject = atlas.mesh.with_nodes(
+        atlas
+            .mesh
+            .nodes
+            .iter()
+            .map(|p| fit.similarity.apply(p))
+            .collect(),
+    );
+    for f in &params.formats {
+        let mesh_file = format!("{base}_mesh.{}", f.extension());
+        write_mesh(
+            &out.join(&mesh_file),
+            &mesh,
+            Some(&mean_in_subject),
+            &per_element,
+        )?;
+        files.push(mesh_file);
+    }
+    if let Some(deck) = &params.deck {
+        let deck_file = format!("{base}_deck.inp");
+        write_atomic(
+            &out.join(&deck_file),
+            deck.with_nodes(&mesh.nodes)?.as_bytes(),
+        )?;
+        files.push(deck_file);
+    }
+    let fitted = Shape {
+        name: subject.name.clone(),
+        points: fit.projected.iter().map(|p| p.point).collect(),
+        facets: atlas.facets.clone(),
+        landmarks: atlas.landmarks.clone(),
+    };
+    let outline_file = format!("{base}_fit.vtp");
+    write_vtp(&out.join(&outline_file), &fitted)?;
+    files.push(outline_file);
+    if params.plots && D == 3 {
+        // Figs. 23 and 27: the fitted surface coloured by its distance to the subject, and the
+        // morphed mesh's surface coloured by scaled Jacobian, seen alike.
+        use crate::report::render;
+        let to3 = |v: &[Point<D>]| -> Vec<Point<3>> { v.iter().map(same_dim::<D, 3>).collect() };
+        let instance = to3(&fit.instance);
+        let distance: Vec<f64> = fit
+            .instance
+            .iter()
+            .map(|p| index.closest(p).dist2.sqrt())
+            .collect();
+        let tris: Vec<[usize; 3]> = atlas
+            .facets
+            .iter()
+            .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
+            .collect();
+        let view = render::View::fitting(&to3(&subject.points));
+        let far = 0.01 * subject.bbox_diagonal();
+        let by_distance = render::distance_color(far);
+        let mesh3 = FeMesh {
+            nodes: to3(&mesh.nodes),
+            kind: mesh.kind,
+            connectivity: mesh.connectivity.clone(),
+            sets: Default::default(),
+        };
+        let sj: Vec<f64> = per_element.iter().map(|e| e.scaled_jacobian_min).collect();
+        let (btris, bvals) = render::boundary_triangles(&mesh3, &sj);
+        type Picture<'a> = (
+            &'a str,
+            &'a [Point<3>],
+            &'a [[usize; 3]],
+            Option<&'a [f64]>,
+            Option<&'a [f64]>,
+            render::Legend<'a>,
+        );
+        let pictures: [Picture; 2] = [
+            (
+                "distance",
+                &instance,
+                &tris,
+                Some(&distance),
+                None,
+                render::Legend {
+                    color: &by_distance,
+                    lo: 0.0,
+                    hi: far,
+                    lo_label: "0".into(),
+                    hi_label: format!("{far:.3} (1 % diag.)"),
+                },
+            ),
+            (
+                "quality",
+                &mesh3.nodes,
+                &btris,
+                None,
+                Some(&bvals),
+                render::Legend {
+                    color: &render::jacobian_color,
+                    lo: 0.0,
+                    hi: 1.0,
+                    lo_label: "≤ 0".into(),
+                    hi_label: "1".into(),
+                },
+            ),
+        ];
+        for (what, points, facets, vertex, face, legend) in pictures {
+            let img = render::render(points, facets, vertex, face, legend.color, &view, 480, 360);
+            let title = match what {
+                "distance" => format!("{}: fit, distance to the subject", subject.name),
+                _ => format!("{}: morphed mesh, scaled Jacobian", subject.name),
+            };
+            let img = render::annotated(&img, &title, Some(&legend));
+            let name = format!("{base}_{what}.png");
+            write_atomic(&out.join(&name), &img.png()?)?;
+            files.push(name);
+        }
+    }
+    if params.plots && D == 2 {
+        let png = format!("{base}.png");
+        let to2 = |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
+        let mean_pts: Vec<Point<2>> = atlas
+            .mean
+            .iter()
+            .map(|p| same_dim::<D, 2>(&fit.similarity.apply(p)))
+            .collect();
+        let closed = subject.facets.len() == subject.points.len();
+        let locus: Vec<Vec<Point<2>>> = fit.locus.iter().map(|l| to2(l)).collect();
+        let mesh2 = FeMesh {
+            nodes: to2(&mesh.nodes),
+            kind: mesh.kind,
+            connectivity: mesh.connectivity.clone(),
+            sets: Default::default(),
+        };
+        plot_subject(
+            &out.join(&png),
+            &subject.name,
+            &mean_pts,
+            &to2(&subject.points),
+            &locus,
+            &mesh2,
+            closed,
+        )?;
+        files.push(png);
+    }
+    report.files = files;
+    Ok(report)
+}
+
+pub(crate) fn file_name(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,319 @@
+//! Batch fitting (issue 7) through the CLI on a seeded synthetic population of closed
+//! surfaces (the 3D demo's; no data needed): resume after a kill gives the outputs of an
+//! uninterrupted run, shards are disjoint and cover the list and their reports merge, and a
+//! subject that fails is reported while the batch goes on.
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::atlasmesh;
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// An atlas of 16 synthetic surfaces and `n` other ones as subjects (PLY files).
+fn setup(name: &str, n: usize) -> (PathBuf, PathBuf, Vec<PathBuf>) {
+    let d = common::temp_dir(name);
+    let shapes = atlasmesh::study::demo_population_3d(16 + n, 12, 7).unwrap();
+    let mut files = Vec::new();
+    for (k, shape) in shapes.iter().enumerate() {
+        let p = d.join(format!("shape{k:02}.ply"));
+        atlasmesh::formats::write_ply(&p, shape).unwrap();
+        files.push(p);
+    }
+    let atlas = d.join("atlas.safetensors");
+    let mut args: Vec<String> = vec!["build".into(), "--shapes".into()];
+    args.extend(files[..16].iter().map(|p| s(p)));
+    args.extend(
+        [
+            "--modes",
+            "4",
+            "--element-size",
+            "0.1",
+            "--no-plots",
+            "--out",
+        ]
+        .map(String::from),
+    );
+    args.push(s(&atlas));
+    let o = atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let subjects = d.join("subjects");
+    std::fs::create_dir_all(&subjects).unwrap();
+    let mut list = Vec::new();
+    for f in &files[16..] {
+        let to = subjects.join(f.file_name().unwrap());
+        std::fs::rename(f, &to).unwrap();
+        list.push(to);
+    }
+    (d, atlas, list)
+}
+
+fn fit_args(atlas: &Path, subjects: &Path, out: &Path) -> Vec<String> {
+    vec![
+        "fit".into(),
+        "--atlas".into(),
+        s(atlas),
+        "--subjects".into(),
+        s(subjects),
+        "--no-plots".into(),
+        "--out".into(),
+        s(out),
+    ]
+}
+
+fn report(out: &Path) -> atlasmesh::report::Report {
+    serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap()
+}
+
+/// Every file of a batch folder (relative path, bytes), without report.json.
+fn outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(out).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            for f in std::fs::read_dir(&p).unwrap() {
+                let f = f.unwrap().path();
+                let rel = f.strip_prefix(out).unwrap().display().to_string();
+                v.push((rel, std::fs::read(&f).unwrap()));
+            }
+        }
+    }
+    v.sort();
+    v
+}
+
+#[test]
+fn a_killed_batch_resumes_where_it_stopped() {
+    let (d, atlas, subjects) = setup("batch-resume", 24);
+    let dir = subjects[0].parent().unwrap();
+    // The whole batch at once.
+    let whole = d.join("whole");
+    let o = atlasmesh(&fit_args(&atlas, dir, &whole));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&whole);
+    assert_eq!(r.summary.subjects, 24);
+    assert_eq!(r.summary.meshes_valid, 24);
+    assert_eq!(r.summary.resumed, 0);
+    // Killed after a few subjects (one worker), then run again.
+    let part = d.join("part");
+    let mut args = fit_args(&atlas, dir, &part);
+    args.extend(["--jobs".into(), "1".into()]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args(&args)
+        .arg("--quiet")
+        .spawn()
+        .unwrap();
+    let records = |out: &Path| {
+        std::fs::read_dir(out)
+            .map(|r| {
+                r.filter(|e| {
+                    e.as_ref()
+                        .is_ok_and(|e| e.path().join(atlasmesh::study::batch::RECORD).is_file())
+                })
+                .count()
+            })
+            .unwrap_or(0)
+    };
+    let t = std::time::Instant::now();
+    while records(&part) < 4 && t.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    let status = child.wait().unwrap();
+    assert!(!status.success(), "the batch was killed before its end");
+    assert!(!part.join("report.json").exists());
+    let done = records(&part);
+    assert!((4..24).contains(&done), "{done} subjects done at the kill");
+    // Whatever the kill left, no file under its final name is half-written: every mesh
+    // there reads.
+    for (f, _) in outputs(&part) {
+        if f.ends_with("_mesh.vtu") {
+            atlasmesh::formats::read_vtu(&part.join(&f)).unwrap();
+        }
+    }
+    let o = atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r2 = report(&part);
+    assert_eq!(r2.summary.resumed, done, "only the rest was fitted");
+    assert_eq!(r2.summary.subjects, 24);
+    // The same outputs as the uninterrupted run, byte for byte (temporary files aside).
+    let clean = |v: Vec<(String, Vec<u8>)>| -> Vec<(String, Vec<u8>)> {
+        v.into_iter()
+            .filter(|(f, _)| !f.contains(".tmp-"))
+            .collect()
+    };
+    let (a, b) = (clean(outputs(&whole)), clean(outputs(&part)));
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.0, y.0);
+        if x.0.ends_with(atlasmesh::study::batch::RECORD) {
+            // The record holds the fit time.
+            let strip = |v: &[u8]| {
+                let mut r: atlasmesh::study::batch::SubjectRecord =
+                    serde_json::from_slice(v).unwrap();
+                r.report.fit_seconds = 0.0;
+                r.input.clear();
+                serde_json::to_string(&r).unwrap()
+            };
+            assert_eq!(strip(&x.1), strip(&y.1), "{}", x.0);
+        } else {
+            assert!(x.1 == y.1, "{} differs from the uninterrupted run", x.0);
+        }
+    }
+    // A third run does nothing; a changed input is fitted again.
+    let o = atlasmesh(&args);
+    assert!(o.status.success());
+    assert_eq!(report(&part).summary.resumed, 24);
+    let shape = atlasmesh::formats::read_surface(&subjects[3]).unwrap();
+    let mut moved = shape.clone();
+    moved.points.iter_mut().for_each(|p| p[0] += 0.01);
+    atlasmesh::formats::write_ply(&subjects[3], &moved).unwrap();
+    let o = atlasmesh(&args);
+    assert!(o.status.success());
+    assert_eq!(report(&part).summary.resumed, 23);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn shards_cover_the_batch_and_merge() {
+    let (d, atlas, subjects) = setup("batch-shards", 7);
+    let list = d.join("subjects.list");
+    std::fs::write(
+        &list,
+        subjects
+            .iter()
+            .map(|p| format!("subjects/{}\n", p.file_name().unwrap().to_string_lossy()))
+            .collect::<String>(),
+    )
+    .unwrap();
+    let mut reports = Vec::new();
+    let mut names = Vec::new();
+    for i in 0..3 {
+        let out = d.join(format!("shard{i}"));
+        let mut args = fit_args(&atlas, &list, &out);
+        args.extend(["--shard".into(), format!("{i}/3")]);
+        let o = atlasmesh(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r = report(&out);
+        assert_eq!(r.shard.as_deref(), Some(format!("{i}/3").as_str()));
+        names.extend(r.subjects.iter().map(|s| s.name.clone()));
+        reports.push(s(&out.join("report.json")));
+    }
+    let n = names.len();
+    names.sort();
+    names.dedup();
+    assert_eq!(names.len(), n, "shards are disjoint");
+    assert_eq!(n, 7, "shards cover the list");
+    let merged = d.join("merged.json");
+    let mut args = vec!["merge-reports".to_string()];
+    args.extend(reports.iter().cloned());
+    args.extend(["--out".into(), s(&merged)]);
+    let o = atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: atlasmesh::report::Report =
+        serde_json::from_slice(&std::fs::read(&merged).unwrap()).unwrap();
+    assert_eq!(m.summary.subjects, 7);
+    assert_eq!(
+        m.subjects
+            .iter()
+            .map(|s| s.name.clone())
+            .collect::<Vec<_>>(),
+        names
+    );
+    // A shard merged twice is refused.
+    let mut args = vec!["merge-reports".to_string(), reports[0].clone()];
+    args.extend([reports[0].clone(), "--out".into(), s(&d.join("twice.json"))]);
+    let o = atlasmesh(&args);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("in two of the reports"));
+    // A bad shard spec.
+    let mut args = fit_args(&atlas, &list, &d.join("bad"));
+    args.extend(["--shard".into(), "3/3".into()]);
+    let o = atlasmesh(&args);
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn a_failing_subject_is_reported_and_the_batch_goes_on() {
+    let (d, atlas, subjects) = setup("batch-fail", 3);
+    // A truncated binary PLY beside the good subjects.
+    let bytes = std::fs::read(&subjects[0]).unwrap();
+    let bad = subjects[0].with_file_name("truncated.ply");
+    std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
+    let out = d.join("out");
+    let o = atlasmesh(&fit_args(&atlas, subjects[0].parent().unwrap(), &out));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(6), "some subjects failed: {err}");
+    assert!(err.contains("truncated"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let r = report(&out);
+    assert_eq!(r.summary.subjects, 4);
+    assert_eq!(r.summary.failed, 1);
+    assert_eq!(r.failed[0].name, "truncated");
+    assert_eq!(r.failed[0].exit_code, 2);
+    assert_eq!(r.subjects.len(), 3);
+    assert!(r.subjects.iter().all(|s| s.inverted_elements == 0));
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// The shipped Slurm array script (`scripts/atlasmesh-array.sbatch`) through a real cluster
+/// (`scripts/slurm-single-node.sh` starts one; `.ci/run` does): three array tasks, one shard
+/// each, then `merge-reports`.
+#[test]
+fn a_slurm_array_job_fits_the_shards() {
+    let up = Command::new("sinfo")
+        .args(["-h", "-o", "%T"])
+        .output()
+        .is_ok_and(|o| o.status.success() && !o.stdout.is_empty());
+    if !up {
+        assert!(
+            std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
+            "a Slurm cluster is required (sinfo does not answer; see scripts/slurm-single-node.sh)"
+        );
+        eprintln!("Slurm array job: skipped (no cluster; scripts/slurm-single-node.sh starts one)");
+        return;
+    }
+    let (d, atlas, subjects) = setup("batch-slurm", 7);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/atlasmesh-array.sbatch");
+    let out = d.join("out");
+    let o = Command::new("sbatch")
+        .args(["--wait", "--array=0-2", "--mem=500M"])
+        .arg(format!("--chdir={}", d.display()))
+        .arg(&script)
+        .arg(&atlas)
+        .arg(subjects[0].parent().unwrap())
+        .arg(&out)
+        .env("ATLASMESH", env!("CARGO_BIN_EXE_atlasmesh"))
+        .output()
+        .unwrap();
+    let logs: String = std::fs::read_dir(&d)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".log"))
+        .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
+        .collect();
+    assert!(
+        o.status.success(),
+        "sbatch: {}{}\n{logs}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let mut args = vec!["merge-reports".to_string()];
+    for i in 0..3 {
+        let r = out.join(format!("shard-{i}/report.json"));
+        assert!(r.is_file(), "task {i} wrote no report: {logs}");
+        args.push(s(&r));
+    }
+    args.extend(["--out".into(), s(&out.join("report.json"))]);
+    let o = atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&out);
+    assert_eq!(r.summary.subjects, 7);
+    assert_eq!(r.summary.meshes_valid, 7);
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -1,0 +1,328 @@
+//! Shared helpers of the integration tests.
+
+use std::path::PathBuf;
+
+/// The data folder named by `ATLASMESH_DATA`, or `None` (the test prints that it was skipped).
+/// When the variable is set, a missing folder is a failure.
+pub fn data_dir(test: &str) -> Option<PathBuf> {
+    match std::env::var_os("ATLASMESH_DATA") {
+        None => {
+            eprintln!("{test}: skipped (ATLASMESH_DATA is not set)");
+            None
+        }
+        Some(d) => {
+            let p = PathBuf::from(d);
+            assert!(p.is_dir(), "ATLASMESH_DATA={} is not a folder", p.display());
+            Some(p)
+        }
+    }
+}
+
+/// A fresh temporary folder for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("atlasmesh-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The 40 IMM hands of `data`, resampled in correspondence to 2001 points (`Some`) or as
+/// given (56 landmarks, `None`); open outlines.
+pub fn hands(
+    data: &std::path::Path,
+    resample: Option<usize>,
+) -> Vec<atlasmesh::geometry::Shape<2>> {
+    atlasmesh::study::load_population(
+        &[data.join("imm-hands-2d/hands_long.csv")],
+        &atlasmesh::study::PopulationOptions {
+            closed: false,
+            resample,
+        },
+    )
+    .unwrap()
+}
+
+/// The distal femurs S001-S030 of `data`.
+pub fn femurs(data: &std::path::Path) -> Vec<atlasmesh::geometry::Shape<3>> {
+    let paths: Vec<_> = (1..=30)
+        .map(|k| {
+            data.join(format!(
+                "knee-distal-femur-synthetic-3d/femur/S{k:03}_Femur.ply"
+            ))
+        })
+        .collect();
+    atlasmesh::study::load_surfaces(&paths).unwrap()
+}
+
+/// Vertices of the distal femurs (in their given correspondence) used as the 3 landmarks:
+/// the two epicondyles (the mean femur's extreme vertices along its medio-lateral axis x)
+/// and the most proximal vertex of the shaft (extreme along z).
+pub const FEMUR_LANDMARKS: [usize; 3] = [7311, 62, 4198];
+
+/// The femurs S001-S030 made non-corresponding: each decimated by vertex clustering with
+/// its own cell (2.0-2.6 mm) and grid offset (redrawn until the result is a closed,
+/// edge-manifold surface, as a segmentation gives), its vertices shuffled, and the 3 landmarks
+/// re-picked as the kept vertices nearest to the true ones. Returns the shapes and, per
+/// shape and kept vertex, the original vertex it is (the truth, kept aside).
+pub fn raw_femurs(
+    originals: &[atlasmesh::geometry::Shape<3>],
+    seed: u64,
+) -> (Vec<atlasmesh::geometry::Shape<3>>, Vec<Vec<usize>>) {
+    use atlasmesh::geometry::dist2;
+    use rand::seq::SliceRandom;
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    originals
+        .iter()
+        .map(|s| {
+            let (d, kept) = (0..100)
+                .find_map(|_| {
+                    let cell = rng.random_range(2.0..2.6);
+                    let offset = std::array::from_fn(|_| rng.random_range(0.0..cell));
+                    let (d, kept) = s.decimate_by_clustering(cell, offset).unwrap();
+                    let d = atlasmesh::geometry::prepare_surface(d).ok()?;
+                    atlasmesh::geometry::is_closed_surface(&d).then_some((d, kept))
+                })
+                .expect("a closed decimation in 100 draws");
+            let mut perm: Vec<usize> = (0..d.points.len()).collect();
+            perm.shuffle(&mut rng);
+            // New vertex k is old vertex perm[k].
+            let mut inverse = vec![0; perm.len()];
+            for (k, &o) in perm.iter().enumerate() {
+                inverse[o] = k;
+            }
+            let mut shape = atlasmesh::geometry::Shape {
+                name: d.name.clone(),
+                points: perm.iter().map(|&o| d.points[o]).collect(),
+                facets: d.facets.iter().map(|f| f.map(|v| inverse[v])).collect(),
+                landmarks: Vec::new(),
+            };
+            shape.landmarks = FEMUR_LANDMARKS
+                .iter()
+                .map(|&l| {
+                    (0..shape.points.len())
+                        .min_by(|&a, &b| {
+                            dist2(shape.points[a], s.points[l])
+                                .total_cmp(&dist2(shape.points[b], s.points[l]))
+                        })
+                        .unwrap()
+                })
+                .collect();
+            let truth = perm.iter().map(|&o| kept[o]).collect();
+            (shape, truth)
+        })
+        .unzip()
+}
+
+/// Whether `program` runs; a failure when the tools are required.
+pub fn tool(program: &str, what: &str) -> bool {
+    let ok = std::process::Command::new(program)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success() || !o.stdout.is_empty() || !o.stderr.is_empty());
+    if !ok {
+        assert!(
+            std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
+            "{program} is required ({what}) but not found"
+        );
+        eprintln!("{what}: skipped ({program} not found)");
+    }
+    ok
+}
+
+/// A CalculiX step around a mesh deck: bone-like elasticity, `FIXED` clamped, a unit force
+/// along -z on every node of `LOAD`, displacements of `LOAD` printed to the `.dat` file.
+pub const CCX_STEP: &str = "*MATERIAL, NAME=TISSUE
+*ELASTIC
+17000., 0.3
+*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE
+*STEP
+*STATIC
+*BOUNDARY
+FIXED, 1, 3, 0.
+*CLOAD
+LOAD, 3, -1.
+*NODE PRINT, NSET=LOAD
+U
+*END STEP
+";
+
+/// Runs ccx on `deck` (a `.inp` path) in its folder; returns the displacements it printed.
+pub fn solve(deck: &std::path::Path) -> Vec<[f64; 3]> {
+    let dir = deck.parent().unwrap();
+    let stem = deck.file_stem().unwrap().to_string_lossy().to_string();
+    let o = std::process::Command::new("ccx")
+        .arg("-i")
+        .arg(&stem)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "ccx on {stem}: {log}");
+    assert!(!log.contains("*ERROR"), "ccx on {stem}: {log}");
+    let dat = std::fs::read_to_string(dir.join(format!("{stem}.dat"))).unwrap();
+    let body = dat
+        .split("displacements (vx,vy,vz)")
+        .nth(1)
+        .expect("displacements in the .dat file");
+    body.lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            (f.len() == 4).then(|| std::array::from_fn(|d| f[d + 1].parse::<f64>().unwrap()))
+        })
+        .collect()
+}
+
+/// Morphs and repairs the mean mesh of `atlas` to the instances at ±3σ along the first 5
+/// modes; returns per instance (mode, sign, min scaled Jacobian before, after, inverted
+/// after, boundary distance change / median edge).
+pub fn stress<const D: usize>(
+    atlas: &atlasmesh::model::Atlas<D>,
+) -> Vec<(usize, f64, f64, f64, usize, f64)> {
+    let morpher = atlas
+        .morpher(&atlasmesh::ffd::FfdParams::default())
+        .unwrap();
+    let edge = atlas.mean_shape().median_edge_length();
+    let mut rows = Vec::new();
+    for m in 0..5.min(atlas.num_modes()) {
+        for sign in [-3.0, 3.0] {
+            let mut w = vec![0.0; atlas.num_modes()];
+            w[m] = sign * atlas.eigenvalues[m].sqrt();
+            let instance = atlas.instance(&w);
+            let shape = atlasmesh::geometry::Shape {
+                name: format!("mode{m}{sign:+}"),
+                points: instance.clone(),
+                facets: atlas.facets.clone(),
+                landmarks: Vec::new(),
+            };
+            let index = atlasmesh::geometry::ClosestPointIndex::from_shape(&shape);
+            let fit = atlasmesh::fit::FitResult {
+                weights: w,
+                similarity: atlasmesh::geometry::Similarity::identity(),
+                instance: instance.clone(),
+                projected: instance
+                    .iter()
+                    .map(|p| atlasmesh::geometry::SurfacePoint {
+                        point: *p,
+                        facet: 0,
+                        weights: [0.0; D],
+                        dist2: 0.0,
+                        slot: u32::MAX,
+                    })
+                    .collect(),
+                corresponded: vec![true; instance.len()],
+                e_d_history: Vec::new(),
+                locus: Vec::new(),
+                iterations: 0,
+                converged: true,
+            };
+            let morph = morpher.morph(&fit.correspondence()).unwrap();
+            let mut mesh = morph.mesh;
+            let (r, _) = atlasmesh::mesh::repair::repair_with_quality(
+                &mut mesh,
+                Some(&index),
+                &atlasmesh::mesh::repair::RepairParams::default(),
+                &morph.quality,
+            )
+            .unwrap();
+            rows.push((
+                m,
+                sign,
+                r.scaled_jacobian_min_before,
+                r.scaled_jacobian_min,
+                r.inverted_after,
+                r.surface_distance_change / edge,
+            ));
+        }
+    }
+    rows
+}
+
+pub fn check(name: &str, rows: &[(usize, f64, f64, f64, usize, f64)], bound: f64) {
+    let needed = rows.iter().filter(|r| r.2 < bound).count();
+    for r in rows {
+        eprintln!(
+            "{name} mode {} at {:+}σ: min scaled Jacobian {:.3} -> {:.3}, inverted {}, boundary change {:.2e} edges",
+            r.0 + 1,
+            r.1,
+            r.2,
+            r.3,
+            r.4,
+            r.5
+        );
+    }
+    eprintln!("{name}: {needed} of {} meshes needed repair", rows.len());
+    for r in rows {
+        assert_eq!(
+            r.4,
+            0,
+            "{name} mode {} {:+}: inverted elements",
+            r.0 + 1,
+            r.1
+        );
+        assert!(
+            r.3 >= r.2.min(bound) - 1e-12,
+            "{name}: the repair made it worse"
+        );
+        assert!(r.5 <= 0.01, "{name}: boundary moved {} edges off", r.5);
+        assert!(
+            r.3 >= bound,
+            "{name} mode {} {:+}: min scaled Jacobian {} below {bound}",
+            r.0 + 1,
+            r.1,
+            r.3
+        );
+    }
+}
+
+/// Issue 6 on a `loo` report: every mesh valid and at or above its repair bound, the repair's
+/// boundary within 1 % of the median edge length off the subject; prints how many needed it.
+#[allow(dead_code)]
+pub fn assert_repaired(name: &str, r: &atlasmesh::report::Report) {
+    let needed: Vec<&atlasmesh::report::SubjectReport> =
+        r.subjects.iter().filter(|s| s.repaired).collect();
+    eprintln!(
+        "{name}: {} of {} meshes needed repair",
+        needed.len(),
+        r.subjects.len()
+    );
+    for s in &needed {
+        eprintln!(
+            "  {}: min scaled Jacobian {:.3} ({} inverted) -> {:.3}, boundary change {:.1e} edges",
+            s.name,
+            s.scaled_jacobian_min_before_repair,
+            s.inverted_before_repair,
+            s.scaled_jacobian_min,
+            s.surface_distance_change_edges
+        );
+    }
+    for s in &r.subjects {
+        assert!(s.repair_bound > 0.0, "{name} {}: repair off", s.name);
+        assert_eq!(s.inverted_elements, 0, "{name} {}: inverted", s.name);
+        assert!(
+            s.scaled_jacobian_min >= s.repair_bound,
+            "{name} {}: min scaled Jacobian {} below {}",
+            s.name,
+            s.scaled_jacobian_min,
+            s.repair_bound
+        );
+        assert!(
+            s.surface_distance_change_edges <= 0.01,
+            "{name} {}: boundary moved {} edges off",
+            s.name,
+            s.surface_distance_change_edges
+        );
+    }
+    assert_eq!(r.summary.below_repair_bound, 0);
+}
+
+/// Runs the command-line tool with `args` and `--quiet`.
+#[allow(dead_code)]
+pub fn atlasmesh<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .unwrap()
+}

@@ -1,0 +1,16 @@
+//! The integration tests, in one binary: the library on the shared data, the command-line
+//! tool as users run it, and the files it writes read back by other programs.
+
+mod common;
+
+mod aorta;
+mod bad_input;
+mod batch;
+mod cli;
+mod femur;
+mod fuzz_regressions;
+mod hands;
+mod html;
+mod register;
+mod repair;
+mod solver;

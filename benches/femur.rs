@@ -8,16 +8,16 @@
 //! spoiled. Without the data, seeded synthetic surfaces of the 3D demo (7322 vertices) stand
 //! in.
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/common.rs"]
 mod common;
 
-use atlasmesh::mesh::hex_mesh::{HexMeshParams, hex_mesh};
-use atlasmesh::mesh::quality::{mesh_quality, summarize};
 use atlasmesh::ffd::FfdParams;
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::ClosestPointIndex;
-use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
 use atlasmesh::mesh::Morpher;
+use atlasmesh::mesh::hex_mesh::{HexMeshParams, hex_mesh};
+use atlasmesh::mesh::quality::{mesh_quality, summarize};
+use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
 use atlasmesh::study::load_surfaces;
 use criterion::{Criterion, criterion_group, criterion_main};
 

@@ -8,13 +8,14 @@
 //! spoiled. Without the data, seeded synthetic surfaces of the 3D demo (7322 vertices) stand
 //! in.
 
+// Only the raw-femur helper of the tests is used here.
+#[allow(dead_code)]
 #[path = "../tests/it/common.rs"]
 mod common;
 
 use atlasmesh::ffd::FfdParams;
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::ClosestPointIndex;
-use atlasmesh::mesh::Morpher;
 use atlasmesh::mesh::hex_mesh::{HexMeshParams, hex_mesh};
 use atlasmesh::mesh::quality::{mesh_quality, summarize};
 use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};

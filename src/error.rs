@@ -11,21 +11,31 @@ pub enum Error {
     /// once.)
     #[error("{path}: {error}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the operating system said.
         error: std::io::Error,
     },
     /// A file is malformed: its content does not follow its format. Fix the file at the given
     /// line (1-based; 0 when the position is not a line, as in binary files).
     #[error("{path}:{line}: {message}")]
     Parse {
+        /// The file.
         path: PathBuf,
+        /// The line (1-based; 0 when the position is not a line).
         line: usize,
+        /// What is wrong there.
         message: String,
     },
     /// A shape cannot be used by the method (too few points, NaN, degenerate, mismatched
     /// counts). The message names the shape and the problem.
     #[error("shape {name}: {message}")]
-    InvalidShape { name: String, message: String },
+    InvalidShape {
+        /// The shape's name (its file stem, or its id in a CSV).
+        name: String,
+        /// What is wrong with it.
+        message: String,
+    },
     /// The population as a whole cannot be used (too few shapes, different point counts,
     /// mixed dimensions, no variance).
     #[error("population: {0}")]
@@ -40,7 +50,12 @@ pub enum Error {
     /// An atlas file is not a valid atlasmesh atlas (wrong format version, missing tensor).
     /// Rebuild the atlas with `atlasmesh build`.
     #[error("{path}: not a valid atlas: {message}")]
-    Atlas { path: PathBuf, message: String },
+    Atlas {
+        /// The atlas file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
     /// A numerical step failed (singular system, SVD did not converge). Usually the input is
     /// degenerate: identical shapes, collinear points.
     #[error("numerics: {0}")]
@@ -49,7 +64,12 @@ pub enum Error {
     /// the model (another anatomy, a segmentation error, a part missing: try `--partial`),
     /// so no mesh was written for it. The message gives the misfit and the bound.
     #[error("subject {name}: the fit did not converge: {message}")]
-    NotConverged { name: String, message: String },
+    NotConverged {
+        /// The subject's name.
+        name: String,
+        /// The misfit and the bound.
+        message: String,
+    },
 }
 
 /// Short for `Result<T, atlasmesh::Error>`.
@@ -72,6 +92,7 @@ impl Error {
         }
     }
 
+    /// An [`Error::Io`] on `path`.
     pub fn io(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
@@ -79,6 +100,7 @@ impl Error {
         }
     }
 
+    /// An [`Error::Parse`] at `line` of `path`.
     pub fn parse(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
         Error::Parse {
             path: path.into(),

@@ -1,11 +1,13 @@
 //! A deformation `f(u) = Σ P_i B_i(u)` (eq. 1): its value and Jacobian at a point.
 
-use super::*;
+use super::bases::cubic_bases;
+use super::lattice::Lattice;
 use crate::geometry::Point;
 
 /// A B-spline deformation `f` (eq. 1): a lattice and its control points.
 #[derive(Clone, Debug)]
 pub struct Ffd<const D: usize> {
+    /// The lattice of the control points.
     pub lattice: Lattice<D>,
     /// Control points `P_i` (shape units), `lattice.len()` of them.
     pub control: Vec<Point<D>>,

@@ -1,6 +1,6 @@
 //! The regular lattice of control points and the tensor B-spline bases on it (eq. 1).
 
-use super::*;
+use super::bases::cubic_bases;
 use crate::geometry::{Point, bounding_box};
 
 /// A regular lattice of control points in `D` dimensions.

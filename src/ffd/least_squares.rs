@@ -1,6 +1,8 @@
 //! The regularized least-squares fit of eq. 9: control points from point pairs.
 
-use super::*;
+use super::deformation::Ffd;
+use super::lattice::Lattice;
+use super::system::{FfdParams, FfdSystem};
 use crate::error::Result;
 use crate::geometry::Point;
 use faer::Mat;

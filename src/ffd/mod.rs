@@ -27,7 +27,6 @@ pub use deformation::Ffd;
 pub use lattice::Lattice;
 pub use least_squares::FfdFit;
 pub use smoothing::smoothing_energy;
-use smoothing::*;
 pub use system::{FfdParams, FfdSystem};
 
 #[cfg(test)]

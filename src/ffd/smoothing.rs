@@ -1,6 +1,6 @@
 //! The smoothing energy `E_smooth` of eq. 2 and 9, exact, as a banded quadratic form.
 
-use super::*;
+use super::lattice::Lattice;
 use crate::geometry::Point;
 
 /// Row-banded symmetric matrix over lattice control points: entry `(i, j)` for

@@ -1,6 +1,8 @@
 //! The sparse normal equations of eq. 2 and 9 and their Cholesky factor.
 
-use super::*;
+use super::lattice::Lattice;
+use super::least_squares::FfdFit;
+use super::smoothing::{Banded, Scaling, smoothing_matrix};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use faer::dyn_stack::{MemBuffer, MemStack};

@@ -1,13 +1,20 @@
 //! The fit of Algorithm 1: starts, the schedule of `gamma`, the loop to convergence.
 
-use super::*;
+use super::params::{
+    COARSE_MAX_ITERATIONS, COARSE_MODEL_FACTOR, COARSE_TOLERANCE_FACTOR, FULL_BACKWARD_SHARE,
+    FitParams, GIVE_UP_AFTER, PRE_ALIGNMENT_ITERATIONS, PRE_PRUNE_AFTER, PRE_PRUNE_FACTOR,
+    PRUNE_FACTOR, rotation_angle,
+};
+use super::resolution::Model;
+use super::result::FitResult;
+use super::scratch::{Run, Scratches};
+use super::state::{Pass, Sampling, Stage, State, Subject};
 use crate::error::{Error, Result};
 use crate::geometry::{
     ClosestPointIndex, Point, REFERENCE_POINTS, Shape, Similarity, SurfacePoint, centroid, dist2,
     project_along_normals, scale, start_rotations, sub,
 };
 use crate::model::Atlas;
-use faer::linalg::solvers::Solve;
 
 /// For a subject with missing parts: a model point has no partner where its projection lands
 /// on the subject's open border (a segment end, or an edge of a single facet) from farther than
@@ -111,6 +118,7 @@ pub(super) enum Level {
 }
 
 impl<'a, const D: usize> Fitter<'a, D> {
+    /// A fitter of `atlas`: its model at full and coarse resolution, precomputed once for every subject.
     pub fn new(atlas: &'a Atlas<D>) -> Self {
         let n = atlas.mean.len();
         let coarse_points = FitParams::default().coarse_points;

@@ -23,13 +23,8 @@ mod state;
 mod update;
 
 pub use fitter::Fitter;
-pub(crate) use fitter::*;
 pub use params::FitParams;
-pub(crate) use params::*;
-pub(crate) use resolution::*;
 pub use result::FitResult;
-pub(crate) use scratch::*;
-pub(crate) use state::*;
 
 #[cfg(test)]
 mod tests;

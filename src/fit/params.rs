@@ -2,7 +2,6 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::COMPATIBLE_NORMALS_COS;
-use faer::linalg::solvers::Solve;
 
 /// Parameters of Algorithm 1.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -1,6 +1,6 @@
 //! The shape model at one resolution (all points, or a coarse subset for the first stage).
 
-use super::*;
+use super::fitter::spread;
 use crate::geometry::{ClosestPointIndex, Point, Shape, facet_normal, norm};
 use crate::model::Atlas;
 

@@ -1,6 +1,9 @@
 //! Buffers reused by the updates of a fit, apart from the maths.
 
-use super::*;
+use super::fitter::{Fitter, Level};
+use super::params::FitParams;
+use super::resolution::Model;
+use super::state::State;
 use crate::geometry::{ClosestPointIndex, Point};
 
 /// Buffers reused by every update of a fit on one model: the instance (reference frame), the

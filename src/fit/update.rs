@@ -1,6 +1,9 @@
 //! One update of the shape parameters and the pose: eq. 5-8 linearized along the normals.
 
-use super::*;
+use super::fitter::{Fitter, Level};
+use super::params::compatibility;
+use super::scratch::Scratches;
+use super::state::{Sampling, State, Step, Subject};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, QueryMemo, REFERENCE_POINTS, add, dot, scale, sub};
 use faer::Mat;

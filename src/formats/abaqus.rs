@@ -1,7 +1,7 @@
 //! Abaqus/CalculiX `.inp`: meshes with `*NSET`, `*ELSET`, `*SURFACE` read and written, and
 //! whole decks whose node coordinates are replaced.
 
-use super::*;
+use super::fe_mesh::{id_lines, xyz};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use crate::mesh::{ElementKind, FeMesh, MeshSets};
@@ -18,8 +18,11 @@ pub(crate) type RawSurface = (String, Vec<(usize, String, String)>);
 /// id `node_ids[k]`).
 #[derive(Clone, Debug)]
 pub struct InpDeck {
+    /// The mesh with its sets (0-based).
     pub mesh: FeMesh<3>,
+    /// The 1-based id in the file of every node of `mesh`.
     pub node_ids: Vec<u64>,
+    /// The deck's text as read.
     pub text: String,
 }
 

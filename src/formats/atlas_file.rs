@@ -6,7 +6,6 @@ use crate::geometry::Point;
 use crate::mesh::{ElementKind, FeMesh};
 use crate::model::{Atlas, AtlasParams};
 use faer::Mat;
-use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::Path;
 

@@ -1,6 +1,9 @@
 //! FE meshes in and out: the format from the extension, the checks every reader shares.
 
-use super::*;
+use super::abaqus::{inp, read_inp};
+use super::febio::feb;
+use super::gmsh::{msh, read_msh};
+use super::vtk_legacy::{read_vtk_unstructured, vtk};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use crate::mesh::quality::ElementQuality;
@@ -93,10 +96,15 @@ pub(crate) fn check_mesh<const D: usize>(
 /// The FE mesh formats written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum MeshFormat {
+    /// VTK XML unstructured grid (`.vtu`).
     Vtu,
+    /// Legacy VTK (`.vtk`, ASCII UNSTRUCTURED_GRID).
     Vtk,
+    /// Abaqus/CalculiX (`.inp`).
     Inp,
+    /// Gmsh 4.1 (`.msh`).
     Msh,
+    /// FEBio 4.0 (`.feb`, 3D).
     Feb,
 }
 

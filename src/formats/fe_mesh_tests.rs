@@ -1,6 +1,5 @@
 use super::*;
-use crate::geometry::{Point, Shape, is_closed_surface, prepare_surface, signed_volume};
-use crate::mesh::{ElementKind, FeMesh, MeshSets};
+use crate::mesh::ElementKind;
 
 fn tmp(name: &str, text: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("atlasmesh-femesh-{}", std::process::id()));

@@ -1,6 +1,6 @@
 //! Gmsh `.msh` (2.2 and 4.1 ASCII read, 4.1 written) with physical groups as sets.
 
-use super::*;
+use super::fe_mesh::{check_mesh, xyz};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, bounding_box};
 use crate::mesh::{ALL_KINDS, ElementKind, FeMesh, MeshSets};

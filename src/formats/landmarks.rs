@@ -12,7 +12,9 @@ use std::path::Path;
 /// A landmark as given: a position, or the index of a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Landmark<const D: usize> {
+    /// A position (snapped to the nearest point of the shape).
     At(Point<D>),
+    /// The index of a point of the shape.
     Index(usize),
 }
 

@@ -40,24 +40,13 @@ pub use atomic::{create_dir, write_atomic};
 pub use fe_mesh::{MeshFormat, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh};
 pub use gmsh::read_msh;
 pub use outline::read_outlines;
-pub(crate) use outline::*;
 pub use outline_csv::read_long_csv;
 pub use outline_text::read_text_outlines;
 pub use ply::write_ply;
 pub use stl::write_stl;
 pub use surface::read_surface;
-pub(crate) use surface::*;
 pub use vtk_legacy::{VtkPolyData, read_vtk_outline, read_vtk_polydata, read_vtk_unstructured};
 pub use vtk_xml::{read_vtp, read_vtu, write_vtp, write_vtu, write_vtu_with_quality};
-
-use abaqus::inp;
-use fe_mesh::{check_mesh, id_lines, xyz};
-use febio::feb;
-use gmsh::msh;
-use obj::{parse_obj, xyz_after_keyword};
-use ply::parse_ply;
-use stl::parse_stl;
-use vtk_legacy::vtk;
 
 #[cfg(test)]
 mod fe_mesh_tests;

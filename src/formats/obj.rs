@@ -1,6 +1,6 @@
 //! Wavefront OBJ surfaces read.
 
-use super::*;
+use super::surface::Parsed;
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use std::path::Path;

@@ -1,6 +1,8 @@
 //! Reading 2D outlines: the format by extension, and the checks every reader shares.
 
-use super::*;
+use super::outline_csv::read_long_csv;
+use super::outline_text::read_text_outlines;
+use super::vtk_legacy::read_vtk_outline;
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use std::path::Path;

@@ -1,6 +1,7 @@
 //! Outlines from a long CSV table (`shape,point,x,y`).
 
-use super::*;
+use super::atomic::MAX_COUNT;
+use super::outline::{parse_f64, read_text};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
 use std::collections::HashMap;

@@ -1,6 +1,4 @@
 use super::*;
-use crate::geometry::{Point, Shape, is_closed_surface, prepare_surface, signed_volume};
-use crate::mesh::{ElementKind, FeMesh, MeshSets};
 
 fn tmp(name: &str, content: &[u8]) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("atlasmesh-io-{}", std::process::id()));

@@ -1,9 +1,9 @@
 //! PLY surfaces (ASCII and binary, either endianness) read, binary written.
 
-use super::*;
+use super::atomic::{MAX_COUNT, write_atomic};
+use super::surface::Parsed;
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
-use std::fmt::Write as _;
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug)]

@@ -1,5 +1,6 @@
+use super::abaqus::inp;
 use super::*;
-use crate::geometry::{Point, Shape, is_closed_surface, prepare_surface, signed_volume};
+use crate::geometry::Point;
 use crate::mesh::{ElementKind, FeMesh, MeshSets};
 
 fn two_cubes() -> FeMesh<3> {

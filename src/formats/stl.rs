@@ -1,6 +1,8 @@
 //! STL surfaces (ASCII and binary) read, binary written.
 
-use super::*;
+use super::atomic::write_atomic;
+use super::obj::xyz_after_keyword;
+use super::surface::Parsed;
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape, facet_normal};
 use std::collections::HashMap;

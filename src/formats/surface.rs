@@ -1,7 +1,9 @@
 //! Reading 3D surfaces: the format by extension (PLY, STL, OBJ, VTP, legacy VTK), then the
 //! checks and orientation every surface gets.
 
-use super::*;
+use super::obj::parse_obj;
+use super::ply::parse_ply;
+use super::stl::parse_stl;
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape, prepare_surface};
 use std::path::Path;

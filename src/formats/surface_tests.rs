@@ -1,6 +1,5 @@
 use super::*;
-use crate::geometry::{Point, Shape, is_closed_surface, prepare_surface, signed_volume};
-use crate::mesh::{ElementKind, FeMesh, MeshSets};
+use crate::geometry::{Shape, is_closed_surface, prepare_surface, signed_volume};
 
 fn tetra() -> Shape<3> {
     Shape {

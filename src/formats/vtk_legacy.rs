@@ -1,7 +1,9 @@
 //! Legacy VTK (`.vtk`): POLYDATA outlines and surfaces, UNSTRUCTURED_GRID meshes with their
 //! sets as point and cell data, read and written.
 
-use super::*;
+use super::atomic::MAX_COUNT;
+use super::fe_mesh::{check_mesh, xyz};
+use super::outline::{parse_f64, stem};
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use crate::mesh::quality::ElementQuality;
@@ -50,8 +52,11 @@ impl<'a> Cursor<'a> {
 
 /// Points and line cells of a legacy VTK POLYDATA file.
 pub struct VtkPolyData {
+    /// The points.
     pub points: Vec<[f64; 3]>,
+    /// The LINES cells (point indices).
     pub lines: Vec<Vec<usize>>,
+    /// The POLYGONS cells (point indices).
     pub polygons: Vec<Vec<usize>>,
 }
 

@@ -1,6 +1,6 @@
 use super::*;
-use crate::geometry::{Point, Shape, is_closed_surface, prepare_surface, signed_volume};
-use crate::mesh::{ElementKind, FeMesh, MeshSets};
+use crate::geometry::Shape;
+use crate::mesh::{ElementKind, FeMesh};
 
 #[test]
 fn written_vtp_and_vtu_read_back() {

@@ -16,26 +16,32 @@ pub fn bounding_box<const D: usize>(points: &[Point<D>]) -> (Point<D>, Point<D>)
     (lo, hi)
 }
 
+/// `a - b`.
 #[inline]
 pub fn sub<const D: usize>(a: Point<D>, b: Point<D>) -> Point<D> {
     std::array::from_fn(|d| a[d] - b[d])
 }
+/// `a + b`.
 #[inline]
 pub fn add<const D: usize>(a: Point<D>, b: Point<D>) -> Point<D> {
     std::array::from_fn(|d| a[d] + b[d])
 }
+/// `s a`.
 #[inline]
 pub fn scale<const D: usize>(a: Point<D>, s: f64) -> Point<D> {
     std::array::from_fn(|d| a[d] * s)
 }
+/// `a · b`.
 #[inline]
 pub fn dot<const D: usize>(a: Point<D>, b: Point<D>) -> f64 {
     (0..D).map(|d| a[d] * b[d]).sum()
 }
+/// `|a|`.
 #[inline]
 pub fn norm<const D: usize>(a: Point<D>) -> f64 {
     dot(a, a).sqrt()
 }
+/// `|a - b|²`.
 #[inline]
 pub fn dist2<const D: usize>(a: Point<D>, b: Point<D>) -> f64 {
     let d = sub(a, b);

@@ -7,6 +7,7 @@ use std::collections::HashMap;
 /// A face on the boundary of a mesh (shared by no other element).
 #[derive(Clone, Debug)]
 pub struct BoundaryFace<const D: usize> {
+    /// The element it belongs to.
     pub element: usize,
     /// Local face number ([`crate::mesh::ElementKind::faces`]).
     pub face: u8,
@@ -16,6 +17,7 @@ pub struct BoundaryFace<const D: usize> {
     pub mids: Vec<usize>,
     /// Unit outward normal.
     pub normal: Point<D>,
+    /// The centroid of its corners.
     pub centroid: Point<D>,
 }
 

@@ -22,8 +22,11 @@ pub struct FeMesh<const D: usize> {
 /// `(element, face)` pairs with faces numbered as in [`ElementKind::faces`].
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MeshSets {
+    /// Node sets: sorted node indices by name.
     pub node_sets: BTreeMap<String, Vec<usize>>,
+    /// Element sets: sorted element indices by name.
     pub element_sets: BTreeMap<String, Vec<usize>>,
+    /// Surfaces: `(element, face)` pairs by name, faces numbered as in [`ElementKind::faces`].
     pub surfaces: BTreeMap<String, Vec<(usize, u8)>>,
 }
 

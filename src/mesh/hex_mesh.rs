@@ -41,6 +41,7 @@ pub struct HexMeshParams {
 /// A hexahedral mesh and how well it matches the surface.
 #[derive(Clone, Debug)]
 pub struct HexMesh {
+    /// The mesh (surface units and frame).
     pub mesh: FeMesh<3>,
     /// Largest distance from a boundary face centre of the mesh to the surface (surface
     /// units).

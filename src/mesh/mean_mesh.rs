@@ -3,7 +3,6 @@
 use crate::error::Result;
 use crate::geometry::{Shape, same_dim};
 use crate::mesh::{FeMesh, QuadMeshParams, quad_mesh};
-use serde::{Deserialize, Serialize};
 
 /// Meshes the mean shape: quadrilaterals in 2D ([`quad_mesh`]), hexahedra in 3D
 /// ([`crate::mesh::hex_mesh::hex_mesh`], closed surfaces only).

@@ -158,8 +158,11 @@ pub fn mesh_quality<const D: usize>(mesh: &FeMesh<D>) -> Vec<ElementQuality> {
 /// Summary of a mesh's quality.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct QualitySummary {
+    /// Smallest corner Jacobian (determinant; units of length^D).
     pub jacobian_min: f64,
+    /// Smallest scaled Jacobian (1 for a perfect element, ≤ 0 inverted).
     pub scaled_jacobian_min: f64,
+    /// Elements with a non-positive corner Jacobian.
     pub inverted_elements: usize,
 }
 
@@ -182,16 +185,25 @@ pub fn summarize(q: &[ElementQuality]) -> QualitySummary {
 /// Percentiles and acceptance counts of a mesh's element quality.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct QualityDistribution {
+    /// Smallest corner Jacobian.
     pub jacobian_min: f64,
+    /// 1 % percentile of the elements' smallest corner Jacobians.
     pub jacobian_p01: f64,
+    /// 5 % percentile of the elements' smallest corner Jacobians.
     pub jacobian_p05: f64,
+    /// Smallest scaled Jacobian.
     pub scaled_jacobian_min: f64,
+    /// 1 % percentile of the elements' smallest scaled Jacobians.
     pub scaled_jacobian_p01: f64,
+    /// 5 % percentile of the elements' smallest scaled Jacobians.
     pub scaled_jacobian_p05: f64,
     /// The bound used ([`super::ElementKind::scaled_jacobian_bound`]).
     pub bound: f64,
+    /// Elements whose smallest scaled Jacobian is below `bound`.
     pub elements_below_bound: usize,
+    /// Elements with a non-positive corner Jacobian.
     pub inverted_elements: usize,
+    /// Elements in the mesh.
     pub elements: usize,
     /// The largest [`edge_ratio`].
     pub edge_ratio_max: f64,

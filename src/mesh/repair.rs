@@ -63,7 +63,9 @@ pub struct RepairReport {
     pub below_bound_before: usize,
     /// The same after.
     pub inverted_after: usize,
+    /// Smallest scaled Jacobian after.
     pub scaled_jacobian_min: f64,
+    /// Elements below the bound after.
     pub below_bound_after: usize,
     /// The bound used.
     pub bound: f64,

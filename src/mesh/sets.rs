@@ -43,10 +43,13 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SetsConfig {
+    /// `[[node_set]]` tables.
     #[serde(default)]
     pub node_set: Vec<SetSpec>,
+    /// `[[element_set]]` tables: elements whose centroid is selected.
     #[serde(default)]
     pub element_set: Vec<SetSpec>,
+    /// `[[surface]]` tables: boundary faces.
     #[serde(default)]
     pub surface: Vec<SetSpec>,
     /// The file it was read from (for messages).
@@ -58,15 +61,21 @@ pub struct SetsConfig {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SetSpec {
+    /// The set's name in every mesh written.
     pub name: String,
+    /// `box`: inside a box.
     #[serde(default, rename = "box")]
     pub bbox: Option<BoxSpec>,
+    /// `half_space`: on one side of a plane across an axis.
     #[serde(default)]
     pub half_space: Option<HalfSpace>,
+    /// `landmark`: within `radius` of this atlas landmark.
     #[serde(default)]
     pub landmark: Option<usize>,
+    /// `radius` around `landmark` (a share of the bounding box's largest side).
     #[serde(default)]
     pub radius: Option<f64>,
+    /// `facing`: boundary faces looking along a direction.
     #[serde(default)]
     pub facing: Option<Facing>,
 }
@@ -75,7 +84,9 @@ pub struct SetSpec {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoxSpec {
+    /// Lower corner (bounding-box fractions, one per axis).
     pub min: Vec<f64>,
+    /// Upper corner (bounding-box fractions, one per axis).
     pub max: Vec<f64>,
 }
 
@@ -83,9 +94,12 @@ pub struct BoxSpec {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HalfSpace {
+    /// `x`, `y`, `z` or `longest` (the bounding box's longest side).
     pub axis: String,
+    /// Selects the points below this fraction along the axis.
     #[serde(default)]
     pub below: Option<f64>,
+    /// Selects the points above this fraction along the axis.
     #[serde(default)]
     pub above: Option<f64>,
 }
@@ -94,7 +108,9 @@ pub struct HalfSpace {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Facing {
+    /// The direction (reference frame; need not be unit).
     pub direction: Vec<f64>,
+    /// The largest angle between a face's outward normal and `direction` (degrees).
     pub angle: f64,
 }
 

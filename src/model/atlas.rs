@@ -21,6 +21,7 @@ pub enum ModeSelection {
 /// Parameters of atlas construction.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AtlasParams {
+    /// How many modes to keep (section 2.3).
     pub modes: ModeSelection,
     /// Target element edge length of the mean mesh, in reference-frame units (the mean's
     /// largest bounding-box side is 1).

@@ -18,6 +18,5 @@ mod registration;
 mod resample;
 
 pub use pre_align::pre_align;
-pub(crate) use pre_align::*;
 pub use registration::{MAX_ALIGNMENT_MISFIT, RegisterParams, Registration, register};
 pub use resample::{resample_corresponding, resample_uniform};

@@ -1,7 +1,7 @@
 //! Pairwise registration by a B-spline FFD minimizing eq. 2, and the correspondence by
 //! projection along the normals (section 2.1).
 
-use super::*;
+use super::pre_align::pre_align_scored;
 use crate::error::{Error, Result};
 use crate::ffd::FfdSystem;
 use crate::geometry::{

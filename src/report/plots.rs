@@ -8,7 +8,6 @@ use crate::geometry::{Point, bounding_box};
 use crate::mesh::FeMesh;
 use crate::mesh::quality::mesh_quality;
 use plotters::prelude::*;
-use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::OnceLock;
 

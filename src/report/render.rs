@@ -12,7 +12,9 @@ use crate::geometry::Point;
 /// An RGB picture.
 #[derive(Clone, Debug)]
 pub struct Image {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
     /// Row-major RGB bytes, top row first.
     pub rgb: Vec<u8>,
@@ -57,8 +59,11 @@ impl Image {
 /// towards the viewer), and the window (centre and half-size) it shows.
 #[derive(Clone, Copy, Debug)]
 pub struct View {
+    /// World to camera rotation (rows: right, up, towards the viewer).
     pub rotation: [[f64; 3]; 3],
+    /// World point at the picture's centre.
     pub center: Point<3>,
+    /// Half the side of the square window shown (world units).
     pub half: f64,
 }
 
@@ -207,10 +212,15 @@ pub fn signed_color(max: f64) -> impl Fn(f64) -> [u8; 3] {
 
 /// A colour bar for [`annotated`]: the map, the values at its two ends and their labels.
 pub struct Legend<'a> {
+    /// The colour map.
     pub color: ColorMap<'a>,
+    /// The value at the bar's low end.
     pub lo: f64,
+    /// The value at the bar's high end.
     pub hi: f64,
+    /// The label at the low end.
     pub lo_label: String,
+    /// The label at the high end (with the unit).
     pub hi_label: String,
 }
 

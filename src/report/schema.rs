@@ -2,13 +2,13 @@
 //! measures file, and their writing.
 
 use crate::error::{Error, Result};
-use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Per-subject figures.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SubjectReport {
+    /// The subject's name (its file stem; FILE.SHAPE for a file of several shapes).
     pub name: String,
     /// Correspondence updates of Algorithm 1.
     pub iterations: usize,
@@ -34,13 +34,17 @@ pub struct SubjectReport {
     /// correspondence.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal_correlation_ffd: Option<f64>,
+    /// Smallest corner Jacobian of the mesh written (subject units^D).
     #[serde(deserialize_with = "f64_or_nan")]
     pub jacobian_min: f64,
+    /// Smallest scaled Jacobian of the mesh written.
     #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_min: f64,
+    /// Elements of the mesh written with a non-positive corner Jacobian.
     pub inverted_elements: usize,
-    /// Before the repair (`repair`): inverted elements and the smallest scaled Jacobian.
+    /// Inverted elements before the repair.
     pub inverted_before_repair: usize,
+    /// Smallest scaled Jacobian before the repair.
     #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_min_before_repair: f64,
     /// How far the repair moved boundary nodes off the subject's surface: the largest
@@ -51,11 +55,11 @@ pub struct SubjectReport {
     #[serde(default)]
     #[serde(deserialize_with = "f64_or_nan")]
     pub surface_distance_change_edges: f64,
-    /// The scaled Jacobian bound of the repair (0 without repair); `repaired`: whether any
-    /// element was below it before the repair (then nodes were moved).
+    /// The scaled Jacobian bound of the repair (0 without repair).
     #[serde(default)]
     #[serde(deserialize_with = "f64_or_nan")]
     pub repair_bound: f64,
+    /// Whether any element was below the bound before the repair (then nodes were moved).
     #[serde(default)]
     pub repaired: bool,
     /// The `alpha` of eq. 9 the morph used (the requested one unless that inverted an
@@ -66,9 +70,10 @@ pub struct SubjectReport {
     /// from -1 to 1 (bin `k` covers `[-1 + 0.05 k, -1 + 0.05 (k + 1))`, the last includes 1).
     #[serde(default)]
     pub scaled_jacobian_histogram: Vec<u32>,
-    /// 1st and 5th percentiles of the elements' scaled Jacobians.
+    /// 1st percentile of the elements' smallest scaled Jacobians.
     #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_p01: f64,
+    /// 5th percentile of the elements' smallest scaled Jacobians.
     #[serde(deserialize_with = "f64_or_nan")]
     pub scaled_jacobian_p05: f64,
     /// The largest element edge ratio (longest edge over shortest) of the mesh written.
@@ -90,24 +95,31 @@ pub struct SubjectReport {
 /// Figures over all subjects.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
+    /// Subjects reported.
     pub subjects: usize,
+    /// Subjects whose fit is within 1 % of their diagonal and whose mesh has no inverted element.
     pub succeeded: usize,
+    /// Subjects whose mesh has no inverted element.
     pub meshes_valid: usize,
-    /// Subjects that failed (batch fit: see `failed` in the report), and subjects skipped
-    /// because their outputs were complete (resume).
+    /// Subjects that failed (batch fit: see `failed` in the report).
     #[serde(default)]
     pub failed: usize,
+    /// Subjects skipped because their outputs were complete (resume).
     #[serde(default)]
     pub resumed: usize,
-    /// Subjects whose mesh needed repair, and those still below the repair bound after it.
+    /// Subjects whose mesh needed repair.
     #[serde(default)]
     pub repaired: usize,
+    /// Subjects still below the repair bound after the repair.
     #[serde(default)]
     pub below_repair_bound: usize,
+    /// Median fit time (seconds).
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_fit_seconds: f64,
+    /// Median two-way RMS distance over the subject's diagonal.
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_rms_distance_relative: f64,
+    /// Median normal correlation (eq. 13).
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_normal_correlation: f64,
 }
@@ -115,10 +127,15 @@ pub struct Summary {
 /// The mean mesh's figures.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MeanMeshReport {
+    /// Nodes of the mean mesh.
     pub nodes: usize,
+    /// Elements of the mean mesh.
     pub elements: usize,
+    /// Element kind (`hex8`, `quad4`, ...).
     pub element_kind: String,
+    /// Smallest scaled Jacobian of the mean mesh.
     pub scaled_jacobian_min: f64,
+    /// Smallest corner Jacobian of the mean mesh (reference units^D).
     pub jacobian_min: f64,
     /// The largest element edge ratio (longest edge over shortest).
     #[serde(default, deserialize_with = "f64_or_nan")]
@@ -128,15 +145,21 @@ pub struct MeanMeshReport {
 /// `report.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Report {
+    /// The data the run was made from (files or folder).
     pub dataset: String,
+    /// 2 (outlines) or 3 (surfaces).
     pub dimension: usize,
+    /// Modes of the model used.
     pub modes: usize,
     /// Cumulative variance share, one value per kept mode.
     pub variance_explained: Vec<f64>,
     /// Every parameter of the run (enough to repeat it).
     pub parameters: serde_json::Value,
+    /// The atlas's mean mesh.
     pub mean_mesh: Option<MeanMeshReport>,
+    /// Every subject written (those that failed are in `failed`).
     pub subjects: Vec<SubjectReport>,
+    /// Figures over all subjects.
     pub summary: Summary,
     /// Batch fit: the subjects that failed, with the reason.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -144,6 +167,7 @@ pub struct Report {
     /// Batch fit: the shard (`I/N`) this report covers.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<String>,
+    /// The atlasmesh version that wrote the report.
     pub atlasmesh_version: String,
 }
 
@@ -204,8 +228,11 @@ impl Report {
 /// A subject that failed: its name, its input file and why.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FailedSubject {
+    /// The subject's name.
     pub name: String,
+    /// Its input file.
     pub input: String,
+    /// Why it failed.
     pub error: String,
     /// The exit code of the error's class (2 bad input, 3 I/O, 4 numerics or invalid mesh).
     pub exit_code: u8,

@@ -4,7 +4,6 @@ use crate::error::Result;
 use crate::eval::{normal_correlation, normals_at};
 use crate::geometry::{ClosestPointIndex, Point, Shape};
 use crate::model::Atlas;
-use rayon::prelude::*;
 
 /// The baselines of the paper's fig. 12/20 for one subject: the normal correlation (eq. 13)
 /// between the mean and the subject at the correspondence found (a) by a similarity ICP of

@@ -15,7 +15,11 @@
 //! (subject `k` of the sorted list goes to part `k mod n`): disjoint, covering, balanced to
 //! one subject, and the same on every machine that sees the same list.
 
-use super::{Progress, RunParams, finish_report, mean_mesh_report, process_subject};
+use super::build::mean_mesh_report;
+use super::params::RunParams;
+use super::progress::Progress;
+use super::report_files::finish_report;
+use super::write_subject::process_subject;
 use crate::error::{Error, Result};
 use crate::fit::Fitter;
 use crate::geometry::Shape;
@@ -43,9 +47,13 @@ pub struct BatchOptions {
 /// them).
 #[derive(Clone, Debug, Default)]
 pub struct BatchFacts {
+    /// Subjects that failed, with the reason.
     pub failed: Vec<FailedSubject>,
+    /// The shard (`I/N`) of a batch.
     pub shard: Option<String>,
+    /// Subjects skipped because their outputs were complete.
     pub resumed: usize,
+    /// The population model's measures (the HTML report plots them).
     pub measures: Option<crate::eval::ShapeModelMeasures>,
 }
 
@@ -53,11 +61,13 @@ pub struct BatchFacts {
 /// and what it was made from.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SubjectRecord {
+    /// The input file.
     pub input: String,
     /// CRC-32 of the input file's bytes.
     pub input_crc32: u32,
     /// CRC-32 of the atlas file and of the run parameters (JSON).
     pub run_crc32: u32,
+    /// The subject's report (files relative to the batch folder).
     pub report: SubjectReport,
 }
 

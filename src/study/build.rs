@@ -1,6 +1,7 @@
 //! Building an atlas from a population and writing it.
 
-use super::*;
+use super::params::RunParams;
+use super::sets::apply_sets;
 use crate::error::Result;
 use crate::formats::{create_dir, write_vtp, write_vtu};
 use crate::geometry::Shape;
@@ -8,7 +9,6 @@ use crate::mesh::FeMesh;
 use crate::mesh::quality::{mesh_quality, summarize};
 use crate::model::Atlas;
 use crate::report::MeanMeshReport;
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 pub(crate) fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshReport {

@@ -1,13 +1,15 @@
 //! The built-in demo: synthetic populations, an atlas, leave-one-out fits.
 
-use super::*;
+use super::batch::fit_shapes;
+use super::build::build;
+use super::params::RunParams;
+use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::formats::create_dir;
 use crate::geometry::{Point, Shape, Similarity};
 use crate::model::Atlas;
 use crate::register::resample_corresponding;
 use crate::report::Report;
-use rayon::prelude::*;
 use std::path::Path;
 
 /// The demo's synthetic population: `n` closed outlines of an asymmetric bone-like section

@@ -1,6 +1,10 @@
 //! The leave-one-out experiment (section 6.1).
 
-use super::*;
+use super::build::{atlas_of, mean_mesh_report};
+use super::params::RunParams;
+use super::progress::Progress;
+use super::report_files::finish_report;
+use super::write_subject::process_subject;
 use crate::error::{Error, Result};
 use crate::fit::Fitter;
 use crate::formats::create_dir;

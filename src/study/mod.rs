@@ -46,7 +46,6 @@ pub use params::*;
 pub use population::*;
 pub use progress::{Progress, Silent};
 pub use register_pair::{PairRegistration, register_pair};
-pub use report_files::*;
 pub use sets::*;
 pub use subject::*;
 pub use write_subject::*;

@@ -1,16 +1,17 @@
 //! All parameters of a run.
 
-use super::*;
 use crate::ffd::FfdParams;
 use crate::fit::FitParams;
 use crate::model::AtlasParams;
-use rayon::prelude::*;
 
 /// All parameters of a run.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct RunParams {
+    /// Atlas construction.
     pub atlas: AtlasParams,
+    /// The fit (Algorithm 1).
     pub fit: FitParams,
+    /// The morph's FFD (eq. 9).
     pub morph: FfdParams,
     /// Write PNG plots.
     pub plots: bool,

@@ -1,6 +1,6 @@
 //! Loading a population: outlines and surfaces, landmarks, registration to a template.
 
-use super::*;
+use super::Progress;
 use crate::error::{Error, Result};
 use crate::geometry::{ClosestPointIndex, Point, Shape};
 use crate::register::{resample_corresponding, resample_uniform};

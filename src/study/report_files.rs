@@ -1,13 +1,12 @@
 //! The population-level plots, `report.json` and `report.html` of a run.
 
-use super::*;
+use super::params::RunParams;
 use crate::error::Result;
 use crate::model::Atlas;
 use crate::report::{
     JACOBIAN_BINS, MeanMeshReport, Report, SubjectReport, Summary, plot_cumulative_variance,
     plot_e_d, plot_jacobian_histogram,
 };
-use rayon::prelude::*;
 use std::path::Path;
 
 /// Writes the population-level plots and the report.

@@ -3,7 +3,6 @@
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use crate::model::Atlas;
-use rayon::prelude::*;
 use std::path::Path;
 
 /// Adds the sets of `config` (evaluated on the mean mesh, with the atlas's landmarks) to the

@@ -1,7 +1,8 @@
 //! One subject: fit (Algorithm 1), morph (eq. 9), repair and the measures of section 5, as a
 //! value; nothing is written here.
 
-use super::{RunParams, baseline_correlations};
+use super::baselines::baseline_correlations;
+use super::params::RunParams;
 use crate::error::{Error, Result};
 use crate::eval::{e_d, normal_correlation, normals_at, two_way_rms};
 use crate::fit::{FitResult, Fitter};

@@ -1,7 +1,8 @@
 //! Writing one subject: its meshes in every format, its deck, its fitted surface and its
 //! pictures, beside the measures that [`fit_subject`](super::fit_subject) took.
 
-use super::{RunParams, SubjectOutcome};
+use super::params::RunParams;
+use super::subject::SubjectOutcome;
 use crate::error::Result;
 use crate::fit::Fitter;
 use crate::formats::{write_atomic, write_mesh, write_vtp};

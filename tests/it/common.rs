@@ -114,12 +114,21 @@ pub fn raw_femurs(
         .unzip()
 }
 
-/// Whether `program` runs; a failure when the tools are required.
+/// Whether `program` is an executable on the `PATH` (or, with a `/`, that file); a failure
+/// when the tools are required. The program is not run: CalculiX takes any argument, even
+/// `--version`, as the name of a job and writes its output files for it.
 pub fn tool(program: &str, what: &str) -> bool {
-    let ok = std::process::Command::new(program)
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success() || !o.stdout.is_empty() || !o.stderr.is_empty());
+    use std::os::unix::fs::PermissionsExt;
+    let executable = |p: &std::path::Path| {
+        p.metadata()
+            .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+    };
+    let ok = if program.contains('/') {
+        executable(std::path::Path::new(program))
+    } else {
+        std::env::var_os("PATH")
+            .is_some_and(|path| std::env::split_paths(&path).any(|d| executable(&d.join(program))))
+    };
     if !ok {
         assert!(
             std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),

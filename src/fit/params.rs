@@ -18,7 +18,7 @@ pub struct FitParams {
     pub tolerance: f64,
     /// Cap on correspondence updates per `gamma`.
     pub max_iterations: usize,
-    /// Add the subject-to-instance closest points to `E_d` (see [`Fitter::fit`]).
+    /// Add the subject-to-instance closest points to `E_d` (see [`Fitter::fit`](crate::fit::Fitter::fit)).
     pub symmetric: bool,
     /// Starting rotations tried by the pre-alignment in 2D (evenly spaced; 1 = identity
     /// only). In 3D the starts are the principal-axes rotations and the identity.
@@ -27,7 +27,7 @@ pub struct FitParams {
     pub full_starts: usize,
     /// Points per direction (model and subject) used by the pre-alignment and the coarse
     /// stage; the last `gamma` runs on all points. 0 = all points throughout. The coarse
-    /// model (see [`Fitter::fit`]) is built for the default value; with another, the coarse
+    /// model (see [`Fitter::fit`](crate::fit::Fitter::fit)) is built for the default value; with another, the coarse
     /// stage samples the full model.
     pub coarse_points: usize,
     /// The subject may miss parts (paper, fig. 21-22): `E_d` takes only the distances from

@@ -109,7 +109,7 @@ pub struct ClosestPointIndex<const D: usize> {
     pub(super) corners: Vec<Point<D>>,
     /// The point of every corner.
     pub(super) corner_point: Vec<u32>,
-    /// Unit vertex normal of every corner (as [`vertex_normals`] gives them).
+    /// Unit vertex normal of every corner (as [`vertex_normals`](super::vertex_normals) gives them).
     pub(super) corner_normals: Vec<Point<D>>,
     /// Corner of every point (`u32::MAX`: on no facet).
     pub(super) corner_of: Vec<u32>,
@@ -398,7 +398,7 @@ impl<const D: usize> ClosestPointIndex<D> {
         Some(self.slots[slot].map(|c| self.corner_point[c as usize] as usize))
     }
 
-    /// The unit vertex normal of every point (as [`vertex_normals`] gives them; zero for a
+    /// The unit vertex normal of every point (as [`vertex_normals`](super::vertex_normals) gives them; zero for a
     /// point on no facet), into `out`.
     pub fn vertex_normals_into(&self, out: &mut Vec<Point<D>>) {
         out.clear();

@@ -2,7 +2,7 @@
 
 use super::{Point, add, normalize, sub};
 
-/// Vertex normals of `points` with connectivity `facets`: see [`Shape::vertex_normals`].
+/// Vertex normals of `points` with connectivity `facets`: see [`Shape::vertex_normals`](super::Shape::vertex_normals).
 pub fn vertex_normals<const D: usize>(points: &[Point<D>], facets: &[[usize; D]]) -> Vec<Point<D>> {
     let mut n = Vec::new();
     vertex_normals_of(points, facets.iter().copied(), &mut n);

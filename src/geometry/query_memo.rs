@@ -10,7 +10,7 @@ pub(super) const MEMO_FACETS: usize = 4;
 /// point and the surface moved a little (a fit's or a registration's next iteration), is
 /// then answered by testing those few facets, with a proof that no other facet can be
 /// nearer; where the proof fails, by a search from the nearest one
-/// ([`ClosestPointIndex::closest_memo`]).
+/// ([`ClosestPointIndex::closest_memo`](super::ClosestPointIndex::closest_memo)).
 #[derive(Clone, Copy, Debug)]
 pub struct QueryMemo<const D: usize> {
     /// The index the memo belongs to (0: none yet).

@@ -4,8 +4,8 @@ use crate::error::Result;
 use crate::geometry::{Shape, same_dim};
 use crate::mesh::{FeMesh, QuadMeshParams, quad_mesh};
 
-/// Meshes the mean shape: quadrilaterals in 2D ([`quad_mesh`]), hexahedra in 3D
-/// ([`crate::mesh::hex_mesh::hex_mesh`], closed surfaces only).
+/// Meshes the mean shape: quadrilaterals in 2D ([`quad_mesh`](fn@super::quad_mesh)), hexahedra in 3D
+/// ([`hex_mesh`](fn@super::hex_mesh), closed surfaces only).
 pub fn mesh_mean_shape<const D: usize>(
     mean: &Shape<D>,
     element_size: f64,

@@ -95,7 +95,7 @@ impl<const D: usize> Registration<D> {
     }
 }
 
-/// Registers `template` to `target` (section 2.1, eq. 2): pre-alignment ([`pre_align`]),
+/// Registers `template` to `target` (section 2.1, eq. 2): pre-alignment ([`pre_align`](super::pre_align)),
 /// then, with the template's points `p_j` fixed as the FFD's sources, for each `alpha` of the
 /// schedule `iterations_per_alpha` times: the closest point `c_j` on the target of every
 /// deformed point `f(p_j)`, and the control points minimizing

@@ -32,7 +32,7 @@ pub struct RunParams {
     pub repair: Option<crate::mesh::repair::RepairParams>,
     /// A fit whose two-way RMS distance to its subject (eq. 6 both ways) exceeds this share
     /// of the subject's bounding-box diagonal did not converge: the subject is refused
-    /// ([`Error::NotConverged`]) and no mesh is written for it. A good fit is below 0.01. With
+    /// ([`Error::NotConverged`](crate::Error::NotConverged)) and no mesh is written for it. A good fit is below 0.01. With
     /// `fit.partial` the distance is the subject's to the instance only.
     #[serde(default = "default_max_misfit")]
     pub max_misfit: f64,

@@ -8,10 +8,8 @@
 //! spoiled. Without the data, seeded synthetic surfaces of the 3D demo (7322 vertices) stand
 //! in.
 
-// Only the raw-femur helper of the tests is used here.
-#[allow(dead_code)]
-#[path = "../tests/it/common.rs"]
-mod common;
+#[path = "../tests/it/raw_femurs.rs"]
+mod raw_femurs;
 
 use atlasmesh::ffd::FfdParams;
 use atlasmesh::fit::{FitParams, Fitter};
@@ -162,7 +160,7 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.finish();
-    let (raw, _) = common::raw_femurs(&shapes, 30);
+    let (raw, _) = raw_femurs::raw_femurs(&shapes, 30);
     let mut g = c.benchmark_group("issue4");
     g.sample_size(10);
     g.bench_function("atlas_from_30_raw_femurs_2_cores", |b| {

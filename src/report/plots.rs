@@ -36,22 +36,43 @@ pub fn font_available() -> bool {
     })
 }
 
-/// The temporary name a plot is drawn to before [`rename_png`] gives it its name (an
-/// interrupted run leaves no half-written picture).
-fn tmp_png(path: &Path) -> std::path::PathBuf {
-    let name = path
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}.png", std::process::id()))
+/// An RGB picture that plotters draws into (no image codec: [`Canvas::save`] encodes it).
+struct Canvas {
+    width: u32,
+    height: u32,
+    rgb: Vec<u8>,
 }
 
-fn rename_png(path: &Path) -> Result<()> {
-    let tmp = tmp_png(path);
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
+impl Canvas {
+    /// A white picture of `width` × `height` pixels.
+    fn new(width: u32, height: u32) -> Self {
+        Canvas {
+            width,
+            height,
+            rgb: vec![255; width as usize * height as usize * 3],
+        }
+    }
+
+    /// Draws on the whole picture with `draw`, then writes it as PNG to `path` (a temporary
+    /// name, then a rename).
+    fn draw(
+        mut self,
+        path: &Path,
+        draw: impl FnOnce(DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<()>,
+    ) -> Result<()> {
+        {
+            let root = BitMapBackend::with_buffer(&mut self.rgb, (self.width, self.height))
+                .into_drawing_area();
+            draw(root.clone())?;
+            root.present().map_err(perr(path))?;
+        }
+        let img = render::Image {
+            width: self.width as usize,
+            height: self.height as usize,
+            rgb: self.rgb,
+        };
+        crate::formats::write_atomic(path, &img.png()?)
+    }
 }
 
 /// A chart's frame on `area`: the margins, the label areas (`y_label` pixels for the y
@@ -79,46 +100,44 @@ fn perr<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> Error + '_ {
 /// Plots the cumulative variance share against the number of modes (fig. 5).
 pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) -> Result<()> {
     let text = font_available();
-    let tmp = tmp_png(path);
-    let root = BitMapBackend::new(&tmp, (640, 420)).into_drawing_area();
-    root.fill(&WHITE).map_err(perr(path))?;
-    let n = cumulative.len().max(1);
-    let lo = cumulative.first().copied().unwrap_or(0.0).min(0.9) - 0.02;
-    let mut chart = chart_frame(&root, "Cumulative variance", 52, text)
-        .build_cartesian_2d(0.5f64..n as f64 + 0.5, lo..1.005f64)
-        .map_err(perr(path))?;
-    if text {
-        chart
-            .configure_mesh()
-            .x_desc("number of modes")
-            .y_desc("share of variance")
-            .draw()
+    Canvas::new(640, 420).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let n = cumulative.len().max(1);
+        let lo = cumulative.first().copied().unwrap_or(0.0).min(0.9) - 0.02;
+        let mut chart = chart_frame(&root, "Cumulative variance", 52, text)
+            .build_cartesian_2d(0.5f64..n as f64 + 0.5, lo..1.005f64)
             .map_err(perr(path))?;
-    }
-    let pts: Vec<(f64, f64)> = cumulative
-        .iter()
-        .enumerate()
-        .map(|(i, v)| ((i + 1) as f64, *v))
-        .collect();
-    chart
-        .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2)))
-        .map_err(perr(path))?;
-    chart
-        .draw_series(pts.iter().enumerate().map(|(i, p)| {
-            Circle::new(
-                *p,
-                4,
-                if i < kept {
-                    RED.filled()
-                } else {
-                    BLUE.filled()
-                },
-            )
-        }))
-        .map_err(perr(path))?;
-    root.present().map_err(perr(path))?;
-    drop(root);
-    rename_png(path)
+        if text {
+            chart
+                .configure_mesh()
+                .x_desc("number of modes")
+                .y_desc("share of variance")
+                .draw()
+                .map_err(perr(path))?;
+        }
+        let pts: Vec<(f64, f64)> = cumulative
+            .iter()
+            .enumerate()
+            .map(|(i, v)| ((i + 1) as f64, *v))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2)))
+            .map_err(perr(path))?;
+        chart
+            .draw_series(pts.iter().enumerate().map(|(i, p)| {
+                Circle::new(
+                    *p,
+                    4,
+                    if i < kept {
+                        RED.filled()
+                    } else {
+                        BLUE.filled()
+                    },
+                )
+            }))
+            .map_err(perr(path))?;
+        Ok(())
+    })
 }
 
 /// Plots compactness, generalization and specificity against the number of modes, side by
@@ -129,136 +148,132 @@ pub fn plot_shape_model_measures(
     units: &str,
 ) -> Result<()> {
     let text = font_available();
-    let tmp = tmp_png(path);
-    let root = BitMapBackend::new(&tmp, (1200, 400)).into_drawing_area();
-    root.fill(&WHITE).map_err(perr(path))?;
-    let panels = root.split_evenly((1, 3));
-    let series = [
-        (
-            "Compactness",
-            "share of variance".to_string(),
-            &m.compactness,
-            &m.compactness_sd,
-        ),
-        (
-            "Generalization",
-            format!("mean distance ({units})"),
-            &m.generalization,
-            &m.generalization_sd,
-        ),
-        (
-            "Specificity",
-            format!("mean distance ({units})"),
-            &m.specificity,
-            &m.specificity_sd,
-        ),
-    ];
-    let n = m.modes.len().max(1) as f64;
-    for (area, (title, ylabel, v, sd)) in panels.iter().zip(series) {
-        let lo = v
-            .iter()
-            .zip(sd.iter())
-            .map(|(a, b)| a - b)
-            .fold(f64::INFINITY, f64::min);
-        let hi = v
-            .iter()
-            .zip(sd.iter())
-            .map(|(a, b)| a + b)
-            .fold(f64::NEG_INFINITY, f64::max);
-        let (lo, hi) = if lo.is_finite() && hi > lo {
-            let pad = 0.05 * (hi - lo);
-            (lo - pad, hi + pad)
-        } else {
-            (0.0, 1.0)
-        };
-        let mut chart = chart_frame(area, title, 64, text)
-            .build_cartesian_2d(0.5f64..n + 0.5, lo..hi)
-            .map_err(perr(path))?;
-        if text {
+    Canvas::new(1200, 400).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let panels = root.split_evenly((1, 3));
+        let series = [
+            (
+                "Compactness",
+                "share of variance".to_string(),
+                &m.compactness,
+                &m.compactness_sd,
+            ),
+            (
+                "Generalization",
+                format!("mean distance ({units})"),
+                &m.generalization,
+                &m.generalization_sd,
+            ),
+            (
+                "Specificity",
+                format!("mean distance ({units})"),
+                &m.specificity,
+                &m.specificity_sd,
+            ),
+        ];
+        let n = m.modes.len().max(1) as f64;
+        for (area, (title, ylabel, v, sd)) in panels.iter().zip(series) {
+            let lo = v
+                .iter()
+                .zip(sd.iter())
+                .map(|(a, b)| a - b)
+                .fold(f64::INFINITY, f64::min);
+            let hi = v
+                .iter()
+                .zip(sd.iter())
+                .map(|(a, b)| a + b)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let (lo, hi) = if lo.is_finite() && hi > lo {
+                let pad = 0.05 * (hi - lo);
+                (lo - pad, hi + pad)
+            } else {
+                (0.0, 1.0)
+            };
+            let mut chart = chart_frame(area, title, 64, text)
+                .build_cartesian_2d(0.5f64..n + 0.5, lo..hi)
+                .map_err(perr(path))?;
+            if text {
+                chart
+                    .configure_mesh()
+                    .x_desc("number of modes")
+                    .y_desc(ylabel.as_str())
+                    .draw()
+                    .map_err(perr(path))?;
+            }
+            let band: Vec<(f64, f64)> = m
+                .modes
+                .iter()
+                .zip(v.iter().zip(sd.iter()))
+                .map(|(k, (a, e))| (*k as f64, a + e))
+                .chain(
+                    m.modes
+                        .iter()
+                        .zip(v.iter().zip(sd.iter()))
+                        .rev()
+                        .map(|(k, (a, e))| (*k as f64, a - e)),
+                )
+                .collect();
             chart
-                .configure_mesh()
-                .x_desc("number of modes")
-                .y_desc(ylabel.as_str())
-                .draw()
+                .draw_series(std::iter::once(Polygon::new(band, BLUE.mix(0.2).filled())))
+                .map_err(perr(path))?;
+            chart
+                .draw_series(LineSeries::new(
+                    m.modes.iter().zip(v.iter()).map(|(k, a)| (*k as f64, *a)),
+                    BLUE.stroke_width(2),
+                ))
                 .map_err(perr(path))?;
         }
-        let band: Vec<(f64, f64)> = m
-            .modes
-            .iter()
-            .zip(v.iter().zip(sd.iter()))
-            .map(|(k, (a, e))| (*k as f64, a + e))
-            .chain(
-                m.modes
-                    .iter()
-                    .zip(v.iter().zip(sd.iter()))
-                    .rev()
-                    .map(|(k, (a, e))| (*k as f64, a - e)),
-            )
-            .collect();
-        chart
-            .draw_series(std::iter::once(Polygon::new(band, BLUE.mix(0.2).filled())))
-            .map_err(perr(path))?;
-        chart
-            .draw_series(LineSeries::new(
-                m.modes.iter().zip(v.iter()).map(|(k, a)| (*k as f64, *a)),
-                BLUE.stroke_width(2),
-            ))
-            .map_err(perr(path))?;
-    }
-    root.present().map_err(perr(path))?;
-    drop(root);
-    rename_png(path)
+        Ok(())
+    })
 }
 
 /// Plots `E_d` against the iteration for every subject (fig. 11), log scale.
 pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
     let text = font_available();
-    let tmp = tmp_png(path);
-    let root = BitMapBackend::new(&tmp, (720, 460)).into_drawing_area();
-    root.fill(&WHITE).map_err(perr(path))?;
-    let maxit = histories
-        .iter()
-        .map(|h| h.1.len())
-        .max()
-        .unwrap_or(1)
-        .max(2);
-    let vals: Vec<f64> = histories
-        .iter()
-        .flat_map(|h| h.1.iter().copied())
-        .filter(|v| *v > 0.0 && v.is_finite())
-        .collect();
-    let lo = vals
-        .iter()
-        .copied()
-        .fold(f64::INFINITY, f64::min)
-        .max(1e-300);
-    let hi = vals.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
-    let mut chart = chart_frame(&root, "E_d per iteration", 64, text)
-        .build_cartesian_2d(0f64..maxit as f64, (lo..hi).log_scale())
-        .map_err(perr(path))?;
-    if text {
-        chart
-            .configure_mesh()
-            .x_desc("iteration")
-            .y_desc("E_d")
-            .draw()
+    Canvas::new(720, 460).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let maxit = histories
+            .iter()
+            .map(|h| h.1.len())
+            .max()
+            .unwrap_or(1)
+            .max(2);
+        let vals: Vec<f64> = histories
+            .iter()
+            .flat_map(|h| h.1.iter().copied())
+            .filter(|v| *v > 0.0 && v.is_finite())
+            .collect();
+        let lo = vals
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+            .max(1e-300);
+        let hi = vals.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
+        let mut chart = chart_frame(&root, "E_d per iteration", 64, text)
+            .build_cartesian_2d(0f64..maxit as f64, (lo..hi).log_scale())
             .map_err(perr(path))?;
-    }
-    for (k, (_, h)) in histories.iter().enumerate() {
-        let color = Palette99::pick(k).to_rgba();
-        chart
-            .draw_series(LineSeries::new(
-                h.iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v > 0.0)
-                    .map(|(i, v)| (i as f64, *v)),
-                color.stroke_width(1),
-            ))
-            .map_err(perr(path))?;
-    }
-    root.present().map_err(perr(path))?;
-    drop(root);
-    rename_png(path)
+        if text {
+            chart
+                .configure_mesh()
+                .x_desc("iteration")
+                .y_desc("E_d")
+                .draw()
+                .map_err(perr(path))?;
+        }
+        for (k, (_, h)) in histories.iter().enumerate() {
+            let color = Palette99::pick(k).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    h.iter()
+                        .enumerate()
+                        .filter(|(_, v)| **v > 0.0)
+                        .map(|(i, v)| (i as f64, *v)),
+                    color.stroke_width(1),
+                ))
+                .map_err(perr(path))?;
+        }
+        Ok(())
+    })
 }
 
 /// Bins of [`SubjectReport::scaled_jacobian_histogram`].
@@ -280,34 +295,32 @@ pub fn jacobian_histogram(values: impl IntoIterator<Item = f64>) -> Vec<u32> {
 /// Histogram of the scaled Jacobians of all subjects' elements (counts summed over subjects).
 pub fn plot_jacobian_histogram(path: &Path, counts: &[u32]) -> Result<()> {
     let text = font_available();
-    let tmp = tmp_png(path);
-    let root = BitMapBackend::new(&tmp, (720, 460)).into_drawing_area();
-    root.fill(&WHITE).map_err(perr(path))?;
-    let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
-    let mut chart = chart_frame(&root, "Scaled Jacobians of all morphed meshes", 64, text)
-        .build_cartesian_2d(-1f64..1f64, 0f64..top * 1.05)
-        .map_err(perr(path))?;
-    if text {
-        chart
-            .configure_mesh()
-            .x_desc("smallest corner scaled Jacobian of an element")
-            .y_desc("elements")
-            .draw()
+    Canvas::new(720, 460).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
+        let mut chart = chart_frame(&root, "Scaled Jacobians of all morphed meshes", 64, text)
+            .build_cartesian_2d(-1f64..1f64, 0f64..top * 1.05)
             .map_err(perr(path))?;
-    }
-    let w = 2.0 / counts.len().max(1) as f64;
-    chart
-        .draw_series(counts.iter().enumerate().map(|(k, &c)| {
-            let x0 = -1.0 + w * k as f64;
-            Rectangle::new(
-                [(x0, 0.0), (x0 + w, c as f64)],
-                jacobian_color(x0 + 0.5 * w).filled(),
-            )
-        }))
-        .map_err(perr(path))?;
-    root.present().map_err(perr(path))?;
-    drop(root);
-    rename_png(path)
+        if text {
+            chart
+                .configure_mesh()
+                .x_desc("smallest corner scaled Jacobian of an element")
+                .y_desc("elements")
+                .draw()
+                .map_err(perr(path))?;
+        }
+        let w = 2.0 / counts.len().max(1) as f64;
+        chart
+            .draw_series(counts.iter().enumerate().map(|(k, &c)| {
+                let x0 = -1.0 + w * k as f64;
+                Rectangle::new(
+                    [(x0, 0.0), (x0 + w, c as f64)],
+                    jacobian_color(x0 + 0.5 * w).filled(),
+                )
+            }))
+            .map_err(perr(path))?;
+        Ok(())
+    })
 }
 
 /// Colour of a scaled Jacobian in [-1, 1] ([`render::jacobian_color`]).
@@ -329,84 +342,82 @@ pub fn plot_subject(
     closed: bool,
 ) -> Result<()> {
     let text = font_available();
-    let tmp = tmp_png(path);
-    let root = BitMapBackend::new(&tmp, (1100, 540)).into_drawing_area();
-    root.fill(&WHITE).map_err(perr(path))?;
-    let (left, right) = root.split_horizontally(550);
-    let mut all: Vec<Point<2>> = subject.to_vec();
-    all.extend_from_slice(mean);
-    all.extend(locus.iter().flatten().copied());
-    all.extend_from_slice(&mesh.nodes);
-    let (lo, hi) = bounding_box(&all);
-    let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.55 + 1e-12;
-    let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
-    // Image convention of the data (y down) is kept: y axis reversed.
-    let xr = c[0] - ext..c[0] + ext;
-    let yr = c[1] + ext..c[1] - ext;
-    let line = |pts: &[Point<2>]| -> Vec<(f64, f64)> {
-        let mut v: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
-        if closed && let Some(f) = v.first().copied() {
-            v.push(f);
-        }
-        v
-    };
-    {
-        let mut b = ChartBuilder::on(&left);
-        b.margin(10);
-        if text {
-            b.caption(format!("{title}: fit"), ("sans-serif", 18));
-        }
-        let mut ch = b
-            .build_cartesian_2d(xr.clone(), yr.clone())
-            .map_err(perr(path))?;
-        for l in locus {
-            ch.draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1)))
+    Canvas::new(1100, 540).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let (left, right) = root.split_horizontally(550);
+        let mut all: Vec<Point<2>> = subject.to_vec();
+        all.extend_from_slice(mean);
+        all.extend(locus.iter().flatten().copied());
+        all.extend_from_slice(&mesh.nodes);
+        let (lo, hi) = bounding_box(&all);
+        let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.55 + 1e-12;
+        let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+        // Image convention of the data (y down) is kept: y axis reversed.
+        let xr = c[0] - ext..c[0] + ext;
+        let yr = c[1] + ext..c[1] - ext;
+        let line = |pts: &[Point<2>]| -> Vec<(f64, f64)> {
+            let mut v: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
+            if closed && let Some(f) = v.first().copied() {
+                v.push(f);
+            }
+            v
+        };
+        {
+            let mut b = ChartBuilder::on(&left);
+            b.margin(10);
+            if text {
+                b.caption(format!("{title}: fit"), ("sans-serif", 18));
+            }
+            let mut ch = b
+                .build_cartesian_2d(xr.clone(), yr.clone())
+                .map_err(perr(path))?;
+            for l in locus {
+                ch.draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1)))
+                    .map_err(perr(path))?;
+            }
+            ch.draw_series(LineSeries::new(line(mean), RED.stroke_width(2)))
+                .map_err(perr(path))?;
+            ch.draw_series(LineSeries::new(line(subject), BLUE.stroke_width(2)))
                 .map_err(perr(path))?;
         }
-        ch.draw_series(LineSeries::new(line(mean), RED.stroke_width(2)))
+        {
+            let mut b = ChartBuilder::on(&right);
+            b.margin(10);
+            if text {
+                b.caption(
+                    format!("{title}: mesh (scaled Jacobian)"),
+                    ("sans-serif", 18),
+                );
+            }
+            let mut ch = b.build_cartesian_2d(xr, yr).map_err(perr(path))?;
+            let q = mesh_quality(mesh);
+            ch.draw_series((0..mesh.num_elements()).map(|e| {
+                let pts: Vec<(f64, f64)> = mesh
+                    .element(e)
+                    .iter()
+                    .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
+                    .collect();
+                Polygon::new(pts, jacobian_color(q[e].scaled_jacobian_min).filled())
+            }))
             .map_err(perr(path))?;
-        ch.draw_series(LineSeries::new(line(subject), BLUE.stroke_width(2)))
+            ch.draw_series((0..mesh.num_elements()).map(|e| {
+                let mut pts: Vec<(f64, f64)> = mesh
+                    .element(e)
+                    .iter()
+                    .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
+                    .collect();
+                pts.push(pts[0]);
+                PathElement::new(pts, BLACK.mix(0.6).stroke_width(1))
+            }))
             .map_err(perr(path))?;
-    }
-    {
-        let mut b = ChartBuilder::on(&right);
-        b.margin(10);
-        if text {
-            b.caption(
-                format!("{title}: mesh (scaled Jacobian)"),
-                ("sans-serif", 18),
-            );
+            ch.draw_series(LineSeries::new(
+                line(subject),
+                BLUE.mix(0.7).stroke_width(1),
+            ))
+            .map_err(perr(path))?;
         }
-        let mut ch = b.build_cartesian_2d(xr, yr).map_err(perr(path))?;
-        let q = mesh_quality(mesh);
-        ch.draw_series((0..mesh.num_elements()).map(|e| {
-            let pts: Vec<(f64, f64)> = mesh
-                .element(e)
-                .iter()
-                .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
-                .collect();
-            Polygon::new(pts, jacobian_color(q[e].scaled_jacobian_min).filled())
-        }))
-        .map_err(perr(path))?;
-        ch.draw_series((0..mesh.num_elements()).map(|e| {
-            let mut pts: Vec<(f64, f64)> = mesh
-                .element(e)
-                .iter()
-                .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
-                .collect();
-            pts.push(pts[0]);
-            PathElement::new(pts, BLACK.mix(0.6).stroke_width(1))
-        }))
-        .map_err(perr(path))?;
-        ch.draw_series(LineSeries::new(
-            line(subject),
-            BLUE.mix(0.7).stroke_width(1),
-        ))
-        .map_err(perr(path))?;
-    }
-    root.present().map_err(perr(path))?;
-    drop(root);
-    rename_png(path)
+        Ok(())
+    })
 }
 
 /// The mean shape and the instances at -2σ and +2σ along each of the first 3 modes (figs. 4
@@ -484,45 +495,43 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
         return crate::formats::write_atomic(path, &img.png()?);
     }
     let text = font_available();
-    let tmp = tmp_png(path);
-    let root = BitMapBackend::new(&tmp, (360 * modes as u32, 380)).into_drawing_area();
-    root.fill(&WHITE).map_err(perr(path))?;
-    let (lo, hi) = bounding_box(&atlas.mean);
-    let pad = 0.25 * (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
-    let (cx, cy) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
-    let half = 0.5 * (hi[0] - lo[0]).max(hi[1] - lo[1]) + pad;
-    for (m, area) in root.split_evenly((1, modes)).iter().enumerate() {
-        let mut b = ChartBuilder::on(area);
-        b.margin(8);
-        if text {
-            b.caption(
-                format!("mode {}: -2σ, mean, +2σ", m + 1),
-                ("sans-serif", 16),
-            );
-        }
-        let mut chart = b
-            .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
-            .map_err(perr(path))?;
-        for (shape, color) in [
-            (at(m, -2.0), BLUE.to_rgba()),
-            (atlas.mean.clone(), BLACK.to_rgba()),
-            (at(m, 2.0), RED.to_rgba()),
-        ] {
-            chart
-                .draw_series(atlas.facets.iter().map(|f| {
-                    PathElement::new(
-                        f.iter()
-                            .map(|&i| (shape[i][0], shape[i][1]))
-                            .collect::<Vec<_>>(),
-                        color.stroke_width(2),
-                    )
-                }))
+    Canvas::new(360 * modes as u32, 380).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let (lo, hi) = bounding_box(&atlas.mean);
+        let pad = 0.25 * (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+        let (cx, cy) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
+        let half = 0.5 * (hi[0] - lo[0]).max(hi[1] - lo[1]) + pad;
+        for (m, area) in root.split_evenly((1, modes)).iter().enumerate() {
+            let mut b = ChartBuilder::on(area);
+            b.margin(8);
+            if text {
+                b.caption(
+                    format!("mode {}: -2σ, mean, +2σ", m + 1),
+                    ("sans-serif", 16),
+                );
+            }
+            let mut chart = b
+                .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
                 .map_err(perr(path))?;
+            for (shape, color) in [
+                (at(m, -2.0), BLUE.to_rgba()),
+                (atlas.mean.clone(), BLACK.to_rgba()),
+                (at(m, 2.0), RED.to_rgba()),
+            ] {
+                chart
+                    .draw_series(atlas.facets.iter().map(|f| {
+                        PathElement::new(
+                            f.iter()
+                                .map(|&i| (shape[i][0], shape[i][1]))
+                                .collect::<Vec<_>>(),
+                            color.stroke_width(2),
+                        )
+                    }))
+                    .map_err(perr(path))?;
+            }
         }
-    }
-    root.present().map_err(perr(path))?;
-    drop(root);
-    rename_png(path)
+        Ok(())
+    })
 }
 
 /// The paper's comparison (fig. 12/20): per subject (sorted by the SSM fit's value) the
@@ -548,52 +557,50 @@ pub fn plot_baselines(path: &Path, subjects: &[SubjectReport]) -> Result<()> {
         .fold(1.0f64, f64::min)
         .min(0.99)
         - 0.01;
-    let tmp = tmp_png(path);
-    let root = BitMapBackend::new(&tmp, (720, 420)).into_drawing_area();
-    root.fill(&WHITE).map_err(perr(path))?;
-    let mut chart = chart_frame(&root, "normal correlation per subject", 56, text)
-        .build_cartesian_2d(0.0..rows.len().max(1) as f64, lo..1.0)
-        .map_err(perr(path))?;
-    if text {
-        chart
-            .configure_mesh()
-            .x_desc("subjects (sorted by the SSM fit)")
-            .y_desc("normal correlation")
-            .draw()
-            .map_err(perr(path))?;
-    }
-    type Series = (&'static str, RGBColor, fn(&(f64, f64, f64)) -> f64);
-    let series: [Series; 3] = [
-        ("SSM fit", RGBColor(200, 30, 30), |r| r.0),
-        ("FFD registration", RGBColor(30, 90, 200), |r| r.1),
-        ("similarity ICP", RGBColor(90, 90, 90), |r| r.2),
-    ];
-    for (name, color, get) in series {
-        let pts: Vec<(f64, f64)> = rows
-            .iter()
-            .enumerate()
-            .map(|(i, r)| (i as f64 + 0.5, get(r)))
-            .filter(|p| p.1.is_finite())
-            .collect();
-        let s = chart
-            .draw_series(LineSeries::new(pts, color.stroke_width(2)))
+    Canvas::new(720, 420).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let mut chart = chart_frame(&root, "normal correlation per subject", 56, text)
+            .build_cartesian_2d(0.0..rows.len().max(1) as f64, lo..1.0)
             .map_err(perr(path))?;
         if text {
-            s.label(name).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-            });
+            chart
+                .configure_mesh()
+                .x_desc("subjects (sorted by the SSM fit)")
+                .y_desc("normal correlation")
+                .draw()
+                .map_err(perr(path))?;
         }
-    }
-    if text {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(perr(path))?;
-    }
-    root.present().map_err(perr(path))?;
-    drop(root);
-    rename_png(path)
+        type Series = (&'static str, RGBColor, fn(&(f64, f64, f64)) -> f64);
+        let series: [Series; 3] = [
+            ("SSM fit", RGBColor(200, 30, 30), |r| r.0),
+            ("FFD registration", RGBColor(30, 90, 200), |r| r.1),
+            ("similarity ICP", RGBColor(90, 90, 90), |r| r.2),
+        ];
+        for (name, color, get) in series {
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .enumerate()
+                .map(|(i, r)| (i as f64 + 0.5, get(r)))
+                .filter(|p| p.1.is_finite())
+                .collect();
+            let s = chart
+                .draw_series(LineSeries::new(pts, color.stroke_width(2)))
+                .map_err(perr(path))?;
+            if text {
+                s.label(name).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+                });
+            }
+        }
+        if text {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::LowerRight)
+                .draw()
+                .map_err(perr(path))?;
+        }
+        Ok(())
+    })
 }

@@ -2,6 +2,7 @@
 //! tool as users run it, and the files it writes read back by other programs.
 
 mod common;
+mod raw_femurs;
 
 mod aorta;
 mod bad_input;

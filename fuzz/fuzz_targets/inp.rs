@@ -1,8 +1,10 @@
 #![no_main]
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    let p = atlasmesh_fuzz::file(data, "inp");
-    if let Ok(deck) = atlasmesh::formats::read_inp(&p) {
+    let name = atlasmesh_fuzz::name("inp");
+    if let Ok(text) = std::str::from_utf8(data)
+        && let Ok(deck) = atlasmesh::formats::parse_inp(&name, text)
+    {
         let _ = deck.with_nodes(&deck.mesh.nodes);
     }
-    let _ = atlasmesh::formats::read_fe_mesh_raw(&p);
+    let _ = atlasmesh::formats::parse_fe_mesh_raw(&name, data);
 });

@@ -1,5 +1,4 @@
 #![no_main]
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    let p = atlasmesh_fuzz::file(data, "txt");
-    let _ = atlasmesh::formats::read_outlines(&p, true);
+    let _ = atlasmesh::formats::parse_outlines(&atlasmesh_fuzz::name("txt"), data, true);
 });

@@ -1,4 +1,4 @@
 #![no_main]
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    let _ = atlasmesh::formats::read_surface(&atlasmesh_fuzz::file(data, "vtp"));
+    let _ = atlasmesh::formats::parse_surface(&atlasmesh_fuzz::name("vtp"), data);
 });

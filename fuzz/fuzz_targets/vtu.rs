@@ -1,5 +1,4 @@
 #![no_main]
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    let p = atlasmesh_fuzz::file(data, "vtu");
-    let _ = atlasmesh::formats::read_fe_mesh_raw(&p);
+    let _ = atlasmesh::formats::parse_fe_mesh_raw(&atlasmesh_fuzz::name("vtu"), data);
 });

@@ -1,7 +1,12 @@
-//! Shared by the fuzz targets: the readers take paths (as users give them), so every input is
-//! written to a file with the format's extension in a per-process temporary folder first.
+//! Shared by the fuzz targets: they call atlasmesh's parsers on the bytes (no file), with a
+//! file name that carries the format's extension; only the atlas header reader needs a file.
 
 use std::path::PathBuf;
+
+/// The name `input.EXT` the parsers see (it selects the format; no such file is read).
+pub fn name(ext: &str) -> PathBuf {
+    PathBuf::from(format!("input.{ext}"))
+}
 
 /// Writes `data` to `input.EXT` in this process's fuzz folder and returns its path.
 pub fn file(data: &[u8], ext: &str) -> PathBuf {

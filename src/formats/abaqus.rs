@@ -45,6 +45,11 @@ pub(crate) fn keyword_params(line: &str) -> (String, HashMap<String, String>) {
 /// other keywords (materials, steps, ...) are skipped here and kept in `text`.
 pub fn read_inp(path: &Path) -> Result<InpDeck> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_inp(path, &text)
+}
+
+/// [`read_inp`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_inp(path: &Path, text: &str) -> Result<InpDeck> {
     let mut node_ids: Vec<u64> = Vec::new();
     let mut node_index: HashMap<u64, usize> = HashMap::new();
     let mut nodes: Vec<Point<3>> = Vec::new();
@@ -434,7 +439,7 @@ pub fn read_inp(path: &Path) -> Result<InpDeck> {
             },
         },
         node_ids,
-        text,
+        text: text.to_string(),
     })
 }
 

@@ -175,13 +175,18 @@ impl<const D: usize> Atlas<D> {
     /// Loads an atlas written by [`Atlas::save`], checking format, version, dimension and
     /// shapes of every tensor.
     pub fn load(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Self::from_bytes(path, &bytes)
+    }
+
+    /// [`Atlas::load`] of an atlas file's bytes (`path` only names the file in messages).
+    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self> {
         use safetensors::{Dtype, SafeTensors};
         let bad = |m: String| Error::Atlas {
             path: path.to_path_buf(),
             message: m,
         };
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let (_, meta) = SafeTensors::read_metadata(&bytes)
+        let (_, meta) = SafeTensors::read_metadata(bytes)
             .map_err(|e| bad(format!("not a safetensors file ({e})")))?;
         let meta = meta.metadata().clone().unwrap_or_default();
         if meta.get("format").map(String::as_str) != Some("atlasmesh-atlas") {

@@ -1,9 +1,9 @@
 //! FE meshes in and out: the format from the extension, the checks every reader shares.
 
-use super::abaqus::{inp, read_inp};
+use super::abaqus::{inp, parse_inp};
 use super::febio::feb;
-use super::gmsh::{msh, read_msh};
-use super::vtk_legacy::{read_vtk_unstructured, vtk};
+use super::gmsh::{msh, parse_msh};
+use super::vtk_legacy::{parse_vtk_unstructured, vtk};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use crate::mesh::quality::ElementQuality;
@@ -19,21 +19,40 @@ pub fn read_fe_mesh<const D: usize>(path: &Path) -> Result<FeMesh<D>> {
 /// Reads an FE mesh with 3D node coordinates, whatever its elements' dimension
 /// (`mesh.kind.dimension()` tells; [`to_dimension`] converts).
 pub fn read_fe_mesh_raw(path: &Path) -> Result<FeMesh<3>> {
+    // An unknown format is named as such before the file is read.
+    mesh_extension(path)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_fe_mesh_raw(path, &bytes)
+}
+
+/// [`read_fe_mesh_raw`] of a file's bytes: the format from the extension of `path`, which
+/// only names the file in messages (no file is read).
+pub fn parse_fe_mesh_raw(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
+    let text = || super::outline::utf8(path, bytes);
+    match mesh_extension(path)? {
+        "inp" => Ok(parse_inp(path, text()?)?.mesh),
+        "msh" => parse_msh(path, text()?),
+        "vtu" => super::vtk_xml::parse_vtu(path, text()?),
+        _ => parse_vtk_unstructured(path, text()?),
+    }
+}
+
+/// The FE mesh format of `path`, by its extension: `inp`, `msh`, `vtu` or `vtk`.
+fn mesh_extension(path: &Path) -> Result<&'static str> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    match ext.as_str() {
-        "inp" => Ok(read_inp(path)?.mesh),
-        "msh" => read_msh(path),
-        "vtu" => super::vtk_xml::read_vtu(path),
-        "vtk" => read_vtk_unstructured(path),
-        _ => Err(Error::parse(
-            path,
-            0,
-            "unknown FE mesh format; use .inp, .msh, .vtu or .vtk",
-        )),
-    }
+    ["inp", "msh", "vtu", "vtk"]
+        .into_iter()
+        .find(|&e| e == ext)
+        .ok_or_else(|| {
+            Error::parse(
+                path,
+                0,
+                "unknown FE mesh format; use .inp, .msh, .vtu or .vtk",
+            )
+        })
 }
 
 /// A 3D-coordinate mesh as a mesh of dimension `D` (2D: elements must be 2D and `z` zero).

@@ -15,6 +15,11 @@ pub(crate) type MshElement = (usize, u32, Vec<i64>, Vec<i64>, i64);
 /// the mesh; physical groups become sets (see the module doc).
 pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_msh(path, &text)
+}
+
+/// [`read_msh`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
     let section = |name: &str| -> Option<(usize, Vec<&str>)> {
         let start = text
             .find(&format!("${name}\n"))

@@ -21,6 +21,11 @@ pub enum Landmark<const D: usize> {
 /// Reads the landmarks of one shape from a Scalismo JSON or `.pts` file, in file order.
 pub fn read_landmarks<const D: usize>(path: &Path) -> Result<Vec<Landmark<D>>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_landmarks::<D>(path, &text)
+}
+
+/// [`read_landmarks`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<Landmark<D>>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
@@ -107,6 +112,14 @@ pub fn read_landmarks_csv<const D: usize>(
     path: &Path,
 ) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_landmarks_csv::<D>(path, &text)
+}
+
+/// [`read_landmarks_csv`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_landmarks_csv<const D: usize>(
+    path: &Path,
+    text: &str,
+) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
     let mut lines = text.lines().enumerate();
     let header = lines
         .next()

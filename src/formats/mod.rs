@@ -1,5 +1,6 @@
-//! Files in and out, one file per format: each holds its reader (from the file's bytes or
-//! text), its writer and its element-type table. Every output is written atomically (a
+//! Files in and out, one file per format: each holds its parser (`parse_*`, from the file's
+//! bytes or text: no file is read, the path only names it in messages), a thin reader of the
+//! file (`read_*`), its writer and its element-type table. Every output is written atomically (a
 //! temporary name, then a rename: [`write_atomic`]).
 //!
 //! | file | format |
@@ -13,6 +14,7 @@
 //! | `gmsh` | Gmsh `.msh` |
 //! | `febio` | FEBio `.feb` |
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
+//! | `sets_file` | the sets file (TOML) |
 //! | `atlas_file` | the atlas file (safetensors) |
 //! | `atomic` | output folders and atomic writes |
 
@@ -28,25 +30,33 @@ pub mod outline;
 pub mod outline_csv;
 pub mod outline_text;
 pub mod ply;
+mod sets_file;
 pub mod stl;
 pub mod surface;
 pub mod vtk_legacy;
 pub mod vtk_xml;
 
-pub use abaqus::{InpDeck, read_inp};
+pub use abaqus::{InpDeck, parse_inp, read_inp};
 pub use atlas_file::{ATLAS_FORMAT_VERSION, atlas_dimension};
 pub(crate) use atomic::MAX_COUNT;
 pub use atomic::{create_dir, write_atomic};
-pub use fe_mesh::{MeshFormat, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh};
-pub use gmsh::read_msh;
-pub use outline::read_outlines;
-pub use outline_csv::read_long_csv;
-pub use outline_text::read_text_outlines;
+pub use fe_mesh::{
+    MeshFormat, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh,
+};
+pub use gmsh::{parse_msh, read_msh};
+pub use outline::{parse_outlines, read_outlines};
+pub use outline_csv::{parse_long_csv, read_long_csv};
+pub use outline_text::{parse_text_outlines, read_text_outlines};
 pub use ply::write_ply;
 pub use stl::write_stl;
-pub use surface::read_surface;
-pub use vtk_legacy::{VtkPolyData, read_vtk_outline, read_vtk_polydata, read_vtk_unstructured};
-pub use vtk_xml::{read_vtp, read_vtu, write_vtp, write_vtu, write_vtu_with_quality};
+pub use surface::{parse_surface, read_surface};
+pub use vtk_legacy::{
+    VtkPolyData, parse_vtk_outline, parse_vtk_polydata, parse_vtk_unstructured, read_vtk_outline,
+    read_vtk_polydata, read_vtk_unstructured,
+};
+pub use vtk_xml::{
+    parse_vtp, parse_vtu, read_vtp, read_vtu, write_vtp, write_vtu, write_vtu_with_quality,
+};
 
 #[cfg(test)]
 mod fe_mesh_tests;

@@ -1,8 +1,8 @@
 //! Reading 2D outlines: the format by extension, and the checks every reader shares.
 
-use super::outline_csv::read_long_csv;
-use super::outline_text::read_text_outlines;
-use super::vtk_legacy::read_vtk_outline;
+use super::outline_csv::parse_long_csv;
+use super::outline_text::parse_text_outlines;
+use super::vtk_legacy::parse_vtk_outline;
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use std::path::Path;
@@ -10,14 +10,21 @@ use std::path::Path;
 /// Reads the outlines in `path` (format from the extension: `.csv`, `.vtk`, else text).
 /// `closed` applies to CSV and text files; VTK files carry their own topology.
 pub fn read_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_outlines(path, &bytes, closed)
+}
+
+/// [`read_outlines`] of a file's bytes: the format from the extension of `path`, which only
+/// names the file in messages (no file is read).
+pub fn parse_outlines(path: &Path, bytes: &[u8], closed: bool) -> Result<Vec<Shape<2>>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
     let shapes = match ext.as_str() {
-        "csv" => read_long_csv(path, closed)?,
-        "vtk" => vec![read_vtk_outline(path)?],
-        _ => read_text_outlines(path, closed)?,
+        "csv" => parse_long_csv(path, text_of(path, bytes)?, closed)?,
+        "vtk" => vec![parse_vtk_outline(path, bytes)?],
+        _ => parse_text_outlines(path, text_of(path, bytes)?, closed)?,
     };
     if shapes.is_empty() {
         return Err(Error::parse(path, 0, "the file holds no shape"));
@@ -60,6 +67,25 @@ pub(crate) fn check_finite(path: &Path, s: &Shape<2>) -> Result<()> {
 pub(crate) fn read_text(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     String::from_utf8(bytes).map_err(|_| Error::parse(path, 0, "not a text file (invalid UTF-8)"))
+}
+
+/// The text of a file's bytes, as [`read_text`] gives it.
+pub(crate) fn text_of<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
+    std::str::from_utf8(bytes).map_err(|_| Error::parse(path, 0, "not a text file (invalid UTF-8)"))
+}
+
+/// The text of a file's bytes, as `std::fs::read_to_string` gives it (invalid UTF-8 is an
+/// I/O error of kind `InvalidData`).
+pub(crate) fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
+    std::str::from_utf8(bytes).map_err(|_| {
+        Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "stream did not contain valid UTF-8",
+            ),
+        )
+    })
 }
 
 pub(crate) fn stem(path: &Path) -> String {

@@ -11,6 +11,11 @@ use std::path::Path;
 /// index, which must run 0..n-1 without gaps or repeats.
 pub fn read_long_csv(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
     let text = read_text(path)?;
+    parse_long_csv(path, &text, closed)
+}
+
+/// [`read_long_csv`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_long_csv(path: &Path, text: &str, closed: bool) -> Result<Vec<Shape<2>>> {
     let mut lines = text
         .lines()
         .enumerate()

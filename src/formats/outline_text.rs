@@ -10,6 +10,11 @@ use std::path::Path;
 /// file; blocks of a file with several are named `STEM-000`, `STEM-001`, ... in file order.
 pub fn read_text_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
     let text = read_text(path)?;
+    parse_text_outlines(path, &text, closed)
+}
+
+/// [`read_text_outlines`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_text_outlines(path: &Path, text: &str, closed: bool) -> Result<Vec<Shape<2>>> {
     let mut blocks: Vec<Vec<Point<2>>> = vec![Vec::new()];
     for (i, raw) in text.lines().enumerate() {
         if raw.trim().is_empty() {

@@ -12,22 +12,28 @@ use std::path::Path;
 /// legacy `.vtk` POLYDATA with POLYGONS, `.vtp` with ASCII arrays).
 /// The surface is checked and oriented by [`prepare_surface`].
 pub fn read_surface(path: &Path) -> Result<Shape<3>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_surface(path, &bytes)
+}
+
+/// [`read_surface`] of a file's bytes: the format from the extension of `path`, which only
+/// names the file (and the shape) in messages (no file is read).
+pub fn parse_surface(path: &Path, bytes: &[u8]) -> Result<Shape<3>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let (points, polys) = match ext.as_str() {
-        "ply" => parse_ply(path, &bytes)?,
-        "stl" => parse_stl(path, &bytes)?,
-        "obj" => parse_obj(path, &bytes)?,
-        "vtp" => super::vtk_xml::read_vtp(path)?,
+        "ply" => parse_ply(path, bytes)?,
+        "stl" => parse_stl(path, bytes)?,
+        "obj" => parse_obj(path, bytes)?,
+        "vtp" => super::vtk_xml::parse_vtp(path, super::outline::utf8(path, bytes)?)?,
         "vtk" => {
-            let v = super::read_vtk_polydata(path)?;
+            let v = super::vtk_legacy::parse_vtk_polydata(path, bytes)?;
             if v.polygons.is_empty() {
                 return Err(Error::parse(
                     path,

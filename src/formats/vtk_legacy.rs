@@ -64,6 +64,11 @@ pub struct VtkPolyData {
 /// `POLYGONS` (other sections are ignored).
 pub fn read_vtk_polydata(path: &Path) -> Result<VtkPolyData> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_vtk_polydata(path, &bytes)
+}
+
+/// [`read_vtk_polydata`] of a file's bytes (`path` only names the file in messages): no file is read.
+pub fn parse_vtk_polydata(path: &Path, bytes: &[u8]) -> Result<VtkPolyData> {
     let mut c = Cursor {
         b: &bytes,
         pos: 0,
@@ -235,7 +240,13 @@ pub fn read_vtk_polydata(path: &Path) -> Result<VtkPolyData> {
 /// the chain of segments; every point must have at most two neighbours and the segments must
 /// form one chain or one loop.
 pub fn read_vtk_outline(path: &Path) -> Result<Shape<2>> {
-    let vtk = read_vtk_polydata(path)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_vtk_outline(path, &bytes)
+}
+
+/// [`read_vtk_outline`] of a file's bytes (`path` only names the file in messages).
+pub fn parse_vtk_outline(path: &Path, bytes: &[u8]) -> Result<Shape<2>> {
+    let vtk = parse_vtk_polydata(path, bytes)?;
     let z0 = vtk.points[0][2];
     if vtk
         .points
@@ -326,6 +337,11 @@ pub fn read_vtk_outline(path: &Path) -> Result<Shape<2>> {
 /// sets.
 pub fn read_vtk_unstructured(path: &Path) -> Result<FeMesh<3>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_vtk_unstructured(path, &text)
+}
+
+/// [`read_vtk_unstructured`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_vtk_unstructured(path: &Path, text: &str) -> Result<FeMesh<3>> {
     let lines: Vec<&str> = text.lines().collect();
     if !lines
         .first()

@@ -175,6 +175,11 @@ pub(crate) fn index(path: &Path, v: f64, n: usize, what: &str) -> Result<usize> 
 /// file (ASCII arrays).
 pub fn read_vtp(path: &Path) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_vtp(path, &text)
+}
+
+/// [`read_vtp`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_vtp(path: &Path, text: &str) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
     if !text.contains("type=\"PolyData\"") {
         return Err(Error::parse(path, 1, "not a VTK XML PolyData file"));
     }
@@ -210,6 +215,11 @@ pub fn read_vtp(path: &Path) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
 /// are read back as node and element sets.
 pub fn read_vtu(path: &Path) -> Result<FeMesh<3>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_vtu(path, &text)
+}
+
+/// [`read_vtu`] of a file's text (`path` only names the file in messages): no file is read.
+pub fn parse_vtu(path: &Path, text: &str) -> Result<FeMesh<3>> {
     if !text.contains("type=\"UnstructuredGrid\"") {
         return Err(Error::parse(path, 1, "not a VTK XML UnstructuredGrid file"));
     }

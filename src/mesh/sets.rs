@@ -115,10 +115,10 @@ pub struct Facing {
 }
 
 impl SetsConfig {
-    /// Reads and checks a sets file.
-    pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let mut c: SetsConfig = toml::from_str(&text).map_err(|e| {
+    /// Parses and checks the text of a sets file (`path` only names the file in messages;
+    /// [`SetsConfig::read`] reads the file).
+    pub fn parse(path: &Path, text: &str) -> Result<Self> {
+        let mut c: SetsConfig = toml::from_str(text).map_err(|e| {
             let line = e
                 .span()
                 .map(|s| text[..s.start.min(text.len())].lines().count().max(1))

@@ -203,7 +203,7 @@ impl<const D: usize> Atlas<D> {
         let stored = meta.get("checksum_crc32").cloned().unwrap_or_default();
         let mut rest = meta.clone();
         rest.remove("checksum_crc32");
-        let crc = atlas_checksum(data_section(&bytes).unwrap_or_default(), &rest);
+        let crc = atlas_checksum(data_section(bytes).unwrap_or_default(), &rest);
         if stored != format!("{crc:08x}") {
             return Err(bad(format!(
                 "checksum mismatch (stored {stored:?}, computed {crc:08x}): the file is corrupted \
@@ -234,7 +234,7 @@ impl<const D: usize> Atlas<D> {
             .get("training_shapes")
             .and_then(|s| s.parse().ok())
             .unwrap_or(0);
-        let st = SafeTensors::deserialize(&bytes).map_err(|e| bad(format!("{e}")))?;
+        let st = SafeTensors::deserialize(bytes).map_err(|e| bad(format!("{e}")))?;
         let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
             let t = st
                 .tensor(name)

@@ -31,7 +31,7 @@ pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<La
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
     if ext == "json" {
-        let v: serde_json::Value = serde_json::from_str(&text)
+        let v: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| Error::parse(path, e.line(), format!("not JSON: {e}")))?;
         let items = v
             .as_array()

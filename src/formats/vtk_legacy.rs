@@ -70,7 +70,7 @@ pub fn read_vtk_polydata(path: &Path) -> Result<VtkPolyData> {
 /// [`read_vtk_polydata`] of a file's bytes (`path` only names the file in messages): no file is read.
 pub fn parse_vtk_polydata(path: &Path, bytes: &[u8]) -> Result<VtkPolyData> {
     let mut c = Cursor {
-        b: &bytes,
+        b: bytes,
         pos: 0,
         line: 0,
     };

@@ -183,15 +183,15 @@ pub fn parse_vtp(path: &Path, text: &str) -> Result<(Vec<Point<3>>, Vec<Vec<usiz
     if !text.contains("type=\"PolyData\"") {
         return Err(Error::parse(path, 1, "not a VTK XML PolyData file"));
     }
-    let pts = points(path, &text)?;
+    let pts = points(path, text)?;
     // Surfaces have Polys; outlines (as atlasmesh writes them) Lines.
     let cells = if text.contains("<Polys") {
         "Polys"
     } else {
         "Lines"
     };
-    let conn = array(path, &text, cells, Some("connectivity"))?;
-    let offs = array(path, &text, cells, Some("offsets"))?;
+    let conn = array(path, text, cells, Some("connectivity"))?;
+    let offs = array(path, text, cells, Some("offsets"))?;
     let mut polys = Vec::with_capacity(offs.len());
     let mut prev = 0usize;
     for &o in &offs {
@@ -223,10 +223,10 @@ pub fn parse_vtu(path: &Path, text: &str) -> Result<FeMesh<3>> {
     if !text.contains("type=\"UnstructuredGrid\"") {
         return Err(Error::parse(path, 1, "not a VTK XML UnstructuredGrid file"));
     }
-    let nodes = points(path, &text)?;
-    let conn = array(path, &text, "Cells", Some("connectivity"))?;
-    let offs = array(path, &text, "Cells", Some("offsets"))?;
-    let types = array(path, &text, "Cells", Some("types"))?;
+    let nodes = points(path, text)?;
+    let conn = array(path, text, "Cells", Some("connectivity"))?;
+    let offs = array(path, text, "Cells", Some("offsets"))?;
+    let types = array(path, text, "Cells", Some("types"))?;
     if types.len() != offs.len() {
         return Err(Error::parse(
             path,
@@ -289,11 +289,11 @@ pub fn parse_vtu(path: &Path, text: &str) -> Result<FeMesh<3>> {
         ("PointData", nodes.len(), 0),
         ("CellData", connectivity.len() / k, 1),
     ] {
-        let Some(body) = section_body(&text, section) else {
+        let Some(body) = section_body(text, section) else {
             continue;
         };
         for name in set_array_names(body) {
-            let v = array(path, &text, section, Some(&format!("set_{name}")))?;
+            let v = array(path, text, section, Some(&format!("set_{name}")))?;
             if v.len() != n {
                 return Err(Error::parse(
                     path,

@@ -171,6 +171,38 @@ impl<const D: usize> Fitter<'_, D> {
             0.5 * (forward / sampling.forward.len() as f64
                 + backward / sampling.backward.len() as f64)
         };
+        let dz = self.solve_step(buf, p, gamma, &st.w, &subj.shape.name)?;
+        // (iii) the new state.
+        let weight_change = self.apply_step(st, &dz);
+        Ok(Step {
+            forward: if sampling.forward.is_empty() {
+                backward
+            } else {
+                forward
+            },
+            two_way_ms,
+            pose_change: dz[..pose].iter().fold(0.0, |a, v| a.max(v.abs())),
+            weight_change,
+        })
+    }
+
+    /// (ii) The Gauss-Newton step of eq. 5 from the rows `buf` (each `p + 1` numbers: the
+    /// derivatives by the `p` parameters, then the residual) and, with `gamma`, the
+    /// regularization of eq. 7 at the weights `w`: `(AᵀA + γ Λ⁻¹) δ = -(Aᵀr + γ Λ⁻¹ w)`, in
+    /// a trust region (at most 0.2 in scale and rotation, 0.1 of the unit box in translation,
+    /// 1 σ per mode). `name` (the subject's) is for messages.
+    fn solve_step(
+        &self,
+        buf: &[f64],
+        p: usize,
+        gamma: Option<f64>,
+        w: &[f64],
+        name: &str,
+    ) -> Result<Vec<f64>> {
+        let m = self.m;
+        let r = rotation_params(D);
+        let pose = 1 + r + D;
+        let cols = p + 1;
         let nrows = buf.len() / cols;
         let a = faer::MatRef::from_row_major_slice(buf, nrows, cols);
         let ata = a.transpose() * a;
@@ -185,7 +217,7 @@ impl<const D: usize> Fitter<'_, D> {
         if let Some(gamma) = gamma {
             for k in 0..m {
                 h[(pose + k, pose + k)] += gamma * self.lambda_inv[k];
-                g[(pose + k, 0)] -= gamma * self.lambda_inv[k] * st.w[k];
+                g[(pose + k, 0)] -= gamma * self.lambda_inv[k] * w[k];
             }
         }
         // A tiny ridge, relative to each diagonal entry (they span many orders of magnitude
@@ -204,7 +236,7 @@ impl<const D: usize> Fitter<'_, D> {
         if dz.iter().any(|v| !v.is_finite()) {
             return Err(Error::Numerical(format!(
                 "the fit of {} diverged (NaN in the pose or the mode weights)",
-                subj.shape.name
+                name
             )));
         }
         // A trust region for the first updates, far from the subject: at most 0.2 in scale
@@ -229,7 +261,18 @@ impl<const D: usize> Fitter<'_, D> {
             shrink = shrink.min(big(maha, 1.0));
         }
         dz.iter_mut().for_each(|v| *v *= shrink);
-        // (iii) the new state.
+        Ok(dz)
+    }
+
+    /// (iii) The new state: the pose composed with the step `dz` (scale, rotation, translation
+    /// in the reference frame), the weights moved by it. Returns the weights' change, per
+    /// point as for the paper's 2001 points.
+    fn apply_step(&self, st: &mut State<D>, dz: &[f64]) -> f64 {
+        let m = self.m;
+        let r = rotation_params(D);
+        let pose = 1 + r + D;
+        let p = dz.len();
+        let sim = st.sim;
         let dt: Point<D> = std::array::from_fn(|d| dz[1 + r + d]);
         let mut new = st.sim;
         new.t = add(sim.t, scale(sim.rotate(&dt), sim.s));
@@ -251,17 +294,6 @@ impl<const D: usize> Fitter<'_, D> {
         // `||Δw||` the more points the atlas has. Measured as for the paper's 2001 points
         // (the root mean square move times the root of 2001), the tolerance means the same
         // at every resolution.
-        let weight_change =
-            (weight_change * REFERENCE_POINTS / self.atlas.mean.len() as f64).sqrt();
-        Ok(Step {
-            forward: if sampling.forward.is_empty() {
-                backward
-            } else {
-                forward
-            },
-            two_way_ms,
-            pose_change: dz[..pose].iter().fold(0.0, |a, v| a.max(v.abs())),
-            weight_change,
-        })
+        (weight_change * REFERENCE_POINTS / self.atlas.mean.len() as f64).sqrt()
     }
 }

@@ -186,54 +186,12 @@ impl<const D: usize> Atlas<D> {
             path: path.to_path_buf(),
             message: m,
         };
-        let (_, meta) = SafeTensors::read_metadata(bytes)
-            .map_err(|e| bad(format!("not a safetensors file ({e})")))?;
-        let meta = meta.metadata().clone().unwrap_or_default();
-        if meta.get("format").map(String::as_str) != Some("atlasmesh-atlas") {
-            return Err(bad(
-                "no atlasmesh metadata; write atlases with `atlasmesh build`".into(),
-            ));
-        }
-        let version = meta.get("format_version").cloned().unwrap_or_default();
-        if version != ATLAS_FORMAT_VERSION {
-            return Err(bad(format!(
-                "format version {version:?}, this build reads version {ATLAS_FORMAT_VERSION}; rebuild the atlas"
-            )));
-        }
-        let stored = meta.get("checksum_crc32").cloned().unwrap_or_default();
-        let mut rest = meta.clone();
-        rest.remove("checksum_crc32");
-        let crc = atlas_checksum(data_section(bytes).unwrap_or_default(), &rest);
-        if stored != format!("{crc:08x}") {
-            return Err(bad(format!(
-                "checksum mismatch (stored {stored:?}, computed {crc:08x}): the file is corrupted \
-                 or was changed after it was written; rebuild the atlas or copy it again"
-            )));
-        }
-        let dim: usize = meta
-            .get("dimension")
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(0);
-        if dim != D {
-            return Err(bad(format!("the atlas is {dim}D, {D}D was expected")));
-        }
-        let kind = meta
-            .get("element_kind")
-            .and_then(|s| ElementKind::from_name(s))
-            .ok_or_else(|| bad("unknown element kind".into()))?;
-        let params: AtlasParams = meta
-            .get("params")
-            .and_then(|s| serde_json::from_str(s).ok())
-            .ok_or_else(|| bad("missing or malformed params".into()))?;
-        let sets: crate::mesh::MeshSets = match meta.get("mesh_sets") {
-            None => Default::default(),
-            Some(j) => serde_json::from_str(j)
-                .map_err(|e| bad(format!("malformed mesh_sets metadata: {e}")))?,
-        };
-        let training_shapes = meta
-            .get("training_shapes")
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(0);
+        let AtlasMetadata {
+            kind,
+            params,
+            sets,
+            training_shapes,
+        } = AtlasMetadata::of::<D>(path, bytes)?;
         let st = SafeTensors::deserialize(bytes).map_err(|e| bad(format!("{e}")))?;
         let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
             let t = st
@@ -330,6 +288,80 @@ impl<const D: usize> Atlas<D> {
                 sets,
             },
             params,
+            training_shapes,
+        })
+    }
+}
+
+/// What an atlas file's metadata says, checked: the format and its version, the checksum of
+/// the whole file, the dimension, the element kind, the parameters, the mesh sets.
+struct AtlasMetadata {
+    kind: ElementKind,
+    params: AtlasParams,
+    sets: crate::mesh::MeshSets,
+    training_shapes: usize,
+}
+
+impl AtlasMetadata {
+    /// The metadata of the atlas file `bytes` (named `path`), for an atlas of dimension `D`.
+    fn of<const D: usize>(path: &Path, bytes: &[u8]) -> Result<Self> {
+        use safetensors::SafeTensors;
+        let bad = |m: String| Error::Atlas {
+            path: path.to_path_buf(),
+            message: m,
+        };
+        let (_, meta) = SafeTensors::read_metadata(bytes)
+            .map_err(|e| bad(format!("not a safetensors file ({e})")))?;
+        let meta = meta.metadata().clone().unwrap_or_default();
+        if meta.get("format").map(String::as_str) != Some("atlasmesh-atlas") {
+            return Err(bad(
+                "no atlasmesh metadata; write atlases with `atlasmesh build`".into(),
+            ));
+        }
+        let version = meta.get("format_version").cloned().unwrap_or_default();
+        if version != ATLAS_FORMAT_VERSION {
+            return Err(bad(format!(
+                "format version {version:?}, this build reads version {ATLAS_FORMAT_VERSION}; rebuild the atlas"
+            )));
+        }
+        let stored = meta.get("checksum_crc32").cloned().unwrap_or_default();
+        let mut rest = meta.clone();
+        rest.remove("checksum_crc32");
+        let crc = atlas_checksum(data_section(bytes).unwrap_or_default(), &rest);
+        if stored != format!("{crc:08x}") {
+            return Err(bad(format!(
+                "checksum mismatch (stored {stored:?}, computed {crc:08x}): the file is corrupted \
+             or was changed after it was written; rebuild the atlas or copy it again"
+            )));
+        }
+        let dim: usize = meta
+            .get("dimension")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        if dim != D {
+            return Err(bad(format!("the atlas is {dim}D, {D}D was expected")));
+        }
+        let kind = meta
+            .get("element_kind")
+            .and_then(|s| ElementKind::from_name(s))
+            .ok_or_else(|| bad("unknown element kind".into()))?;
+        let params: AtlasParams = meta
+            .get("params")
+            .and_then(|s| serde_json::from_str(s).ok())
+            .ok_or_else(|| bad("missing or malformed params".into()))?;
+        let sets: crate::mesh::MeshSets = match meta.get("mesh_sets") {
+            None => Default::default(),
+            Some(j) => serde_json::from_str(j)
+                .map_err(|e| bad(format!("malformed mesh_sets metadata: {e}")))?,
+        };
+        let training_shapes = meta
+            .get("training_shapes")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        Ok(AtlasMetadata {
+            kind,
+            params,
+            sets,
             training_shapes,
         })
     }

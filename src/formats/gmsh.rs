@@ -408,56 +408,8 @@ pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
 
 /// Gmsh 4.1 ASCII with physical groups for the sets.
 pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
-    let sets = &mesh.sets;
-    // Physical tags, unique over all sets: element sets (dim D), surfaces (dim D-1), node
-    // sets (dim 0).
-    let mut names: Vec<(usize, usize, String)> = Vec::new(); // (dim, tag, name)
-    let mut tag = 0;
-    let mut tag_of = |d: usize, n: &str, names: &mut Vec<(usize, usize, String)>| {
-        tag += 1;
-        names.push((d, tag, n.to_string()));
-        tag
-    };
-    // Every element is in the physical group EALL (readers such as meshio expect a physical
-    // tag on every element), then in those of its element sets.
-    let all_tag = tag_of(D, "EALL", &mut names);
-    let mut el_tags: BTreeMap<&str, usize> = BTreeMap::new();
-    for n in sets.element_sets.keys() {
-        el_tags.insert(n, tag_of(D, n, &mut names));
-    }
-    let mut sf_tags: BTreeMap<&str, usize> = BTreeMap::new();
-    for n in sets.surfaces.keys() {
-        sf_tags.insert(n, tag_of(D - 1, n, &mut names));
-    }
-    let mut nd_tags: BTreeMap<&str, usize> = BTreeMap::new();
-    for n in sets.node_sets.keys() {
-        nd_tags.insert(n, tag_of(0, n, &mut names));
-    }
-    // Elements grouped by the element sets that hold them.
-    let ne = mesh.num_elements();
-    let mut member_of: Vec<Vec<usize>> = vec![vec![all_tag]; ne];
-    for (n, m) in &sets.element_sets {
-        for &e in m {
-            if e < ne {
-                member_of[e].push(el_tags[n.as_str()]);
-            }
-        }
-    }
-    let mut groups: BTreeMap<Vec<usize>, Vec<usize>> = BTreeMap::new();
-    for (e, t) in member_of.into_iter().enumerate() {
-        groups.entry(t).or_default().push(e);
-    }
-    // Nodes grouped by the node sets that hold them.
+    let g = Groups::of(mesh);
     let nn = mesh.nodes.len();
-    let mut node_member: Vec<Vec<usize>> = vec![Vec::new(); nn];
-    for (n, m) in &sets.node_sets {
-        for &i in m {
-            if i < nn {
-                node_member[i].push(nd_tags[n.as_str()]);
-            }
-        }
-    }
-    let tagged_nodes: Vec<usize> = (0..nn).filter(|&i| !node_member[i].is_empty()).collect();
     let (lo, hi) = bounding_box(&mesh.nodes);
     let (lo, hi) = (xyz(&lo), xyz(&hi));
     let bbox = format!(
@@ -466,15 +418,121 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
     );
     let mut s = String::with_capacity(nn * 70 + mesh.connectivity.len() * 8);
     s.push_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
-    if !names.is_empty() {
-        let _ = writeln!(s, "$PhysicalNames\n{}", names.len());
-        for (d, t, n) in &names {
+    if !g.names.is_empty() {
+        let _ = writeln!(s, "$PhysicalNames\n{}", g.names.len());
+        for (d, t, n) in &g.names {
             let _ = writeln!(s, "{d} {t} \"{n}\"");
         }
         s.push_str("$EndPhysicalNames\n");
     }
-    // Entities: points (tagged nodes), then D-1 (surfaces), then D (element groups).
-    let surfaces: Vec<(&String, &Vec<(usize, u8)>)> = sets.surfaces.iter().collect();
+    entities(&mut s, mesh, &g, &bbox);
+    // All nodes in the first element group's entity.
+    let _ = writeln!(s, "$Nodes\n1 {nn} 1 {nn}\n{D} 1 0 {nn}");
+    for i in 0..nn {
+        let _ = writeln!(s, "{}", i + 1);
+    }
+    for p in &mesh.nodes {
+        let q = xyz(p);
+        let _ = writeln!(s, "{:.17e} {:.17e} {:.17e}", q[0], q[1], q[2]);
+    }
+    s.push_str("$EndNodes\n");
+    elements(&mut s, mesh, &g);
+    s
+}
+
+/// The physical groups of a mesh as the `.msh` writer lays them out: tags unique over all sets
+/// (element sets of dimension D, surfaces D-1, node sets 0), the elements grouped by the
+/// element sets that hold them, the nodes by their node sets.
+struct Groups<'m> {
+    /// `(dimension, tag, name)` of every physical group.
+    names: Vec<(usize, usize, String)>,
+    /// Tag of every surface.
+    sf_tags: BTreeMap<&'m str, usize>,
+    /// Elements by the tags of the sets that hold them.
+    groups: BTreeMap<Vec<usize>, Vec<usize>>,
+    /// Tags of the node sets of every node.
+    node_member: Vec<Vec<usize>>,
+    /// The nodes in some node set.
+    tagged_nodes: Vec<usize>,
+    /// The surfaces, by name.
+    surfaces: Vec<(&'m String, &'m Vec<(usize, u8)>)>,
+}
+
+impl<'m> Groups<'m> {
+    fn of<const D: usize>(mesh: &'m FeMesh<D>) -> Self {
+        let sets = &mesh.sets;
+        // Physical tags, unique over all sets: element sets (dim D), surfaces (dim D-1), node
+        // sets (dim 0).
+        let mut names: Vec<(usize, usize, String)> = Vec::new(); // (dim, tag, name)
+        let mut tag = 0;
+        let mut tag_of = |d: usize, n: &str, names: &mut Vec<(usize, usize, String)>| {
+            tag += 1;
+            names.push((d, tag, n.to_string()));
+            tag
+        };
+        // Every element is in the physical group EALL (readers such as meshio expect a physical
+        // tag on every element), then in those of its element sets.
+        let all_tag = tag_of(D, "EALL", &mut names);
+        let mut el_tags: BTreeMap<&str, usize> = BTreeMap::new();
+        for n in sets.element_sets.keys() {
+            el_tags.insert(n, tag_of(D, n, &mut names));
+        }
+        let mut sf_tags: BTreeMap<&str, usize> = BTreeMap::new();
+        for n in sets.surfaces.keys() {
+            sf_tags.insert(n, tag_of(D - 1, n, &mut names));
+        }
+        let mut nd_tags: BTreeMap<&str, usize> = BTreeMap::new();
+        for n in sets.node_sets.keys() {
+            nd_tags.insert(n, tag_of(0, n, &mut names));
+        }
+        // Elements grouped by the element sets that hold them.
+        let ne = mesh.num_elements();
+        let mut member_of: Vec<Vec<usize>> = vec![vec![all_tag]; ne];
+        for (n, m) in &sets.element_sets {
+            for &e in m {
+                if e < ne {
+                    member_of[e].push(el_tags[n.as_str()]);
+                }
+            }
+        }
+        let mut groups: BTreeMap<Vec<usize>, Vec<usize>> = BTreeMap::new();
+        for (e, t) in member_of.into_iter().enumerate() {
+            groups.entry(t).or_default().push(e);
+        }
+        // Nodes grouped by the node sets that hold them.
+        let nn = mesh.nodes.len();
+        let mut node_member: Vec<Vec<usize>> = vec![Vec::new(); nn];
+        for (n, m) in &sets.node_sets {
+            for &i in m {
+                if i < nn {
+                    node_member[i].push(nd_tags[n.as_str()]);
+                }
+            }
+        }
+        let tagged_nodes: Vec<usize> = (0..nn).filter(|&i| !node_member[i].is_empty()).collect();
+        let surfaces: Vec<(&String, &Vec<(usize, u8)>)> = sets.surfaces.iter().collect();
+        Groups {
+            names,
+            sf_tags,
+            groups,
+            node_member,
+            tagged_nodes,
+            surfaces,
+        }
+    }
+}
+
+/// The `$Entities` section: points (tagged nodes), then D-1 (surfaces), then D (element
+/// groups), each within the bounding box `bbox`.
+fn entities<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups, bbox: &str) {
+    let Groups {
+        sf_tags,
+        groups,
+        node_member,
+        tagged_nodes,
+        surfaces,
+        ..
+    } = g;
     let mut counts = [0usize; 4];
     counts[0] = tagged_nodes.len();
     counts[D - 1] += surfaces.len();
@@ -524,17 +582,19 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
         }
     }
     s.push_str("$EndEntities\n");
-    // All nodes in the first element group's entity.
-    let _ = writeln!(s, "$Nodes\n1 {nn} 1 {nn}\n{D} {} 0 {nn}", volume_base + 1);
-    for i in 0..nn {
-        let _ = writeln!(s, "{}", i + 1);
-    }
-    for p in &mesh.nodes {
-        let q = xyz(p);
-        let _ = writeln!(s, "{:.17e} {:.17e} {:.17e}", q[0], q[1], q[2]);
-    }
-    s.push_str("$EndNodes\n");
-    // Elements: the FE elements by group, then surface faces, then the points.
+}
+
+/// The `$Elements` section: the FE elements by group (in Gmsh's node order), then the
+/// surfaces' faces, then one point element per tagged node.
+fn elements<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups) {
+    let Groups {
+        groups,
+        tagged_nodes,
+        surfaces,
+        ..
+    } = g;
+    let ne = mesh.num_elements();
+    let volume_base = 0;
     let quadratic = mesh.kind.linear() != mesh.kind;
     let face_type = match (D, mesh.kind.faces()[0].len(), quadratic) {
         (2, _, _) => 1,     // 2-node line
@@ -590,7 +650,6 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
         let _ = writeln!(s, "0 {} 15 1\n{next} {}", k + 1, i + 1);
     }
     s.push_str("$EndElements\n");
-    s
 }
 
 /// The element-type table of this format.

@@ -107,158 +107,9 @@ fn hex_mesh_once(
         )));
     }
     let index = ClosestPointIndex::from_shape(surface);
-    let cid = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
-    let centre = |i: usize, j: usize, k: usize| -> Point<3> {
-        [
-            origin[0] + (i as f64 + 0.5) * h,
-            origin[1] + (j as f64 + 0.5) * h,
-            origin[2] + (k as f64 + 0.5) * h,
-        ]
-    };
-
-    // 1. Inside cubes, by the parity of surface crossings along x through each row of centres.
-    let mut rows: Vec<Vec<f64>> = vec![Vec::new(); n[1] * n[2]];
-    // A tiny offset keeps the rows off the surface's vertices and edges.
-    let (oy, oz) = (1.234_567e-7 * h, 2.345_678e-7 * h);
-    for f in &surface.facets {
-        let (a, b, c) = (
-            surface.points[f[0]],
-            surface.points[f[1]],
-            surface.points[f[2]],
-        );
-        let ylo = a[1].min(b[1]).min(c[1]);
-        let yhi = a[1].max(b[1]).max(c[1]);
-        let zlo = a[2].min(b[2]).min(c[2]);
-        let zhi = a[2].max(b[2]).max(c[2]);
-        let j0 = (((ylo - origin[1]) / h - 0.5).ceil().max(0.0)) as usize;
-        let j1 = (((yhi - origin[1]) / h - 0.5).floor() as i64).min(n[1] as i64 - 1);
-        let k0 = (((zlo - origin[2]) / h - 0.5).ceil().max(0.0)) as usize;
-        let k1 = (((zhi - origin[2]) / h - 0.5).floor() as i64).min(n[2] as i64 - 1);
-        for k in k0 as i64..=k1 {
-            for j in j0 as i64..=j1 {
-                let (y, z) = (
-                    origin[1] + (j as f64 + 0.5) * h + oy,
-                    origin[2] + (k as f64 + 0.5) * h + oz,
-                );
-                // Barycentric coordinates of (y, z) in the triangle's yz projection.
-                let d = (b[1] - a[1]) * (c[2] - a[2]) - (c[1] - a[1]) * (b[2] - a[2]);
-                if d.abs() < 1e-300 {
-                    continue;
-                }
-                let u = ((y - a[1]) * (c[2] - a[2]) - (c[1] - a[1]) * (z - a[2])) / d;
-                let v = ((b[1] - a[1]) * (z - a[2]) - (y - a[1]) * (b[2] - a[2])) / d;
-                if u < 0.0 || v < 0.0 || u + v > 1.0 {
-                    continue;
-                }
-                let x = a[0] + u * (b[0] - a[0]) + v * (c[0] - a[0]);
-                rows[j as usize + n[1] * k as usize].push(x);
-            }
-        }
-    }
-    let mut keep = vec![false; cells];
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            let xs = &mut rows[j + n[1] * k];
-            xs.sort_by(f64::total_cmp);
-            let mut c = 0;
-            for i in 0..n[0] {
-                let x = origin[0] + (i as f64 + 0.5) * h;
-                while c < xs.len() && xs[c] < x {
-                    c += 1;
-                }
-                if c % 2 == 1 {
-                    let p = centre(i, j, k);
-                    keep[cid(i, j, k)] = index.closest(&p).dist2 >= (INSET * h).powi(2);
-                }
-            }
-        }
-    }
-
-    // 2. The largest face-connected component, made manifold.
-    let dist_of = |i: usize, j: usize, k: usize| index.closest(&centre(i, j, k)).dist2;
-    for _ in 0..50 {
-        largest_component(&mut keep, n);
-        let mut changed = false;
-        // Non-manifold edges: around a grid edge, two cubes that touch only along it.
-        for axis in 0..3 {
-            let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
-            for k in 0..n[2] {
-                for j in 0..n[1] {
-                    for i in 0..n[0] {
-                        let ijk = [i, j, k];
-                        if ijk[a1] == 0 || ijk[a2] == 0 {
-                            continue;
-                        }
-                        // The four cubes around the edge from vertex ijk along `axis`.
-                        let mut quad = [[0usize; 3]; 4];
-                        for (q, (d1, d2)) in [(0, 0), (1, 0), (1, 1), (0, 1)].iter().enumerate() {
-                            let mut c = ijk;
-                            c[a1] -= d1;
-                            c[a2] -= d2;
-                            quad[q] = c;
-                        }
-                        let on: Vec<bool> =
-                            quad.iter().map(|c| keep[cid(c[0], c[1], c[2])]).collect();
-                        let count = on.iter().filter(|&&b| b).count();
-                        if count == 2 && on[0] == on[2] {
-                            // Diagonal pair: drop the one nearer the surface.
-                            let pair: Vec<[usize; 3]> = quad
-                                .iter()
-                                .zip(&on)
-                                .filter(|(_, b)| **b)
-                                .map(|(c, _)| *c)
-                                .collect();
-                            let drop = if dist_of(pair[0][0], pair[0][1], pair[0][2])
-                                < dist_of(pair[1][0], pair[1][1], pair[1][2])
-                            {
-                                pair[0]
-                            } else {
-                                pair[1]
-                            };
-                            keep[cid(drop[0], drop[1], drop[2])] = false;
-                            changed = true;
-                        }
-                    }
-                }
-            }
-        }
-        // Non-manifold vertices: the cubes around a grid vertex must form one face-connected
-        // group.
-        for k in 1..n[2] {
-            for j in 1..n[1] {
-                for i in 1..n[0] {
-                    let mut on = [false; 8];
-                    for (b, o) in on.iter_mut().enumerate() {
-                        let (di, dj, dk) = (b & 1, (b >> 1) & 1, (b >> 2) & 1);
-                        *o = keep[cid(i - 1 + di, j - 1 + dj, k - 1 + dk)];
-                    }
-                    let groups = octant_groups(&on);
-                    if groups.len() > 1 {
-                        // Keep the largest group.
-                        let best = groups
-                            .iter()
-                            .enumerate()
-                            .max_by_key(|(_, g)| g.len())
-                            .map(|(gi, _)| gi)
-                            .unwrap_or(0);
-                        for (gi, g) in groups.iter().enumerate() {
-                            if gi == best {
-                                continue;
-                            }
-                            for &b in g {
-                                let (di, dj, dk) = (b & 1, (b >> 1) & 1, (b >> 2) & 1);
-                                keep[cid(i - 1 + di, j - 1 + dj, k - 1 + dk)] = false;
-                            }
-                        }
-                        changed = true;
-                    }
-                }
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
+    // 1. Inside cubes, 2. the largest face-connected component, made manifold.
+    let mut keep = inside_cubes(surface, &index, origin, h, n);
+    make_manifold(&mut keep, &index, origin, h, n);
     if !keep.iter().any(|&b| b) {
         return Err(Error::Mesh(format!(
             "{}: no grid cube fits inside the surface at element size {}; use a smaller one",
@@ -266,65 +117,8 @@ fn hex_mesh_once(
         )));
     }
 
-    // Grid nodes and hexahedra (VTK order).
-    let vid = |i: usize, j: usize, k: usize| i + (n[0] + 1) * (j + (n[1] + 1) * k);
-    let mut node_of: HashMap<usize, usize> = HashMap::new();
-    let mut nodes: Vec<Point<3>> = Vec::new();
-    let mut hexes: Vec<usize> = Vec::new();
-    let mut node = |i: usize, j: usize, k: usize, nodes: &mut Vec<Point<3>>| -> usize {
-        *node_of.entry(vid(i, j, k)).or_insert_with(|| {
-            nodes.push([
-                origin[0] + i as f64 * h,
-                origin[1] + j as f64 * h,
-                origin[2] + k as f64 * h,
-            ]);
-            nodes.len() - 1
-        })
-    };
-    let mut boundary: Vec<[usize; 4]> = Vec::new();
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            for i in 0..n[0] {
-                if !keep[cid(i, j, k)] {
-                    continue;
-                }
-                let c = [
-                    node(i, j, k, &mut nodes),
-                    node(i + 1, j, k, &mut nodes),
-                    node(i + 1, j + 1, k, &mut nodes),
-                    node(i, j + 1, k, &mut nodes),
-                    node(i, j, k + 1, &mut nodes),
-                    node(i + 1, j, k + 1, &mut nodes),
-                    node(i + 1, j + 1, k + 1, &mut nodes),
-                    node(i, j + 1, k + 1, &mut nodes),
-                ];
-                hexes.extend_from_slice(&c);
-                // Faces with outward normals (b - a) × (d - a), and their neighbour cubes.
-                let faces: [([usize; 4], Option<usize>); 6] = [
-                    ([c[0], c[3], c[2], c[1]], (k > 0).then(|| cid(i, j, k - 1))),
-                    (
-                        [c[4], c[5], c[6], c[7]],
-                        (k + 1 < n[2]).then(|| cid(i, j, k + 1)),
-                    ),
-                    ([c[0], c[1], c[5], c[4]], (j > 0).then(|| cid(i, j - 1, k))),
-                    (
-                        [c[3], c[7], c[6], c[2]],
-                        (j + 1 < n[1]).then(|| cid(i, j + 1, k)),
-                    ),
-                    ([c[0], c[4], c[7], c[3]], (i > 0).then(|| cid(i - 1, j, k))),
-                    (
-                        [c[1], c[2], c[6], c[5]],
-                        (i + 1 < n[0]).then(|| cid(i + 1, j, k)),
-                    ),
-                ];
-                for (f, nb) in faces {
-                    if nb.is_none_or(|nb| !keep[nb]) {
-                        boundary.push(f);
-                    }
-                }
-            }
-        }
-    }
+    // Grid nodes and hexahedra (VTK order), and the boundary faces of the cubes.
+    let (mut nodes, mut hexes, boundary) = cube_hexahedra(&keep, origin, h, n);
 
     // 3. Pillow layer.
     let mut normal_sum: HashMap<usize, Point<3>> = HashMap::new();
@@ -414,6 +208,259 @@ fn hex_mesh_once(
         boundary_distance_max: dmax,
         boundary_distance_mean: dsum / nb.max(1) as f64,
     })
+}
+
+/// The cubes of the grid (`n` per axis, edge `h`, from `origin`) whose centres lie inside the
+/// surface, by the parity of its crossings along x through each row of centres, and at least
+/// [`INSET`] cube edges from it.
+fn inside_cubes(
+    surface: &Shape<3>,
+    index: &ClosestPointIndex<3>,
+    origin: Point<3>,
+    h: f64,
+    n: [usize; 3],
+) -> Vec<bool> {
+    let cid = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+    let centre = |i: usize, j: usize, k: usize| -> Point<3> {
+        [
+            origin[0] + (i as f64 + 0.5) * h,
+            origin[1] + (j as f64 + 0.5) * h,
+            origin[2] + (k as f64 + 0.5) * h,
+        ]
+    };
+    let mut rows: Vec<Vec<f64>> = vec![Vec::new(); n[1] * n[2]];
+    // A tiny offset keeps the rows off the surface's vertices and edges.
+    let (oy, oz) = (1.234_567e-7 * h, 2.345_678e-7 * h);
+    for f in &surface.facets {
+        let (a, b, c) = (
+            surface.points[f[0]],
+            surface.points[f[1]],
+            surface.points[f[2]],
+        );
+        let ylo = a[1].min(b[1]).min(c[1]);
+        let yhi = a[1].max(b[1]).max(c[1]);
+        let zlo = a[2].min(b[2]).min(c[2]);
+        let zhi = a[2].max(b[2]).max(c[2]);
+        let j0 = (((ylo - origin[1]) / h - 0.5).ceil().max(0.0)) as usize;
+        let j1 = (((yhi - origin[1]) / h - 0.5).floor() as i64).min(n[1] as i64 - 1);
+        let k0 = (((zlo - origin[2]) / h - 0.5).ceil().max(0.0)) as usize;
+        let k1 = (((zhi - origin[2]) / h - 0.5).floor() as i64).min(n[2] as i64 - 1);
+        for k in k0 as i64..=k1 {
+            for j in j0 as i64..=j1 {
+                let (y, z) = (
+                    origin[1] + (j as f64 + 0.5) * h + oy,
+                    origin[2] + (k as f64 + 0.5) * h + oz,
+                );
+                // Barycentric coordinates of (y, z) in the triangle's yz projection.
+                let d = (b[1] - a[1]) * (c[2] - a[2]) - (c[1] - a[1]) * (b[2] - a[2]);
+                if d.abs() < 1e-300 {
+                    continue;
+                }
+                let u = ((y - a[1]) * (c[2] - a[2]) - (c[1] - a[1]) * (z - a[2])) / d;
+                let v = ((b[1] - a[1]) * (z - a[2]) - (y - a[1]) * (b[2] - a[2])) / d;
+                if u < 0.0 || v < 0.0 || u + v > 1.0 {
+                    continue;
+                }
+                let x = a[0] + u * (b[0] - a[0]) + v * (c[0] - a[0]);
+                rows[j as usize + n[1] * k as usize].push(x);
+            }
+        }
+    }
+    let mut keep = vec![false; n[0] * n[1] * n[2]];
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            let xs = &mut rows[j + n[1] * k];
+            xs.sort_by(f64::total_cmp);
+            let mut c = 0;
+            for i in 0..n[0] {
+                let x = origin[0] + (i as f64 + 0.5) * h;
+                while c < xs.len() && xs[c] < x {
+                    c += 1;
+                }
+                if c % 2 == 1 {
+                    let p = centre(i, j, k);
+                    keep[cid(i, j, k)] = index.closest(&p).dist2 >= (INSET * h).powi(2);
+                }
+            }
+        }
+    }
+    keep
+}
+
+/// Keeps the largest face-connected set of the cubes `keep` and removes cubes until its
+/// boundary is manifold: no two cubes meeting only along an edge (the one nearer the surface
+/// goes) or at a vertex (all but the largest group around it go).
+fn make_manifold(
+    keep: &mut [bool],
+    index: &ClosestPointIndex<3>,
+    origin: Point<3>,
+    h: f64,
+    n: [usize; 3],
+) {
+    let cid = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+    let centre = |i: usize, j: usize, k: usize| -> Point<3> {
+        [
+            origin[0] + (i as f64 + 0.5) * h,
+            origin[1] + (j as f64 + 0.5) * h,
+            origin[2] + (k as f64 + 0.5) * h,
+        ]
+    };
+    let dist_of = |i: usize, j: usize, k: usize| index.closest(&centre(i, j, k)).dist2;
+    for _ in 0..50 {
+        largest_component(keep, n);
+        let mut changed = false;
+        // Non-manifold edges: around a grid edge, two cubes that touch only along it.
+        for axis in 0..3 {
+            let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
+            for k in 0..n[2] {
+                for j in 0..n[1] {
+                    for i in 0..n[0] {
+                        let ijk = [i, j, k];
+                        if ijk[a1] == 0 || ijk[a2] == 0 {
+                            continue;
+                        }
+                        // The four cubes around the edge from vertex ijk along `axis`.
+                        let mut quad = [[0usize; 3]; 4];
+                        for (q, (d1, d2)) in [(0, 0), (1, 0), (1, 1), (0, 1)].iter().enumerate() {
+                            let mut c = ijk;
+                            c[a1] -= d1;
+                            c[a2] -= d2;
+                            quad[q] = c;
+                        }
+                        let on: Vec<bool> =
+                            quad.iter().map(|c| keep[cid(c[0], c[1], c[2])]).collect();
+                        let count = on.iter().filter(|&&b| b).count();
+                        if count == 2 && on[0] == on[2] {
+                            // Diagonal pair: drop the one nearer the surface.
+                            let pair: Vec<[usize; 3]> = quad
+                                .iter()
+                                .zip(&on)
+                                .filter(|(_, b)| **b)
+                                .map(|(c, _)| *c)
+                                .collect();
+                            let drop = if dist_of(pair[0][0], pair[0][1], pair[0][2])
+                                < dist_of(pair[1][0], pair[1][1], pair[1][2])
+                            {
+                                pair[0]
+                            } else {
+                                pair[1]
+                            };
+                            keep[cid(drop[0], drop[1], drop[2])] = false;
+                            changed = true;
+                        }
+                    }
+                }
+            }
+        }
+        // Non-manifold vertices: the cubes around a grid vertex must form one face-connected
+        // group.
+        for k in 1..n[2] {
+            for j in 1..n[1] {
+                for i in 1..n[0] {
+                    let mut on = [false; 8];
+                    for (b, o) in on.iter_mut().enumerate() {
+                        let (di, dj, dk) = (b & 1, (b >> 1) & 1, (b >> 2) & 1);
+                        *o = keep[cid(i - 1 + di, j - 1 + dj, k - 1 + dk)];
+                    }
+                    let groups = octant_groups(&on);
+                    if groups.len() > 1 {
+                        // Keep the largest group.
+                        let best = groups
+                            .iter()
+                            .enumerate()
+                            .max_by_key(|(_, g)| g.len())
+                            .map(|(gi, _)| gi)
+                            .unwrap_or(0);
+                        for (gi, g) in groups.iter().enumerate() {
+                            if gi == best {
+                                continue;
+                            }
+                            for &b in g {
+                                let (di, dj, dk) = (b & 1, (b >> 1) & 1, (b >> 2) & 1);
+                                keep[cid(i - 1 + di, j - 1 + dj, k - 1 + dk)] = false;
+                            }
+                        }
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+}
+
+/// The hexahedra of the cubes `keep` of the grid (`n` per axis, edge `h`, from `origin`):
+/// their nodes, their connectivity (VTK order) and their boundary faces (quadrilaterals
+/// with outward normals `(b - a) × (d - a)`).
+#[allow(clippy::type_complexity)]
+fn cube_hexahedra(
+    keep: &[bool],
+    origin: Point<3>,
+    h: f64,
+    n: [usize; 3],
+) -> (Vec<Point<3>>, Vec<usize>, Vec<[usize; 4]>) {
+    let cid = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+    let vid = |i: usize, j: usize, k: usize| i + (n[0] + 1) * (j + (n[1] + 1) * k);
+    let mut node_of: HashMap<usize, usize> = HashMap::new();
+    let mut nodes: Vec<Point<3>> = Vec::new();
+    let mut hexes: Vec<usize> = Vec::new();
+    let mut node = |i: usize, j: usize, k: usize, nodes: &mut Vec<Point<3>>| -> usize {
+        *node_of.entry(vid(i, j, k)).or_insert_with(|| {
+            nodes.push([
+                origin[0] + i as f64 * h,
+                origin[1] + j as f64 * h,
+                origin[2] + k as f64 * h,
+            ]);
+            nodes.len() - 1
+        })
+    };
+    let mut boundary: Vec<[usize; 4]> = Vec::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                if !keep[cid(i, j, k)] {
+                    continue;
+                }
+                let c = [
+                    node(i, j, k, &mut nodes),
+                    node(i + 1, j, k, &mut nodes),
+                    node(i + 1, j + 1, k, &mut nodes),
+                    node(i, j + 1, k, &mut nodes),
+                    node(i, j, k + 1, &mut nodes),
+                    node(i + 1, j, k + 1, &mut nodes),
+                    node(i + 1, j + 1, k + 1, &mut nodes),
+                    node(i, j + 1, k + 1, &mut nodes),
+                ];
+                hexes.extend_from_slice(&c);
+                // Faces with outward normals (b - a) × (d - a), and their neighbour cubes.
+                let faces: [([usize; 4], Option<usize>); 6] = [
+                    ([c[0], c[3], c[2], c[1]], (k > 0).then(|| cid(i, j, k - 1))),
+                    (
+                        [c[4], c[5], c[6], c[7]],
+                        (k + 1 < n[2]).then(|| cid(i, j, k + 1)),
+                    ),
+                    ([c[0], c[1], c[5], c[4]], (j > 0).then(|| cid(i, j - 1, k))),
+                    (
+                        [c[3], c[7], c[6], c[2]],
+                        (j + 1 < n[1]).then(|| cid(i, j + 1, k)),
+                    ),
+                    ([c[0], c[4], c[7], c[3]], (i > 0).then(|| cid(i - 1, j, k))),
+                    (
+                        [c[1], c[2], c[6], c[5]],
+                        (i + 1 < n[0]).then(|| cid(i + 1, j, k)),
+                    ),
+                ];
+                for (f, nb) in faces {
+                    if nb.is_none_or(|nb| !keep[nb]) {
+                        boundary.push(f);
+                    }
+                }
+            }
+        }
+    }
+    (nodes, hexes, boundary)
 }
 
 fn cross(a: Point<3>, b: Point<3>) -> Point<3> {

@@ -206,63 +206,13 @@ pub fn repair_with_quality<const D: usize>(
         v.dedup();
         v
     };
-    // Node roles: 0 free, 1 sliding on the surface, 2 fixed.
-    let mut role = vec![0u8; nn];
-    let faces = boundary_faces(mesh);
-    let median_edge = {
-        let mut l: Vec<f64> = (0..ne.min(2000))
-            .flat_map(|e| {
-                let el = mesh.element(e);
-                kind.corner_frames()
-                    .iter()
-                    .enumerate()
-                    .map(move |(c, f)| (el[c], el[f[0]]))
-            })
-            .map(|(a, b)| dist2(mesh.nodes[a], mesh.nodes[b]).sqrt())
-            .collect();
-        l.sort_by(f64::total_cmp);
-        l.get(l.len() / 2).copied().unwrap_or(1.0)
-    };
+    let Boundary {
+        role,
+        distance_before,
+        median_edge,
+        own_index,
+    } = Boundary::of(mesh, surface, params);
     report.median_edge = median_edge;
-    let mut distance_before = vec![0.0; nn];
-    for f in &faces {
-        for &n in f.nodes.iter().chain(&f.mids) {
-            if role[n] != 0 {
-                continue;
-            }
-            role[n] = match surface {
-                Some(s) => {
-                    let d = s.closest(&mesh.nodes[n]).dist2.sqrt();
-                    distance_before[n] = d;
-                    if d <= params.on_surface * median_edge {
-                        1
-                    } else {
-                        2
-                    }
-                }
-                None => 2,
-            };
-        }
-    }
-    // The mesh's own boundary as it was (segments in 2D, triangles in 3D): boundary nodes off
-    // the subject's surface slide on it, so that the boundary keeps its shape.
-    let own: Vec<[usize; D]> = faces
-        .iter()
-        .flat_map(|f| {
-            (1..f.nodes.len() + 2 - D)
-                .map(|t| {
-                    std::array::from_fn(|k| {
-                        if k == 0 {
-                            f.nodes[0]
-                        } else {
-                            f.nodes[t + k - 1]
-                        }
-                    })
-                })
-                .collect::<Vec<[usize; D]>>()
-        })
-        .collect();
-    let own_index = ClosestPointIndex::new(&mesh.nodes, &own);
     let conn = mesh.connectivity.clone();
     let original = mesh.nodes.clone();
     let mut moved = vec![false; nn];
@@ -433,6 +383,91 @@ pub fn repair_with_quality<const D: usize>(
             .fold(0.0, f64::max);
     }
     Ok((report, after))
+}
+
+/// The boundary of a mesh as the repair sees it.
+struct Boundary<const D: usize> {
+    /// Every node's role: 0 free, 1 sliding on the subject's surface, 2 sliding on the
+    /// mesh's own boundary.
+    role: Vec<u8>,
+    /// Every boundary node's distance to the subject's surface before the repair.
+    distance_before: Vec<f64>,
+    /// The median edge length of the mesh.
+    median_edge: f64,
+    /// The mesh's own boundary as it was (segments in 2D, triangles in 3D): boundary nodes
+    /// off the subject's surface slide on it, so that the boundary keeps its shape.
+    own_index: ClosestPointIndex<D>,
+}
+
+impl<const D: usize> Boundary<D> {
+    /// The boundary of `mesh`: its nodes within `params.on_surface` median edges of
+    /// `surface` slide on it, the other boundary nodes on the mesh's own boundary.
+    fn of(mesh: &FeMesh<D>, surface: Option<&ClosestPointIndex<D>>, params: &RepairParams) -> Self {
+        let kind = mesh.kind;
+        let nn = mesh.nodes.len();
+        let ne = mesh.num_elements();
+        let mut role = vec![0u8; nn];
+        let faces = boundary_faces(mesh);
+        let median_edge = {
+            let mut l: Vec<f64> = (0..ne.min(2000))
+                .flat_map(|e| {
+                    let el = mesh.element(e);
+                    kind.corner_frames()
+                        .iter()
+                        .enumerate()
+                        .map(move |(c, f)| (el[c], el[f[0]]))
+                })
+                .map(|(a, b)| dist2(mesh.nodes[a], mesh.nodes[b]).sqrt())
+                .collect();
+            l.sort_by(f64::total_cmp);
+            l.get(l.len() / 2).copied().unwrap_or(1.0)
+        };
+        let mut distance_before = vec![0.0; nn];
+        for f in &faces {
+            for &n in f.nodes.iter().chain(&f.mids) {
+                if role[n] != 0 {
+                    continue;
+                }
+                role[n] = match surface {
+                    Some(s) => {
+                        let d = s.closest(&mesh.nodes[n]).dist2.sqrt();
+                        distance_before[n] = d;
+                        if d <= params.on_surface * median_edge {
+                            1
+                        } else {
+                            2
+                        }
+                    }
+                    None => 2,
+                };
+            }
+        }
+        // The mesh's own boundary as it was (segments in 2D, triangles in 3D): boundary nodes off
+        // the subject's surface slide on it, so that the boundary keeps its shape.
+        let own: Vec<[usize; D]> = faces
+            .iter()
+            .flat_map(|f| {
+                (1..f.nodes.len() + 2 - D)
+                    .map(|t| {
+                        std::array::from_fn(|k| {
+                            if k == 0 {
+                                f.nodes[0]
+                            } else {
+                                f.nodes[t + k - 1]
+                            }
+                        })
+                    })
+                    .collect::<Vec<[usize; D]>>()
+            })
+            .collect();
+        let own_index = ClosestPointIndex::new(&mesh.nodes, &own);
+        Boundary {
+            role,
+            distance_before,
+            median_edge,
+            own_index,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -100,6 +100,17 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
         escape(&title),
         escape(&title)
     );
+    summary(&mut h, report);
+    population(&mut h, report, dir, pictures);
+    failures(&mut h, report);
+    subjects(&mut h, report, dir);
+    let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");
+    crate::formats::write_atomic(path, h.as_bytes())
+}
+
+/// The run's facts: dimension, modes, version, the summary table, the mean mesh, the
+/// parameters.
+fn summary(h: &mut String, report: &Report) {
     let s = &report.summary;
     let _ = writeln!(
         h,
@@ -145,7 +156,10 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
         "<details><summary>Parameters (everything needed to repeat the run)</summary><pre>{}</pre></details>",
         escape(&params)
     );
-    // The population's figures.
+}
+
+/// The population's figures.
+fn population(h: &mut String, report: &Report, dir: &Path, pictures: &Pictures) {
     h.push_str("<h2>Population</h2>\n<div class=\"figs\">\n");
     let mut figs: Vec<(String, &str)> = vec![
         (
@@ -200,6 +214,10 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
         }
     }
     h.push_str("</div>\n");
+}
+
+/// The table of the subjects that failed, and why.
+fn failures(h: &mut String, report: &Report) {
     if !report.failed.is_empty() {
         h.push_str("<h2>Failed subjects</h2>\n<table><tr><th>subject</th><th>input</th><th>reason</th></tr>\n");
         for f in &report.failed {
@@ -213,7 +231,10 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
         }
         h.push_str("</table>\n");
     }
-    // The subjects.
+}
+
+/// The table of the subjects, a row each, sortable.
+fn subjects(h: &mut String, report: &Report, dir: &Path) {
     let baselines = report
         .subjects
         .iter()
@@ -242,7 +263,7 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
     }
     h.push_str("</tr></thead><tbody>\n");
     for (k, s) in report.subjects.iter().enumerate() {
-        subject_row(&mut h, s, dir, baselines, k < MAX_SUBJECT_PICTURES);
+        subject_row(h, s, dir, baselines, k < MAX_SUBJECT_PICTURES);
     }
     h.push_str("</tbody></table>\n");
     if report.subjects.len() > MAX_SUBJECT_PICTURES {
@@ -251,8 +272,6 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
             "<p class=\"hint\">Pictures of the first {MAX_SUBJECT_PICTURES} subjects only; every subject's files are in its folder.</p>"
         );
     }
-    let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");
-    crate::formats::write_atomic(path, h.as_bytes())
 }
 
 fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, pictures: bool) {

@@ -4,13 +4,143 @@
 use super::params::RunParams;
 use super::subject::SubjectOutcome;
 use crate::error::Result;
-use crate::fit::Fitter;
+use crate::fit::{FitResult, Fitter};
 use crate::formats::{write_atomic, write_mesh, write_vtp};
-use crate::geometry::{Point, Shape, same_dim};
-use crate::mesh::{FeMesh, Morpher};
+use crate::geometry::{ClosestPointIndex, Point, Shape, same_dim};
+use crate::mesh::{ElementQuality, FeMesh, Morpher};
 use crate::model::Atlas;
 use crate::report::{SubjectReport, plot_subject};
 use std::path::Path;
+
+/// The 3D pictures of a subject (figs. 23 and 27): the fitted surface coloured by its
+/// distance to the subject, and the morphed mesh's surface coloured by scaled Jacobian, seen
+/// alike; written as `NAME_distance.png`, `NAME_quality.png` into `out`. Returns their names.
+#[allow(clippy::too_many_arguments)]
+fn pictures_3d<const D: usize>(
+    atlas: &Atlas<D>,
+    subject: &Shape<D>,
+    fit: &FitResult<D>,
+    mesh: &FeMesh<D>,
+    per_element: &[ElementQuality],
+    index: &ClosestPointIndex<D>,
+    base: &str,
+    out: &Path,
+) -> Result<Vec<String>> {
+    let mut files = Vec::new();
+    // Figs. 23 and 27: the fitted surface coloured by its distance to the subject, and the
+    // morphed mesh's surface coloured by scaled Jacobian, seen alike.
+    use crate::report::render;
+    let to3 = |v: &[Point<D>]| -> Vec<Point<3>> { v.iter().map(same_dim::<D, 3>).collect() };
+    let instance = to3(&fit.instance);
+    let distance: Vec<f64> = fit
+        .instance
+        .iter()
+        .map(|p| index.closest(p).dist2.sqrt())
+        .collect();
+    let tris: Vec<[usize; 3]> = atlas
+        .facets
+        .iter()
+        .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
+        .collect();
+    let view = render::View::fitting(&to3(&subject.points));
+    let far = 0.01 * subject.bbox_diagonal();
+    let by_distance = render::distance_color(far);
+    let mesh3 = FeMesh {
+        nodes: to3(&mesh.nodes),
+        kind: mesh.kind,
+        connectivity: mesh.connectivity.clone(),
+        sets: Default::default(),
+    };
+    let sj: Vec<f64> = per_element.iter().map(|e| e.scaled_jacobian_min).collect();
+    let (btris, bvals) = render::boundary_triangles(&mesh3, &sj);
+    type Picture<'a> = (
+        &'a str,
+        &'a [Point<3>],
+        &'a [[usize; 3]],
+        Option<&'a [f64]>,
+        Option<&'a [f64]>,
+        render::Legend<'a>,
+    );
+    let pictures: [Picture; 2] = [
+        (
+            "distance",
+            &instance,
+            &tris,
+            Some(&distance),
+            None,
+            render::Legend {
+                color: &by_distance,
+                lo: 0.0,
+                hi: far,
+                lo_label: "0".into(),
+                hi_label: format!("{far:.3} (1 % diag.)"),
+            },
+        ),
+        (
+            "quality",
+            &mesh3.nodes,
+            &btris,
+            None,
+            Some(&bvals),
+            render::Legend {
+                color: &render::jacobian_color,
+                lo: 0.0,
+                hi: 1.0,
+                lo_label: "≤ 0".into(),
+                hi_label: "1".into(),
+            },
+        ),
+    ];
+    for (what, points, facets, vertex, face, legend) in pictures {
+        let img = render::render(points, facets, vertex, face, legend.color, &view, 480, 360);
+        let title = match what {
+            "distance" => format!("{}: fit, distance to the subject", subject.name),
+            _ => format!("{}: morphed mesh, scaled Jacobian", subject.name),
+        };
+        let img = render::annotated(&img, &title, Some(&legend));
+        let name = format!("{base}_{what}.png");
+        write_atomic(&out.join(&name), &img.png()?)?;
+        files.push(name);
+    }
+    Ok(files)
+}
+
+/// The 2D picture of a subject (fig. 9): the mean, the subject, the fit's locus and the
+/// morphed mesh by scaled Jacobian, written as `NAME.png` into `out`. Returns its name.
+fn picture_2d<const D: usize>(
+    atlas: &Atlas<D>,
+    subject: &Shape<D>,
+    fit: &FitResult<D>,
+    mesh: &FeMesh<D>,
+    base: &str,
+    out: &Path,
+) -> Result<String> {
+    let png = format!("{base}.png");
+    let to2 = |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
+    let mean_pts: Vec<Point<2>> = atlas
+        .mean
+        .iter()
+        .map(|p| same_dim::<D, 2>(&fit.similarity.apply(p)))
+        .collect();
+    let closed = subject.facets.len() == subject.points.len();
+    let locus: Vec<Vec<Point<2>>> = fit.locus.iter().map(|l| to2(l)).collect();
+    let mesh2 = FeMesh {
+        nodes: to2(&mesh.nodes),
+        kind: mesh.kind,
+        connectivity: mesh.connectivity.clone(),
+        sets: Default::default(),
+    };
+    plot_subject(
+        &out.join(&png),
+        &subject.name,
+        &mean_pts,
+        &to2(&subject.points),
+        &locus,
+        &mesh2,
+        closed,
+    )?;
+    Ok(png)
+}
 
 /// [`fit_subject`](super::fit_subject), then [`write_subject`]: one subject fitted, morphed,
 /// repaired, measured and written into `out`.
@@ -83,108 +213,19 @@ pub fn write_subject<const D: usize>(
     write_vtp(&out.join(&outline_file), &fitted)?;
     files.push(outline_file);
     if params.plots && D == 3 {
-        // Figs. 23 and 27: the fitted surface coloured by its distance to the subject, and the
-        // morphed mesh's surface coloured by scaled Jacobian, seen alike.
-        use crate::report::render;
-        let to3 = |v: &[Point<D>]| -> Vec<Point<3>> { v.iter().map(same_dim::<D, 3>).collect() };
-        let instance = to3(&fit.instance);
-        let distance: Vec<f64> = fit
-            .instance
-            .iter()
-            .map(|p| index.closest(p).dist2.sqrt())
-            .collect();
-        let tris: Vec<[usize; 3]> = atlas
-            .facets
-            .iter()
-            .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
-            .collect();
-        let view = render::View::fitting(&to3(&subject.points));
-        let far = 0.01 * subject.bbox_diagonal();
-        let by_distance = render::distance_color(far);
-        let mesh3 = FeMesh {
-            nodes: to3(&mesh.nodes),
-            kind: mesh.kind,
-            connectivity: mesh.connectivity.clone(),
-            sets: Default::default(),
-        };
-        let sj: Vec<f64> = per_element.iter().map(|e| e.scaled_jacobian_min).collect();
-        let (btris, bvals) = render::boundary_triangles(&mesh3, &sj);
-        type Picture<'a> = (
-            &'a str,
-            &'a [Point<3>],
-            &'a [[usize; 3]],
-            Option<&'a [f64]>,
-            Option<&'a [f64]>,
-            render::Legend<'a>,
-        );
-        let pictures: [Picture; 2] = [
-            (
-                "distance",
-                &instance,
-                &tris,
-                Some(&distance),
-                None,
-                render::Legend {
-                    color: &by_distance,
-                    lo: 0.0,
-                    hi: far,
-                    lo_label: "0".into(),
-                    hi_label: format!("{far:.3} (1 % diag.)"),
-                },
-            ),
-            (
-                "quality",
-                &mesh3.nodes,
-                &btris,
-                None,
-                Some(&bvals),
-                render::Legend {
-                    color: &render::jacobian_color,
-                    lo: 0.0,
-                    hi: 1.0,
-                    lo_label: "≤ 0".into(),
-                    hi_label: "1".into(),
-                },
-            ),
-        ];
-        for (what, points, facets, vertex, face, legend) in pictures {
-            let img = render::render(points, facets, vertex, face, legend.color, &view, 480, 360);
-            let title = match what {
-                "distance" => format!("{}: fit, distance to the subject", subject.name),
-                _ => format!("{}: morphed mesh, scaled Jacobian", subject.name),
-            };
-            let img = render::annotated(&img, &title, Some(&legend));
-            let name = format!("{base}_{what}.png");
-            write_atomic(&out.join(&name), &img.png()?)?;
-            files.push(name);
-        }
+        files.extend(pictures_3d(
+            atlas,
+            subject,
+            &fit,
+            &mesh,
+            &per_element,
+            &index,
+            &base,
+            out,
+        )?);
     }
     if params.plots && D == 2 {
-        let png = format!("{base}.png");
-        let to2 = |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
-        let mean_pts: Vec<Point<2>> = atlas
-            .mean
-            .iter()
-            .map(|p| same_dim::<D, 2>(&fit.similarity.apply(p)))
-            .collect();
-        let closed = subject.facets.len() == subject.points.len();
-        let locus: Vec<Vec<Point<2>>> = fit.locus.iter().map(|l| to2(l)).collect();
-        let mesh2 = FeMesh {
-            nodes: to2(&mesh.nodes),
-            kind: mesh.kind,
-            connectivity: mesh.connectivity.clone(),
-            sets: Default::default(),
-        };
-        plot_subject(
-            &out.join(&png),
-            &subject.name,
-            &mean_pts,
-            &to2(&subject.points),
-            &locus,
-            &mesh2,
-            closed,
-        )?;
-        files.push(png);
+        files.push(picture_2d(atlas, subject, &fit, &mesh, &base, out)?);
     }
     report.files = files;
     Ok(report)

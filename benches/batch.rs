@@ -1,4 +1,4 @@
-//! The batch of issue 7 on both cores: 200 femur subjects (the 100 femurs of
+//! A batch on both cores: 200 femur subjects (the 100 femurs of
 //! `$ATLASMESH_DATA/knee-distal-femur-synthetic-3d`, each as given and under a seeded random
 //! rigid motion) fitted, morphed, repaired, checked and written (VTU) with an atlas of the
 //! 100 (15 modes, hexahedra at 2 % of the mean's largest side, about 2 mm). Without the data,
@@ -66,7 +66,7 @@ fn bench(c: &mut Criterion) {
     let load = |p: &std::path::Path| -> atlasmesh::Result<Vec<Shape<3>>> {
         Ok(vec![atlasmesh::formats::read_surface(p)?])
     };
-    let mut g = c.benchmark_group("issue7");
+    let mut g = c.benchmark_group("batch");
     g.sample_size(10);
     let mut run = 0;
     g.bench_function(format!("batch_200_{label}_2_cores"), |b| {

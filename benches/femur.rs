@@ -1,8 +1,8 @@
-//! Benchmarks of issue 3 on the distal femurs (`$ATLASMESH_DATA/knee-distal-femur-synthetic-3d`):
+//! Benchmarks on the distal femurs (`$ATLASMESH_DATA/knee-distal-femur-synthetic-3d`):
 //! one femur fit (7313 vertices, 15 modes) on one core, the hexahedral mesh of the mean femur
 //! at 2 mm, the morph plus corner Jacobians of that mesh, and the registration of a femur
-//! pair (issue 4), and the atlas from the 30 femurs made non-corresponding (decimated and
-//! shuffled as in `tests/register.rs`; registration with 3 landmarks on both cores, then
+//! pair, and the atlas from the 30 femurs made non-corresponding (decimated and
+//! shuffled as in `tests/it/register.rs`; registration with 3 landmarks on both cores, then
 //! GPA, PCA and the hexahedral mesh of the mean), the morph plus Jacobians of a mesh of the
 //! mean with about 100k hexahedra, and the repair of the 2 mm mesh with 1 % of its elements
 //! spoiled. Without the data, seeded synthetic surfaces of the 3D demo (7322 vertices) stand
@@ -46,7 +46,7 @@ fn bench(c: &mut Criterion) {
     let fitter = Fitter::new(&atlas);
     let subject = &shapes[0];
     let index = ClosestPointIndex::from_shape(subject);
-    let mut g = c.benchmark_group("issue3");
+    let mut g = c.benchmark_group("femur");
     g.sample_size(10);
     g.bench_function("femur_fit_7313pts_15modes", |b| {
         b.iter(|| {
@@ -115,7 +115,7 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.finish();
-    // Repair (issue 6): the mean femur's hex mesh at 2 mm with about 1 % of its elements
+    // Repair: the mean femur's hex mesh at 2 mm with about 1 % of its elements
     // spoiled (interior nodes pushed by 0.8 of an edge, seeded), repaired on one core.
     let mesh = hex_mesh(
         &mean,
@@ -151,7 +151,7 @@ fn bench(c: &mut Criterion) {
         spoiled.num_elements(),
         summarize_below(&spoiled)
     );
-    let mut g = c.benchmark_group("issue6");
+    let mut g = c.benchmark_group("repair");
     g.sample_size(10);
     g.bench_function("repair_femur_hex_1pct", |b| {
         b.iter(|| {
@@ -161,7 +161,7 @@ fn bench(c: &mut Criterion) {
     });
     g.finish();
     let (raw, _) = raw_femurs::raw_femurs(&shapes, 30);
-    let mut g = c.benchmark_group("issue4");
+    let mut g = c.benchmark_group("raw_femurs");
     g.sample_size(10);
     g.bench_function("atlas_from_30_raw_femurs_2_cores", |b| {
         b.iter(|| {

@@ -1,4 +1,4 @@
-//! Benchmarks of issue 2: one hand fit (2001 points, 11 modes) on one core, and the whole
+//! Benchmarks on the hands: one hand fit (2001 points, 11 modes) on one core, and the whole
 //! 40-hand leave-one-out. Reads `$ATLASMESH_DATA/imm-hands-2d`; without it, a seeded
 //! synthetic population of the same size stands in.
 
@@ -46,7 +46,7 @@ fn bench(c: &mut Criterion) {
     let fitter = Fitter::new(&atlas);
     let subject = &shapes[0];
     let index = ClosestPointIndex::from_shape(subject);
-    let mut g = c.benchmark_group("issue2");
+    let mut g = c.benchmark_group("hands");
     g.sample_size(10);
     g.bench_function(format!("hand_fit_2001pts_11modes_{label}"), |b| {
         b.iter(|| {

@@ -1,4 +1,4 @@
-//! Scaling of one fit (issue 7), one core: fit time against the number of vertices and
+//! Scaling of one fit, one core: fit time against the number of vertices and
 //! against the number of modes. Two experiments on the femurs of
 //! `$ATLASMESH_DATA/knee-distal-femur-synthetic-3d` (subject S001, atlas of S002-S021, 10
 //! modes): `femur subject` keeps the atlas as given (7313 points) and varies the subject's

@@ -44,7 +44,7 @@ impl Default for RepairParams {
     }
 }
 
-/// The default bounds: 0.2 for hexahedra (and simplices), 0.3 for quadrilaterals.
+/// The default bounds: 0.2 for hexahedra (and simplices), 0.3 for quadrilaterals.
 pub fn default_bound(kind: ElementKind) -> f64 {
     match kind {
         ElementKind::Quad4 => 0.3,

@@ -559,8 +559,7 @@ fn entities<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups, bbox: 
     for (k, (n, _)) in surfaces.iter().enumerate() {
         entity_lines[D - 1].push(format!("{} {bbox} 1 {} 0", k + 1, sf_tags[n.as_str()]));
     }
-    // Entity tags are numbered per dimension.
-    let volume_base = 0;
+    // Entity tags are numbered per dimension, from 1.
     for (k, (t, _)) in groups.iter().enumerate() {
         let tags = t
             .iter()
@@ -569,7 +568,7 @@ fn entities<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups, bbox: 
             .join(" ");
         entity_lines[D].push(format!(
             "{} {bbox} {} {}{}0",
-            volume_base + k + 1,
+            k + 1,
             t.len(),
             tags,
             if t.is_empty() { "" } else { " " }
@@ -594,7 +593,6 @@ fn elements<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups) {
         ..
     } = g;
     let ne = mesh.num_elements();
-    let volume_base = 0;
     let quadratic = mesh.kind.linear() != mesh.kind;
     let face_type = match (D, mesh.kind.faces()[0].len(), quadratic) {
         (2, _, _) => 1,     // 2-node line
@@ -608,13 +606,7 @@ fn elements<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups) {
     let n_blocks = groups.len() + surfaces.len() + tagged_nodes.len();
     let _ = writeln!(s, "$Elements\n{n_blocks} {total} 1 {total}");
     for (k, (_, els)) in groups.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "{D} {} {} {}",
-            volume_base + k + 1,
-            mesh.kind.gmsh_type(),
-            els.len()
-        );
+        let _ = writeln!(s, "{D} {} {} {}", k + 1, mesh.kind.gmsh_type(), els.len());
         for &e in els {
             let _ = write!(s, "{}", e + 1);
             // Gmsh's order of the nodes (its own for the mid-edge nodes).

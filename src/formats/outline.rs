@@ -66,7 +66,7 @@ pub(crate) fn check_finite(path: &Path, s: &Shape<2>) -> Result<()> {
 
 pub(crate) fn read_text(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    String::from_utf8(bytes).map_err(|_| Error::parse(path, 0, "not a text file (invalid UTF-8)"))
+    text_of(path, &bytes).map(str::to_owned)
 }
 
 /// The text of a file's bytes, as [`read_text`] gives it.

@@ -108,8 +108,9 @@ fn hex_mesh_once(
     }
     let index = ClosestPointIndex::from_shape(surface);
     // 1. Inside cubes, 2. the largest face-connected component, made manifold.
-    let mut keep = inside_cubes(surface, &index, origin, h, n);
-    make_manifold(&mut keep, &index, origin, h, n);
+    let grid = Grid { origin, h, n };
+    let mut keep = inside_cubes(surface, &index, &grid);
+    make_manifold(&mut keep, &index, &grid);
     if !keep.iter().any(|&b| b) {
         return Err(Error::Mesh(format!(
             "{}: no grid cube fits inside the surface at element size {}; use a smaller one",
@@ -118,7 +119,7 @@ fn hex_mesh_once(
     }
 
     // Grid nodes and hexahedra (VTK order), and the boundary faces of the cubes.
-    let (mut nodes, mut hexes, boundary) = cube_hexahedra(&keep, origin, h, n);
+    let (mut nodes, mut hexes, boundary) = cube_hexahedra(&keep, &grid);
 
     // 3. Pillow layer.
     let mut normal_sum: HashMap<usize, Point<3>> = HashMap::new();
@@ -210,24 +211,37 @@ fn hex_mesh_once(
     })
 }
 
-/// The cubes of the grid (`n` per axis, edge `h`, from `origin`) whose centres lie inside the
-/// surface, by the parity of its crossings along x through each row of centres, and at least
-/// [`INSET`] cube edges from it.
-fn inside_cubes(
-    surface: &Shape<3>,
-    index: &ClosestPointIndex<3>,
+/// The mesher's grid of cubes: `n` per axis, of edge `h`, from the corner `origin`.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
     origin: Point<3>,
     h: f64,
     n: [usize; 3],
-) -> Vec<bool> {
-    let cid = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
-    let centre = |i: usize, j: usize, k: usize| -> Point<3> {
+}
+
+impl Grid {
+    /// Index of the cube `(i, j, k)`.
+    #[inline]
+    fn cell(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.n[0] * (j + self.n[1] * k)
+    }
+
+    /// Centre of the cube `(i, j, k)`.
+    #[inline]
+    fn centre(&self, i: usize, j: usize, k: usize) -> Point<3> {
         [
-            origin[0] + (i as f64 + 0.5) * h,
-            origin[1] + (j as f64 + 0.5) * h,
-            origin[2] + (k as f64 + 0.5) * h,
+            self.origin[0] + (i as f64 + 0.5) * self.h,
+            self.origin[1] + (j as f64 + 0.5) * self.h,
+            self.origin[2] + (k as f64 + 0.5) * self.h,
         ]
-    };
+    }
+}
+
+/// The cubes of the grid `g` whose centres lie inside the
+/// surface, by the parity of its crossings along x through each row of centres, and at least
+/// [`INSET`] cube edges from it.
+fn inside_cubes(surface: &Shape<3>, index: &ClosestPointIndex<3>, g: &Grid) -> Vec<bool> {
+    let Grid { origin, h, n } = *g;
     let mut rows: Vec<Vec<f64>> = vec![Vec::new(); n[1] * n[2]];
     // A tiny offset keeps the rows off the surface's vertices and edges.
     let (oy, oz) = (1.234_567e-7 * h, 2.345_678e-7 * h);
@@ -278,8 +292,8 @@ fn inside_cubes(
                     c += 1;
                 }
                 if c % 2 == 1 {
-                    let p = centre(i, j, k);
-                    keep[cid(i, j, k)] = index.closest(&p).dist2 >= (INSET * h).powi(2);
+                    let p = g.centre(i, j, k);
+                    keep[g.cell(i, j, k)] = index.closest(&p).dist2 >= (INSET * h).powi(2);
                 }
             }
         }
@@ -290,22 +304,9 @@ fn inside_cubes(
 /// Keeps the largest face-connected set of the cubes `keep` and removes cubes until its
 /// boundary is manifold: no two cubes meeting only along an edge (the one nearer the surface
 /// goes) or at a vertex (all but the largest group around it go).
-fn make_manifold(
-    keep: &mut [bool],
-    index: &ClosestPointIndex<3>,
-    origin: Point<3>,
-    h: f64,
-    n: [usize; 3],
-) {
-    let cid = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
-    let centre = |i: usize, j: usize, k: usize| -> Point<3> {
-        [
-            origin[0] + (i as f64 + 0.5) * h,
-            origin[1] + (j as f64 + 0.5) * h,
-            origin[2] + (k as f64 + 0.5) * h,
-        ]
-    };
-    let dist_of = |i: usize, j: usize, k: usize| index.closest(&centre(i, j, k)).dist2;
+fn make_manifold(keep: &mut [bool], index: &ClosestPointIndex<3>, g: &Grid) {
+    let n = g.n;
+    let dist_of = |i: usize, j: usize, k: usize| index.closest(&g.centre(i, j, k)).dist2;
     for _ in 0..50 {
         largest_component(keep, n);
         let mut changed = false;
@@ -327,8 +328,10 @@ fn make_manifold(
                             c[a2] -= d2;
                             quad[q] = c;
                         }
-                        let on: Vec<bool> =
-                            quad.iter().map(|c| keep[cid(c[0], c[1], c[2])]).collect();
+                        let on: Vec<bool> = quad
+                            .iter()
+                            .map(|c| keep[g.cell(c[0], c[1], c[2])])
+                            .collect();
                         let count = on.iter().filter(|&&b| b).count();
                         if count == 2 && on[0] == on[2] {
                             // Diagonal pair: drop the one nearer the surface.
@@ -345,7 +348,7 @@ fn make_manifold(
                             } else {
                                 pair[1]
                             };
-                            keep[cid(drop[0], drop[1], drop[2])] = false;
+                            keep[g.cell(drop[0], drop[1], drop[2])] = false;
                             changed = true;
                         }
                     }
@@ -360,7 +363,7 @@ fn make_manifold(
                     let mut on = [false; 8];
                     for (b, o) in on.iter_mut().enumerate() {
                         let (di, dj, dk) = (b & 1, (b >> 1) & 1, (b >> 2) & 1);
-                        *o = keep[cid(i - 1 + di, j - 1 + dj, k - 1 + dk)];
+                        *o = keep[g.cell(i - 1 + di, j - 1 + dj, k - 1 + dk)];
                     }
                     let groups = octant_groups(&on);
                     if groups.len() > 1 {
@@ -371,13 +374,13 @@ fn make_manifold(
                             .max_by_key(|(_, g)| g.len())
                             .map(|(gi, _)| gi)
                             .unwrap_or(0);
-                        for (gi, g) in groups.iter().enumerate() {
+                        for (gi, group) in groups.iter().enumerate() {
                             if gi == best {
                                 continue;
                             }
-                            for &b in g {
+                            for &b in group {
                                 let (di, dj, dk) = (b & 1, (b >> 1) & 1, (b >> 2) & 1);
-                                keep[cid(i - 1 + di, j - 1 + dj, k - 1 + dk)] = false;
+                                keep[g.cell(i - 1 + di, j - 1 + dj, k - 1 + dk)] = false;
                             }
                         }
                         changed = true;
@@ -391,17 +394,12 @@ fn make_manifold(
     }
 }
 
-/// The hexahedra of the cubes `keep` of the grid (`n` per axis, edge `h`, from `origin`):
+/// The hexahedra of the cubes `keep` of the grid `g`:
 /// their nodes, their connectivity (VTK order) and their boundary faces (quadrilaterals
 /// with outward normals `(b - a) × (d - a)`).
 #[allow(clippy::type_complexity)]
-fn cube_hexahedra(
-    keep: &[bool],
-    origin: Point<3>,
-    h: f64,
-    n: [usize; 3],
-) -> (Vec<Point<3>>, Vec<usize>, Vec<[usize; 4]>) {
-    let cid = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+fn cube_hexahedra(keep: &[bool], g: &Grid) -> (Vec<Point<3>>, Vec<usize>, Vec<[usize; 4]>) {
+    let Grid { origin, h, n } = *g;
     let vid = |i: usize, j: usize, k: usize| i + (n[0] + 1) * (j + (n[1] + 1) * k);
     let mut node_of: HashMap<usize, usize> = HashMap::new();
     let mut nodes: Vec<Point<3>> = Vec::new();
@@ -420,7 +418,7 @@ fn cube_hexahedra(
     for k in 0..n[2] {
         for j in 0..n[1] {
             for i in 0..n[0] {
-                if !keep[cid(i, j, k)] {
+                if !keep[g.cell(i, j, k)] {
                     continue;
                 }
                 let c = [
@@ -436,20 +434,29 @@ fn cube_hexahedra(
                 hexes.extend_from_slice(&c);
                 // Faces with outward normals (b - a) × (d - a), and their neighbour cubes.
                 let faces: [([usize; 4], Option<usize>); 6] = [
-                    ([c[0], c[3], c[2], c[1]], (k > 0).then(|| cid(i, j, k - 1))),
+                    (
+                        [c[0], c[3], c[2], c[1]],
+                        (k > 0).then(|| g.cell(i, j, k - 1)),
+                    ),
                     (
                         [c[4], c[5], c[6], c[7]],
-                        (k + 1 < n[2]).then(|| cid(i, j, k + 1)),
+                        (k + 1 < n[2]).then(|| g.cell(i, j, k + 1)),
                     ),
-                    ([c[0], c[1], c[5], c[4]], (j > 0).then(|| cid(i, j - 1, k))),
+                    (
+                        [c[0], c[1], c[5], c[4]],
+                        (j > 0).then(|| g.cell(i, j - 1, k)),
+                    ),
                     (
                         [c[3], c[7], c[6], c[2]],
-                        (j + 1 < n[1]).then(|| cid(i, j + 1, k)),
+                        (j + 1 < n[1]).then(|| g.cell(i, j + 1, k)),
                     ),
-                    ([c[0], c[4], c[7], c[3]], (i > 0).then(|| cid(i - 1, j, k))),
+                    (
+                        [c[0], c[4], c[7], c[3]],
+                        (i > 0).then(|| g.cell(i - 1, j, k)),
+                    ),
                     (
                         [c[1], c[2], c[6], c[5]],
-                        (i + 1 < n[0]).then(|| cid(i + 1, j, k)),
+                        (i + 1 < n[0]).then(|| g.cell(i + 1, j, k)),
                     ),
                 ];
                 for (f, nb) in faces {

@@ -238,6 +238,19 @@ pub struct FailedSubject {
     pub exit_code: u8,
 }
 
+impl FailedSubject {
+    /// The subject `name` (from the file `input`; empty for a shape held in memory) that
+    /// failed with `error`.
+    pub fn new(name: &str, input: &str, error: &crate::error::Error) -> Self {
+        FailedSubject {
+            name: name.to_string(),
+            input: input.to_string(),
+            error: error.to_string(),
+            exit_code: error.exit_code(),
+        }
+    }
+}
+
 use crate::eval::ShapeModelMeasures;
 
 impl ShapeModelMeasures {

@@ -251,15 +251,7 @@ pub fn fit_shapes<const D: usize>(
         .map(|s| {
             let r = match process_subject(atlas, &fitter, &morpher, s, out, params) {
                 Ok(r) => (vec![r], Vec::new()),
-                Err(e) => (
-                    Vec::new(),
-                    vec![FailedSubject {
-                        name: s.name.clone(),
-                        input: String::new(),
-                        error: e.to_string(),
-                        exit_code: e.exit_code(),
-                    }],
-                ),
+                Err(e) => (Vec::new(), vec![FailedSubject::new(&s.name, "", &e)]),
             };
             progress.item_done(label, &s.name);
             r
@@ -333,12 +325,8 @@ fn fit_file<const D: usize>(
     opts: &BatchOptions,
     skipped: &std::sync::atomic::AtomicUsize,
 ) -> (Vec<SubjectReport>, Vec<FailedSubject>) {
-    let fail = |name: &str, e: &Error| FailedSubject {
-        name: name.to_string(),
-        input: file.display().to_string(),
-        error: e.to_string(),
-        exit_code: e.exit_code(),
-    };
+    let input = file.display().to_string();
+    let fail = |name: &str, e: &Error| FailedSubject::new(name, &input, e);
     let name = stem(file);
     let input_crc = match file_crc32(file) {
         Ok(c) => c,

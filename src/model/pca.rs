@@ -8,7 +8,7 @@ use faer::Mat;
 /// Principal components of a set of aligned shapes.
 #[derive(Clone, Debug)]
 pub struct Pca {
-    /// Eigenmodes `Psi`: `N·D × (n_s - 1)`, orthonormal columns, coordinates interleaved
+    /// Eigenmodes `Psi`: `N·D × m` with `m ≤ min(n_s - 1, N·D)`, orthonormal columns, coordinates interleaved
     /// `[x_1, y_1, (z_1,) x_2, ...]` as in the paper's vectorization.
     pub modes: Mat<f64>,
     /// Eigenvalues `lambda_k` of the covariance `Phi Phi^T / (n_s - 1)`, decreasing.
@@ -40,7 +40,9 @@ impl Pca {
 
 /// PCA of the shapes `aligned` (each `N` points) about `mean` (section 2.3): thin SVD of the
 /// `N·D × n_s` matrix `Phi = [S_k^a - S_bar]`; `Psi = U`, `lambda = sigma² / (n_s - 1)`.
-/// Keeps the `n_s - 1` modes (the last singular value of centred data is zero).
+/// Keeps the modes of non-zero variance: at most `n_s - 1` (the last singular value of
+/// centred data is zero) and at most `N·D` (more shapes than coordinates: the data span at
+/// most the coordinate space), dropping the trailing ones at round-off level.
 pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Result<Pca> {
     let ns = aligned.len();
     if ns < 2 {
@@ -58,11 +60,16 @@ pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Resu
         },
         Ok,
     )?;
-    let keep = ns - 1;
     crate::clear_simd_upper_state();
     let s = svd.S().column_vector();
-    let eigenvalues: Vec<f64> = (0..keep).map(|k| s[k] * s[k] / (ns - 1) as f64).collect();
-    if eigenvalues.first().is_none_or(|&l| l <= 0.0) {
+    let available = (ns - 1).min(rows).min(s.nrows());
+    let mut eigenvalues: Vec<f64> = (0..available)
+        .map(|k| s[k] * s[k] / (ns - 1) as f64)
+        .collect();
+    let largest = eigenvalues.first().copied().unwrap_or(0.0);
+    eigenvalues.retain(|&l| l.is_finite() && l > largest * 1e-24);
+    let keep = eigenvalues.len();
+    if !(largest > 0.0) || keep == 0 {
         return Err(Error::Population(
             "the shapes are identical after alignment: there is no variance to model".into(),
         ));
@@ -109,5 +116,52 @@ mod tests {
             }
         }
         assert!(p.eigenvalues.windows(2).all(|w| w[0] >= w[1]));
+    }
+
+    /// Far more shapes than coordinates (240 shapes of 5 points in 2D: 10 coordinates): at
+    /// most 10 modes, orthonormal, and they reconstruct every shape.
+    #[test]
+    fn pca_with_more_shapes_than_coordinates() {
+        let shapes: Vec<Vec<Point<2>>> = (0..240)
+            .map(|k| {
+                (0..5)
+                    .map(|i| {
+                        let a = i as f64 * 1.2566;
+                        // A pseudo-random offset per shape, point and axis (full rank).
+                        let wobble = |d: usize| {
+                            let h = (k * 10 + i * 2 + d).wrapping_mul(2_654_435_761) % 1000;
+                            0.1 * (h as f64 / 1000.0 - 0.5)
+                        };
+                        [a.cos() + wobble(0), a.sin() + wobble(1)]
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut m = vec![[0.0; 2]; 5];
+        for s in &shapes {
+            for (a, p) in m.iter_mut().zip(s) {
+                a[0] += p[0] / 240.0;
+                a[1] += p[1] / 240.0;
+            }
+        }
+        let p = pca(&shapes, &m).unwrap();
+        assert_eq!(p.modes.ncols(), 10);
+        assert_eq!(p.modes.ncols(), p.eigenvalues.len());
+        assert!(p.eigenvalues.iter().all(|&l| l > 0.0));
+        for a in 0..p.modes.ncols() {
+            for b in 0..p.modes.ncols() {
+                let d: f64 = (0..10).map(|r| p.modes[(r, a)] * p.modes[(r, b)]).sum();
+                assert!((d - f64::from(u8::from(a == b))).abs() < 1e-9);
+            }
+        }
+        for s in &shapes {
+            let x: Vec<f64> = (0..10).map(|r| s[r / 2][r % 2] - m[r / 2][r % 2]).collect();
+            for r in 0..10 {
+                let rec: f64 = (0..p.modes.ncols())
+                    .map(|k| p.modes[(r, k)] * (0..10).map(|q| p.modes[(q, k)] * x[q]).sum::<f64>())
+                    .sum();
+                assert!((rec - x[r]).abs() < 1e-9);
+            }
+        }
     }
 }

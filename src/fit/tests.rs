@@ -23,6 +23,7 @@ fn atlas_of(points: usize) -> Atlas<2> {
             let a = 1.0 + 0.1 * (k as f64 * 1.7).sin();
             let b = 0.6 + 0.06 * (k as f64 * 2.3).cos();
             let c = 0.05 * (k as f64 * 0.9).cos();
+            let d = 0.06 * (k as f64 * 1.3).sin();
             let pts = (0..points)
                 .map(|i| {
                     let t = i as f64 / points as f64 * std::f64::consts::TAU;
@@ -30,7 +31,7 @@ fn atlas_of(points: usize) -> Atlas<2> {
                     let egg = 1.0 + 0.25 * t.cos();
                     [
                         egg * (a * t.cos() + c * (3.0 * t).cos()),
-                        egg * (b * t.sin() + c * (2.0 * t).sin()),
+                        egg * (b * t.sin() + d * (2.0 * t).sin()),
                     ]
                 })
                 .collect();

@@ -1,7 +1,7 @@
 //! The boundary faces of a mesh (faces shared by no other element), outward.
 
 use super::FeMesh;
-use crate::geometry::Point;
+use crate::geometry::{Point, Shape};
 use std::collections::HashMap;
 
 /// A face on the boundary of a mesh (shared by no other element).
@@ -83,4 +83,37 @@ pub fn boundary_faces<const D: usize>(mesh: &FeMesh<D>) -> Vec<BoundaryFace<D>> 
         }
     }
     out
+}
+
+/// The boundary of `mesh` as a surface (3D: its faces split into triangles) or an outline
+/// (2D: its edges), over the boundary's corner nodes only, numbered anew; the mesh's frame
+/// and units. The shape the mesh delivers, to be measured against a subject.
+pub fn boundary_surface<const D: usize>(mesh: &FeMesh<D>) -> Shape<D> {
+    let faces = boundary_faces(mesh);
+    let mut renumber: HashMap<usize, usize> = HashMap::new();
+    let mut points = Vec::new();
+    let mut local = |n: usize, points: &mut Vec<Point<D>>| {
+        *renumber.entry(n).or_insert_with(|| {
+            points.push(mesh.nodes[n]);
+            points.len() - 1
+        })
+    };
+    let mut facets = Vec::new();
+    for f in &faces {
+        let v: Vec<usize> = f.nodes.iter().map(|&n| local(n, &mut points)).collect();
+        if D == 2 {
+            facets.push(std::array::from_fn(|k| v[k]));
+        } else {
+            for k in 1..v.len().saturating_sub(1) {
+                let tri = [v[0], v[k], v[k + 1]];
+                facets.push(std::array::from_fn(|j| tri[j]));
+            }
+        }
+    }
+    Shape {
+        name: "mesh boundary".into(),
+        points,
+        facets,
+        landmarks: Vec::new(),
+    }
 }

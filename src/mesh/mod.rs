@@ -26,7 +26,7 @@ pub mod quality;
 pub mod repair;
 pub mod sets;
 
-pub use boundary::{BoundaryFace, boundary_faces};
+pub use boundary::{BoundaryFace, boundary_faces, boundary_surface};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use fe_mesh::{FeMesh, HexMesh, MeshSets, QuadMesh};

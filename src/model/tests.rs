@@ -7,10 +7,14 @@ pub(crate) fn ellipses(n: usize) -> Vec<Shape<2>> {
             let a = 1.0 + 0.2 * (k as f64 * 1.7).sin();
             let b = 0.6 + 0.1 * (k as f64 * 2.3).cos();
             let bump = 0.1 * (k as f64 * 0.9).cos();
+            let lobe = 0.08 * (k as f64 * 1.1).sin();
             let pts = (0..80)
                 .map(|i| {
                     let t = i as f64 / 80.0 * std::f64::consts::TAU;
-                    [a * t.cos() + bump * (3.0 * t).cos(), b * t.sin()]
+                    [
+                        a * t.cos() + bump * (3.0 * t).cos(),
+                        b * t.sin() + lobe * (2.0 * t).sin(),
+                    ]
                 })
                 .collect();
             Shape::polyline(format!("e{k}"), pts, true)

@@ -243,12 +243,17 @@ pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
             .flat_map(|h| h.1.iter().copied())
             .filter(|v| *v > 0.0 && v.is_finite())
             .collect();
-        let lo = vals
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min)
-            .max(1e-300);
-        let hi = vals.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
+        // No history (no subject fitted): a fixed decade, not an infinite axis.
+        let (lo, hi) = if vals.is_empty() {
+            (1.0, 10.0)
+        } else {
+            let lo = vals
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min)
+                .max(1e-300);
+            (lo, vals.iter().copied().fold(0.0, f64::max).max(lo * 10.0))
+        };
         let mut chart = chart_frame(&root, "E_d per iteration", 64, text)
             .build_cartesian_2d(0f64..maxit as f64, (lo..hi).log_scale())
             .map_err(perr(path))?;

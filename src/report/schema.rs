@@ -66,6 +66,9 @@ pub struct SubjectReport {
     /// element; see `Morpher::morph`).
     #[serde(deserialize_with = "f64_or_nan")]
     pub morph_alpha: f64,
+    /// Whether the morph had to stiffen (`morph_alpha` above the requested `alpha`).
+    #[serde(default)]
+    pub morph_escalated: bool,
     /// Counts of the elements' smallest corner scaled Jacobians in 40 bins of width 0.05
     /// from -1 to 1 (bin `k` covers `[-1 + 0.05 k, -1 + 0.05 (k + 1))`, the last includes 1).
     #[serde(default)]
@@ -82,7 +85,36 @@ pub struct SubjectReport {
     /// Elements below the usual acceptance bound of their kind (hexahedra 0.5,
     /// quadrilaterals 0.3, simplices 0.2).
     pub elements_below_bound: usize,
-    /// `rms_distance_relative < 0.01` and no inverted element.
+    /// The delivered mesh against the subject: two-way RMS distance between the boundary of
+    /// the mesh written and the subject's surface (subject units; subject → mesh only for a
+    /// partial subject or an open outline).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub mesh_rms_distance: f64,
+    /// `mesh_rms_distance` / the subject's bounding-box diagonal.
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub mesh_rms_distance_relative: f64,
+    /// The larger of the two directions' 95th-percentile distances between the mesh's
+    /// boundary and the subject (subject units).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub mesh_p95_distance: f64,
+    /// The largest distance either way between the mesh's boundary and the subject (subject
+    /// units).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub mesh_max_distance: f64,
+    /// The share of the subject's points farther from the mesh than one element size.
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub mesh_share_beyond_element: f64,
+    /// The element size of the mesh written: the median edge length of its boundary (subject
+    /// units).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub element_size: f64,
+    /// Which of the checks of `success` failed: `fit` (the instance farther than 1 % of the
+    /// diagonal), `mesh_distance` (the mesh farther than its bound), `mesh_quality`
+    /// (inverted elements, non-finite nodes, or elements below the repair bound).
+    #[serde(default)]
+    pub failed_checks: Vec<String>,
+    /// Every check passed: the delivered mesh is within its distance bound of the subject and
+    /// of valid quality (see `failed_checks`).
     pub success: bool,
     /// Whether the last inner loop of Algorithm 1 met its tolerance.
     pub converged: bool,
@@ -97,7 +129,7 @@ pub struct SubjectReport {
 pub struct Summary {
     /// Subjects reported.
     pub subjects: usize,
-    /// Subjects whose fit is within 1 % of their diagonal and whose mesh has no inverted element.
+    /// Subjects whose every check passed (see `failed_checks` of each subject).
     pub succeeded: usize,
     /// Subjects whose mesh has no inverted element.
     pub meshes_valid: usize,
@@ -113,12 +145,36 @@ pub struct Summary {
     /// Subjects still below the repair bound after the repair.
     #[serde(default)]
     pub below_repair_bound: usize,
+    /// Subjects whose fitted instance is farther than its bound (`fit` in `failed_checks`).
+    #[serde(default)]
+    pub failed_fit: usize,
+    /// Subjects whose delivered mesh is farther than its bound (`mesh_distance`).
+    #[serde(default)]
+    pub failed_mesh_distance: usize,
+    /// Subjects whose delivered mesh is not of valid quality (`mesh_quality`).
+    #[serde(default)]
+    pub failed_mesh_quality: usize,
+    /// Subjects whose morph had to stiffen (`morph_escalated`).
+    #[serde(default)]
+    pub morph_escalations: usize,
+    /// Subjects whose last inner loop of Algorithm 1 did not meet its tolerance.
+    #[serde(default)]
+    pub not_converged: usize,
     /// Median fit time (seconds).
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_fit_seconds: f64,
-    /// Median two-way RMS distance over the subject's diagonal.
+    /// Median two-way RMS distance of the fitted instance over the subject's diagonal.
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_rms_distance_relative: f64,
+    /// Median two-way RMS distance of the delivered mesh to its subject (subject units).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub median_mesh_rms_distance: f64,
+    /// Median of `mesh_rms_distance_relative`.
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub median_mesh_rms_distance_relative: f64,
+    /// Median of `mesh_p95_distance` (subject units).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub median_mesh_p95_distance: f64,
     /// Median normal correlation (eq. 13).
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_normal_correlation: f64,
@@ -191,6 +247,13 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+fn failed_check(subjects: &[SubjectReport], check: &str) -> usize {
+    subjects
+        .iter()
+        .filter(|s| s.failed_checks.iter().any(|c| c == check))
+        .count()
+}
+
 impl Summary {
     /// Summary of the subjects' figures; `failed` subjects that have no report.
     pub fn of(subjects: &[SubjectReport], failed: usize) -> Self {
@@ -205,6 +268,23 @@ impl Summary {
                 .iter()
                 .filter(|s| s.scaled_jacobian_min < s.repair_bound)
                 .count(),
+            failed_fit: failed_check(subjects, "fit"),
+            failed_mesh_distance: failed_check(subjects, "mesh_distance"),
+            failed_mesh_quality: failed_check(subjects, "mesh_quality"),
+            morph_escalations: subjects.iter().filter(|s| s.morph_escalated).count(),
+            not_converged: subjects.iter().filter(|s| !s.converged).count(),
+            median_mesh_rms_distance: median(
+                subjects.iter().map(|s| s.mesh_rms_distance).collect(),
+            ),
+            median_mesh_rms_distance_relative: median(
+                subjects
+                    .iter()
+                    .map(|s| s.mesh_rms_distance_relative)
+                    .collect(),
+            ),
+            median_mesh_p95_distance: median(
+                subjects.iter().map(|s| s.mesh_p95_distance).collect(),
+            ),
             median_fit_seconds: median(subjects.iter().map(|s| s.fit_seconds).collect()),
             median_rms_distance_relative: median(
                 subjects.iter().map(|s| s.rms_distance_relative).collect(),

@@ -10,13 +10,14 @@ use crate::fit::Fitter;
 use crate::formats::create_dir;
 use crate::geometry::Shape;
 use crate::mesh::FeMesh;
-use crate::report::{Report, SubjectReport};
+use crate::report::{FailedSubject, Report, SubjectReport};
 use rayon::prelude::*;
 use std::path::Path;
 
 /// The paper's leave-one-out experiment (section 6.1): for every shape, the atlas from the
 /// others, a fit of the held-out shape (its known correspondence unused: it is fitted as an
-/// outline), the morphed mesh and the measures. Writes `out/report.json`, each subject's VTU,
+/// outline), the morphed mesh and the measures. A fold that fails is listed in the report's
+/// `failed` with its reason, and the others go on. Writes `out/report.json`, each subject's VTU,
 /// VTP and plot, and the population plots. `jobs` threads (0 = all cores).
 pub fn leave_one_out<const D: usize>(
     shapes: &[Shape<D>],
@@ -106,7 +107,16 @@ pub fn leave_one_out_of<const D: usize>(
             .collect()
     });
     progress.items_finished(label);
-    let subjects = results.into_iter().collect::<Result<Vec<_>>>()?;
+    // A fold that fails (a subject outside the model, a refused mesh) is recorded with its
+    // reason and the experiment goes on.
+    let mut reports = Vec::new();
+    let mut failed = Vec::new();
+    for (k, r) in results.into_iter().enumerate() {
+        match r {
+            Ok(s) => reports.push(s),
+            Err(e) => failed.push(FailedSubject::new(&subjects[k].name, "", &e)),
+        }
+    }
     // Compactness, generalization and specificity of the population's model, for the HTML
     // report (up to 10 modes, 200 random instances).
     let measures = if params.plots {
@@ -118,11 +128,12 @@ pub fn leave_one_out_of<const D: usize>(
         out,
         dataset,
         &full,
-        subjects,
+        reports,
         params,
         Some(mean_mesh_report(&full)),
         crate::study::batch::BatchFacts {
             measures,
+            failed,
             ..Default::default()
         },
     )

@@ -36,6 +36,13 @@ pub struct RunParams {
     /// `fit.partial` the distance is the subject's to the instance only.
     #[serde(default = "default_max_misfit")]
     pub max_misfit: f64,
+    /// `success` requires the fitted instance's two-way RMS distance to the subject within
+    /// this share of the subject's bounding-box diagonal.
+    pub max_instance_distance: f64,
+    /// `success` requires the delivered mesh's two-way RMS distance to the subject (its
+    /// boundary against the subject's surface) within this share of the subject's
+    /// bounding-box diagonal.
+    pub max_mesh_distance: f64,
 }
 
 fn default_max_misfit() -> f64 {
@@ -51,6 +58,8 @@ impl Default for RunParams {
             deck: None,
             repair: Some(crate::mesh::repair::RepairParams::default()),
             max_misfit: default_max_misfit(),
+            max_instance_distance: 0.02,
+            max_mesh_distance: 0.01,
             atlas: AtlasParams::default(),
             fit: FitParams::default(),
             morph: FfdParams::default(),

@@ -4,11 +4,13 @@
 use super::baselines::baseline_correlations;
 use super::params::RunParams;
 use crate::error::{Error, Result};
-use crate::eval::{e_d, normal_correlation, normals_at, two_way_rms};
+use crate::eval::{
+    SurfaceDistances, e_d, normal_correlation, normals_at, surface_distances, two_way_rms,
+};
 use crate::fit::{FitResult, Fitter};
 use crate::geometry::{ClosestPointIndex, Shape};
 use crate::mesh::quality::{ElementQuality, distribution, summarize};
-use crate::mesh::{FeMesh, Morpher, repair_with_quality};
+use crate::mesh::{FeMesh, Morpher, boundary_surface, repair_with_quality};
 use crate::model::Atlas;
 use crate::report::{SubjectReport, jacobian_histogram};
 use std::time::Instant;
@@ -87,6 +89,7 @@ pub fn fit_subject<const D: usize>(
         repair = Some(r);
     }
     let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
+    let delivered = delivered_distances(&mesh, subject, &index, params);
     let q = summarize(&per_element);
     let dist = distribution(&mesh, &per_element);
     let mean_normals = atlas.mean_shape().vertex_normals();
@@ -123,6 +126,7 @@ pub fn fit_subject<const D: usize>(
         repair_bound: repair.map_or(0.0, |r| r.bound),
         repaired: repair.is_some_and(|r| r.below_bound_before > 0),
         morph_alpha: morph.alpha,
+        morph_escalated: morph.alpha > params.morph.alpha * (1.0 + 1e-9),
         scaled_jacobian_histogram: jacobian_histogram(
             per_element.iter().map(|e| e.scaled_jacobian_min),
         ),
@@ -130,11 +134,21 @@ pub fn fit_subject<const D: usize>(
         scaled_jacobian_p05: dist.scaled_jacobian_p05,
         edge_ratio_max: dist.edge_ratio_max,
         elements_below_bound: dist.elements_below_bound,
-        success: rel < 0.01 && q.inverted_elements == 0,
+        mesh_rms_distance: delivered.distances.rms,
+        mesh_rms_distance_relative: delivered.distances.rms / subject.bbox_diagonal(),
+        mesh_p95_distance: delivered.distances.p95,
+        mesh_max_distance: delivered.distances.max,
+        mesh_share_beyond_element: delivered.distances.share_beyond,
+        element_size: delivered.element_size,
+        failed_checks: Vec::new(),
+        success: false,
         converged: fit.converged,
         e_d_history: fit.e_d_history.clone(),
         files: Vec::new(),
     };
+    let mut report = report;
+    report.failed_checks = failed_checks(&report, delivered.finite, params);
+    report.success = report.failed_checks.is_empty();
     Ok(SubjectOutcome {
         fit,
         mesh,
@@ -142,4 +156,61 @@ pub fn fit_subject<const D: usize>(
         index,
         report,
     })
+}
+
+/// The delivered mesh measured against its subject.
+struct Delivered {
+    distances: SurfaceDistances,
+    element_size: f64,
+    finite: bool,
+}
+
+/// The boundary of the mesh written against the subject (two-way, or subject → mesh for a
+/// partial subject or an open outline), with the mesh's element size (median boundary edge).
+fn delivered_distances<const D: usize>(
+    mesh: &FeMesh<D>,
+    subject: &Shape<D>,
+    index: &ClosestPointIndex<D>,
+    params: &RunParams,
+) -> Delivered {
+    let finite = mesh.nodes.iter().flatten().all(|v| v.is_finite());
+    let boundary = boundary_surface(mesh);
+    if !finite || boundary.facets.is_empty() {
+        let nan = f64::NAN;
+        return Delivered {
+            distances: SurfaceDistances {
+                rms: nan,
+                p95: nan,
+                max: nan,
+                share_beyond: nan,
+            },
+            element_size: nan,
+            finite,
+        };
+    }
+    let element_size = boundary.median_edge_length();
+    let open_outline = D == 2 && subject.facets.len() < subject.points.len();
+    let two_way = !params.fit.partial && !open_outline;
+    Delivered {
+        distances: surface_distances(&boundary, subject, index, two_way, element_size),
+        element_size,
+        finite,
+    }
+}
+
+/// The checks of `success` that `report` fails: `fit`, `mesh_distance`, `mesh_quality`.
+fn failed_checks(report: &SubjectReport, finite: bool, params: &RunParams) -> Vec<String> {
+    let mut failed = Vec::new();
+    if !(report.rms_distance_relative <= params.max_instance_distance) {
+        failed.push("fit".to_string());
+    }
+    if !(report.mesh_rms_distance_relative <= params.max_mesh_distance) {
+        failed.push("mesh_distance".to_string());
+    }
+    let below_bound =
+        params.repair.is_some() && !(report.scaled_jacobian_min >= report.repair_bound);
+    if !finite || report.inverted_elements > 0 || below_bound {
+        failed.push("mesh_quality".to_string());
+    }
+    failed
 }

@@ -277,3 +277,68 @@ pub fn atlasmesh<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Output 
         .output()
         .unwrap()
 }
+
+/// Every subject of `r` that reports `success` delivered what it claims: its mesh file
+/// (`NAME_mesh.vtu` in `out`), read back, has no inverted element and no non-finite node, and
+/// its boundary lies within the run's bound (`max_mesh_distance` of the subject's diagonal,
+/// two-way RMS; subject → mesh only for open outlines and partial fits) of the subject (found
+/// by name in `subjects`); the distance read back is the one reported. Returns how many were
+/// checked.
+#[allow(dead_code)]
+pub fn assert_delivered<const D: usize>(
+    r: &atlasmesh::report::Report,
+    out: &std::path::Path,
+    subjects: &[atlasmesh::geometry::Shape<D>],
+) -> usize {
+    use atlasmesh::eval::surface_distances;
+    use atlasmesh::geometry::ClosestPointIndex;
+    use atlasmesh::mesh::{boundary_surface, mesh_quality, summarize};
+    let bound = r.parameters["max_mesh_distance"].as_f64().unwrap();
+    let partial = r.parameters["fit"]["partial"].as_bool().unwrap_or(false);
+    let mut checked = 0;
+    for s in r.subjects.iter().filter(|s| s.success) {
+        let subject = subjects
+            .iter()
+            .find(|x| x.name == s.name)
+            .unwrap_or_else(|| panic!("{}: no such subject", s.name));
+        let file = s
+            .files
+            .iter()
+            .find(|f| f.ends_with("_mesh.vtu"))
+            .unwrap_or_else(|| panic!("{}: no mesh file in {:?}", s.name, s.files));
+        let mesh: atlasmesh::mesh::FeMesh<D> =
+            atlasmesh::formats::read_fe_mesh(&out.join(file)).unwrap();
+        assert!(
+            mesh.nodes.iter().flatten().all(|v| v.is_finite()),
+            "{}: non-finite node",
+            s.name
+        );
+        assert_eq!(
+            summarize(&mesh_quality(&mesh)).inverted_elements,
+            0,
+            "{}: success with an inverted element",
+            s.name
+        );
+        let boundary = boundary_surface(&mesh);
+        let index = ClosestPointIndex::from_shape(subject);
+        let two_way = !partial && !(D == 2 && subject.facets.len() < subject.points.len());
+        let d = surface_distances(&boundary, subject, &index, two_way, 1.0);
+        let rel = d.rms / subject.bbox_diagonal();
+        assert!(
+            rel <= bound,
+            "{}: success, but the mesh written is {:.4} (RMS, {:.2} % of the diagonal) from the subject",
+            s.name,
+            d.rms,
+            100.0 * rel
+        );
+        assert!(
+            (d.rms - s.mesh_rms_distance).abs() <= 1e-6 * (1.0 + d.rms),
+            "{}: reported mesh distance {} but the file is at {}",
+            s.name,
+            s.mesh_rms_distance,
+            d.rms
+        );
+        checked += 1;
+    }
+    checked
+}

@@ -1,7 +1,7 @@
 //! `atlasmesh fit`: subjects fitted with a saved atlas, the mean mesh morphed onto each.
 
 use crate::args::{RunArgs, dataset_name};
-use crate::summary::{BatchFailed, print_summary};
+use crate::summary::{failures, print_summary};
 use crate::terminal::Terminal;
 use atlasmesh::geometry::Shape;
 use atlasmesh::model::Atlas;
@@ -121,15 +121,5 @@ fn fit<const D: usize>(
         )
     })?;
     print_summary(&r, &a.out);
-    if !r.failed.is_empty() {
-        for f in &r.failed {
-            eprintln!("failed: {} ({}): {}", f.name, f.input, f.error);
-        }
-        return Err(BatchFailed {
-            failed: r.failed.len(),
-            total: r.summary.subjects,
-        }
-        .into());
-    }
-    Ok(())
+    failures(&r)
 }

@@ -2,7 +2,7 @@
 
 use crate::args::{PopArgs, RunArgs, dataset_name};
 use crate::population::{corresponded, outlines_and_params, surfaces_and_params};
-use crate::summary::print_summary;
+use crate::summary::{failures, print_summary};
 use crate::terminal::Terminal;
 use atlasmesh::geometry::Shape;
 use atlasmesh::mesh::FeMesh;
@@ -36,7 +36,7 @@ pub fn run(a: LooArgs, term: &Terminal) -> anyhow::Result<()> {
         loo(&a, &shapes, None, &params, term)?
     };
     print_summary(&r, &a.out);
-    Ok(())
+    failures(&r)
 }
 
 /// Leave-one-out on shapes of either dimension.

@@ -7,18 +7,59 @@ use std::path::Path;
 pub fn print_summary(r: &Report, out: &Path) {
     let s = &r.summary;
     println!(
-        "{} subjects: {} succeeded, {} meshes valid; median fit {:.1} ms, median relative RMS distance {:.4}, median normal correlation {:.3}",
+        "{} subjects: {} succeeded, {} meshes valid; median fit {:.1} ms; delivered meshes: median RMS distance {:.3} ({:.4} of the diagonal), median 95th percentile {:.3}; median normal correlation {:.3}",
         s.subjects,
         s.succeeded,
         s.meshes_valid,
         s.median_fit_seconds * 1e3,
-        s.median_rms_distance_relative,
+        s.median_mesh_rms_distance,
+        s.median_mesh_rms_distance_relative,
+        s.median_mesh_p95_distance,
         s.median_normal_correlation
     );
+    let unsuccessful = s.subjects.saturating_sub(s.succeeded + s.failed);
+    if unsuccessful > 0 || s.failed > 0 {
+        println!(
+            "not successful: {unsuccessful} ({} fit farther than its bound, {} mesh farther than its bound, {} mesh quality){}",
+            s.failed_fit,
+            s.failed_mesh_distance,
+            s.failed_mesh_quality,
+            if s.failed > 0 {
+                format!("; {} failed (no mesh)", s.failed)
+            } else {
+                String::new()
+            }
+        );
+    }
+    if s.below_repair_bound + s.morph_escalations + s.not_converged > 0 {
+        println!(
+            "{} below the repair bound, {} morphs stiffened, {} fits not converged",
+            s.below_repair_bound, s.morph_escalations, s.not_converged
+        );
+    }
     println!("report: {}", out.join("report.json").display());
     if out.join("report.html").is_file() {
         println!("report: {}", out.join("report.html").display());
     }
+}
+
+/// Lists the subjects of `r` that failed on stderr: [`BatchFailed`] when there are any.
+pub fn failures(r: &Report) -> anyhow::Result<()> {
+    if r.failed.is_empty() {
+        return Ok(());
+    }
+    for f in &r.failed {
+        if f.input.is_empty() {
+            eprintln!("failed: {}: {}", f.name, f.error);
+        } else {
+            eprintln!("failed: {} ({}): {}", f.name, f.input, f.error);
+        }
+    }
+    Err(BatchFailed {
+        failed: r.failed.len(),
+        total: r.summary.subjects,
+    }
+    .into())
 }
 
 /// Some subjects of a batch failed (the others were written): exit code 6.

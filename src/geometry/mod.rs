@@ -18,6 +18,8 @@
 //! | `orientation` | closed surfaces oriented outwards, signed volume |
 //! | `similarity` | [`Similarity`] `t_{R,T,s}` and rotations from generators |
 //! | `decimate` | vertex-clustering decimation |
+//! | `thickness` | local thickness across a closed shape |
+//! | `topology` | connected components, genus, floating islands dropped |
 
 mod closest_point;
 mod decimate;
@@ -30,6 +32,8 @@ mod query_memo;
 mod ray;
 mod shape;
 mod similarity;
+mod thickness;
+mod topology;
 
 pub use closest_point::{ClosestPointIndex, LEAF_FACETS, SurfacePoint};
 pub use normal_projection::{COMPATIBLE_NORMALS_COS, project_along_normals};
@@ -42,6 +46,8 @@ pub use principal_axes::{principal_axes_of, start_rotations};
 pub use query_memo::QueryMemo;
 pub use shape::{Contour2, REFERENCE_POINTS, Shape, Surface3, median_edge_length, uv_sphere};
 pub use similarity::{Similarity, rotation_exp};
+pub use thickness::{local_thickness, thickness_quantile};
+pub use topology::{Component, components, drop_small_components};
 
 #[cfg(test)]
 mod tests;

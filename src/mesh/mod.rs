@@ -5,6 +5,7 @@
 //! | file | what it computes |
 //! |---|---|
 //! | `element` | [`ElementKind`]: node numbering (diagrams), faces, corner frames |
+//! | `element_size` | [`ElementSize`]: the mean mesh's element size from a length, a share or the thickness |
 //! | `fe_mesh` | [`FeMesh`] and [`MeshSets`] |
 //! | `boundary` | the boundary faces of a mesh, outward |
 //! | `quad_mesh` | quadrilateral mesh of a 2D outline |
@@ -17,6 +18,7 @@
 
 mod boundary;
 mod element;
+pub mod element_size;
 mod fe_mesh;
 pub mod hex_mesh;
 mod mean_mesh;
@@ -29,6 +31,7 @@ pub mod sets;
 pub use boundary::{BoundaryFace, boundary_faces, boundary_surface};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
+pub use element_size::{ElementSize, resolve_element_size};
 pub use fe_mesh::{FeMesh, HexMesh, MeshSets, QuadMesh};
 pub use hex_mesh::{HexMeshParams, hex_mesh};
 pub use mean_mesh::mesh_mean_shape;

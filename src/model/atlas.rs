@@ -130,7 +130,9 @@ impl<const D: usize> Atlas<D> {
         })
     }
 
-    fn build_meshed(
+    /// Builds the atlas with the FE mesh that `mesher` makes of the mean shape (reference
+    /// frame, largest side 1): [`build`](Self::build) with a mesher of its own.
+    pub fn build_meshed(
         shapes: &[Shape<D>],
         params: &AtlasParams,
         mesher: impl FnOnce(&Shape<D>) -> Result<FeMesh<D>>,

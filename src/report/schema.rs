@@ -196,6 +196,12 @@ pub struct MeanMeshReport {
     /// The largest element edge ratio (longest edge over shortest).
     #[serde(default, deserialize_with = "f64_or_nan")]
     pub edge_ratio_max: f64,
+    /// The element size the mesher used, as a share of the mean's largest extent.
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub element_size_share: f64,
+    /// The same in the unit of the population's data (mm for mm data).
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub element_size: f64,
 }
 
 /// `report.json`.

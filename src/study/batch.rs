@@ -283,7 +283,7 @@ fn finish_batch<const D: usize>(
         atlas,
         subjects,
         params,
-        Some(mean_mesh_report(atlas)),
+        Some(mean_mesh_report(atlas, f64::NAN)),
         BatchFacts {
             failed,
             shard,

@@ -5,13 +5,18 @@ use super::sets::apply_sets;
 use crate::error::Result;
 use crate::formats::{create_dir, write_vtp, write_vtu};
 use crate::geometry::Shape;
-use crate::mesh::FeMesh;
 use crate::mesh::quality::{mesh_quality, summarize};
+use crate::mesh::{FeMesh, mesh_mean_shape, resolve_element_size};
 use crate::model::Atlas;
 use crate::report::MeanMeshReport;
 use std::path::{Path, PathBuf};
 
-pub(crate) fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshReport {
+/// The mean mesh's figures; `data_per_mean`: data units per reference unit (NaN when not
+/// known).
+pub(crate) fn mean_mesh_report<const D: usize>(
+    atlas: &Atlas<D>,
+    data_per_mean: f64,
+) -> MeanMeshReport {
     let q = summarize(&mesh_quality(&atlas.mesh));
     MeanMeshReport {
         nodes: atlas.mesh.nodes.len(),
@@ -20,11 +25,26 @@ pub(crate) fn mean_mesh_report<const D: usize>(atlas: &Atlas<D>) -> MeanMeshRepo
         scaled_jacobian_min: q.scaled_jacobian_min,
         jacobian_min: q.jacobian_min,
         edge_ratio_max: crate::mesh::quality::edge_ratio_max(&atlas.mesh),
+        element_size_share: atlas.params.element_size,
+        element_size: atlas.params.element_size * data_per_mean,
     }
 }
 
+/// How many units of the data one unit of the reference-frame `mean` is: the shapes' mean
+/// centroid size over the mean's (the scale GPA removed).
+pub fn data_per_mean<const D: usize>(shapes: &[Shape<D>], mean: &Shape<D>) -> f64 {
+    let size = |p: &[crate::geometry::Point<D>]| {
+        let c = crate::geometry::centroid(p);
+        (p.iter().map(|q| crate::geometry::dist2(*q, c)).sum::<f64>()).sqrt()
+    };
+    let data = shapes.iter().map(|s| size(&s.points)).sum::<f64>() / shapes.len().max(1) as f64;
+    data / size(&mean.points)
+}
+
 /// The atlas of `shapes`: with `meshes` (one template volume mesh per shape, or one for the
-/// first) their mean as the FE mesh (`Atlas::build_with_meshes`), else the automatic mesh.
+/// first) their mean as the FE mesh (`Atlas::build_with_meshes`), else the automatic mesh at
+/// `params.element_size` (a length in the shapes' unit, a share, or from the thickness); the
+/// atlas's `params.element_size` is then the share used.
 pub(crate) fn atlas_of<const D: usize>(
     shapes: &[Shape<D>],
     meshes: Option<&[FeMesh<D>]>,
@@ -32,7 +52,16 @@ pub(crate) fn atlas_of<const D: usize>(
 ) -> Result<Atlas<D>> {
     let mut atlas = match meshes {
         Some(m) => Atlas::build_with_meshes(shapes, &params.atlas, m)?,
-        None => Atlas::build(shapes, &params.atlas)?,
+        None => {
+            let mut used = params.atlas.element_size;
+            let mut atlas = Atlas::build_meshed(shapes, &params.atlas, |mean| {
+                used =
+                    resolve_element_size(params.element_size, mean, data_per_mean(shapes, mean))?;
+                mesh_mean_shape(mean, used, params.atlas.smoothing_passes)
+            })?;
+            atlas.params.element_size = used;
+            atlas
+        }
     };
     if let Some(c) = &params.sets {
         apply_sets(&mut atlas, c)?;

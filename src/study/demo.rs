@@ -101,7 +101,7 @@ pub fn demo_3d(out: &Path, progress: &dyn Progress) -> Result<Report> {
     let shapes = demo_population_3d(30, 24, 20261122)?;
     let (train, test) = shapes.split_at(24);
     let mut params = RunParams::default();
-    params.atlas.element_size = 0.05;
+    params.element_size = crate::mesh::ElementSize::Share(0.05);
     params.atlas.modes = crate::model::ModeSelection::Variance(0.99);
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<3>::load(&out.join("atlas.safetensors"))?;
@@ -124,7 +124,7 @@ pub fn demo(out: &Path, progress: &dyn Progress) -> Result<Report> {
     let (shapes, _) = resample_corresponding(&population, 400, true)?;
     let (train, test) = shapes.split_at(24);
     let mut params = RunParams::default();
-    params.atlas.element_size = 0.03;
+    params.element_size = crate::mesh::ElementSize::Share(0.03);
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<2>::load(&out.join("atlas.safetensors"))?;
     let report = fit_shapes(

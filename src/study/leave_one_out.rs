@@ -1,6 +1,6 @@
 //! The leave-one-out experiment (section 6.1).
 
-use super::build::{atlas_of, mean_mesh_report};
+use super::build::{atlas_of, data_per_mean, mean_mesh_report};
 use super::params::RunParams;
 use super::progress::Progress;
 use super::report_files::finish_report;
@@ -130,7 +130,10 @@ pub fn leave_one_out_of<const D: usize>(
         &full,
         reports,
         params,
-        Some(mean_mesh_report(&full)),
+        Some(mean_mesh_report(
+            &full,
+            data_per_mean(shapes, &full.mean_shape()),
+        )),
         crate::study::batch::BatchFacts {
             measures,
             failed,

@@ -7,8 +7,12 @@ use crate::model::AtlasParams;
 /// All parameters of a run.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct RunParams {
-    /// Atlas construction.
+    /// Atlas construction (its `element_size` is replaced by the share that `element_size`
+    /// resolves to when the mean is meshed automatically).
     pub atlas: AtlasParams,
+    /// The mean mesh's element size: a length in the shapes' unit, a share of the mean's
+    /// largest extent, or from the mean's thickness.
+    pub element_size: crate::mesh::ElementSize,
     /// The fit (Algorithm 1).
     pub fit: FitParams,
     /// The morph's FFD (eq. 9).
@@ -61,6 +65,7 @@ impl Default for RunParams {
             max_instance_distance: 0.02,
             max_mesh_distance: 0.01,
             atlas: AtlasParams::default(),
+            element_size: crate::mesh::ElementSize::Auto,
             fit: FitParams::default(),
             morph: FfdParams::default(),
             plots: true,

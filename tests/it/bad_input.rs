@@ -374,7 +374,7 @@ fn atlas_2d(d: &Path) -> PathBuf {
         "--modes",
         "4",
         "--element-size",
-        "0.06",
+        "6%",
         "--no-plots",
         "--out",
         &s(&atlas),
@@ -540,7 +540,13 @@ fn a_full_disk() {
         out.display()
     );
     let o = Command::new("sh").arg("-c").arg(&cmd).output().unwrap();
-    fails(&o, 3, &["File too large"]);
+    // Every fold fails to write its mesh: each is listed with the I/O error, the report
+    // (small) is written, exit 6.
+    fails(&o, 6, &["File too large", "6 of 6 subjects failed"]);
+    let r: atlasmesh::report::Report =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r.failed.len(), 6);
+    assert!(r.failed.iter().all(|f| f.exit_code == 3), "{:?}", r.failed);
     // Whatever was written is whole: no temporary file, and every mesh reads.
     for f in files_in(&out) {
         let name = f.file_name().unwrap().to_string_lossy().into_owned();

@@ -32,7 +32,7 @@ fn setup(name: &str, n: usize) -> (PathBuf, PathBuf, Vec<PathBuf>) {
             "--modes",
             "4",
             "--element-size",
-            "0.1",
+            "10%",
             "--no-plots",
             "--out",
         ]

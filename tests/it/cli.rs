@@ -96,7 +96,7 @@ fn build_then_fit_through_the_cli() {
         "--modes",
         "3",
         "--element-size",
-        "0.04",
+        "4%",
         "--out",
         &atlas,
     ]);

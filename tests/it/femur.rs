@@ -25,7 +25,7 @@ fn femur_leave_one_out_with_15_and_5_modes() {
     for (modes, bound) in [(15, 0.5 * edge), (5, 0.6)] {
         let mut params = RunParams::default();
         params.atlas.modes = ModeSelection::Count(modes);
-        params.atlas.element_size = 0.02; // about 2 mm on a femur 100 mm long
+        params.element_size = atlasmesh::mesh::ElementSize::Share(0.02); // about 2 mm on a femur 100 mm long
         params.plots = false;
         let r = leave_one_out(
             &shapes,

@@ -329,7 +329,7 @@ fn femurs_without_correspondence() {
     );
     let mut params = RunParams::default();
     params.atlas.modes = ModeSelection::Count(15);
-    params.atlas.element_size = 0.02;
+    params.element_size = atlasmesh::mesh::ElementSize::Share(0.02);
     params.plots = false;
     params.baselines = true;
     let out = common::temp_dir("femurs-raw");

@@ -102,7 +102,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
             "--modes",
             "10",
             "--element-size",
-            "0.04",
+            "4%",
             "--no-plots",
             "--out",
         ]
@@ -364,7 +364,7 @@ fn template_inp_with_sets_morphed_to_three_femurs() {
     let sets = dir.join("sets.toml");
     std::fs::write(&sets, SETS).unwrap();
     // The template: an automatic mesh morphed to S001, written as .inp with the sets.
-    let template = femur_template(&data, &dir, &sets, "0.05");
+    let template = femur_template(&data, &dir, &sets, "5%");
     let tm: FeMesh<3> = atlasmesh::formats::read_fe_mesh(&template).unwrap();
     assert!(!tm.sets.node_sets.is_empty() && !tm.sets.surfaces.is_empty());
     // The atlas with that template mesh (S001 first), then three other femurs.
@@ -426,7 +426,7 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
     let sets = dir.join("sets.toml");
     std::fs::write(&sets, SETS).unwrap();
     // Hex20: a coarse hex mesh morphed to S001 (with the sets), made quadratic.
-    let template = femur_template(&data, &dir, &sets, "0.06");
+    let template = femur_template(&data, &dir, &sets, "6%");
     let linear: FeMesh<3> = atlasmesh::formats::read_fe_mesh(&template).unwrap();
     let t20 = dir.join("t20.inp");
     atlasmesh(&["convert", &s(&template), &s(&t20), "--quadratic"]);

@@ -47,9 +47,12 @@ pub struct PopArgs {
     /// Keep the fewest modes explaining this share of the variance (default 0.985).
     #[arg(long, value_name = "P")]
     pub variance: Option<f64>,
-    /// Element edge length of the mean mesh, as a share of the mean's largest extent.
-    #[arg(long, default_value_t = 0.015)]
-    pub element_size: f64,
+    /// Element edge length of the mean mesh: a length in the shapes' unit (`2` = 2 mm for mm
+    /// data), a share of the mean's largest extent (`1.5%`), or `auto`: about 6 elements
+    /// across the mean's thinnest part, never coarser than 1.5 %, at most 150 000 hexahedra
+    /// (20 000 quadrilaterals)
+    #[arg(long, value_name = "SIZE", default_value = "auto")]
+    pub element_size: atlasmesh::mesh::ElementSize,
 }
 
 #[derive(Args)]
@@ -178,5 +181,5 @@ pub fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
         (None, Some(v)) => ModeSelection::Variance(v),
         (None, None) => ModeSelection::Variance(0.985),
     };
-    p.atlas.element_size = pop.element_size;
+    p.element_size = pop.element_size;
 }

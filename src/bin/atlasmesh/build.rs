@@ -67,13 +67,17 @@ fn build<const D: usize>(
         );
     }
     let m = atlas.num_modes();
+    let unit = study::data_per_mean(&shapes, &atlas.mean_shape());
     println!(
-        "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, mean mesh {} elements)",
+        "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, mean mesh {} {} elements of size {:.3} in the shapes' unit ({:.2} % of the largest extent))",
         a.out.display(),
         shapes.len(),
         atlas.mean.len(),
         atlas.cumulative_variance[m - 1],
-        atlas.mesh.num_elements()
+        atlas.mesh.num_elements(),
+        atlas.mesh.kind.name(),
+        atlas.params.element_size * unit,
+        100.0 * atlas.params.element_size
     );
     Ok(())
 }

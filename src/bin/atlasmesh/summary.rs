@@ -6,6 +6,16 @@ use std::path::Path;
 /// Prints a run's summary and where its reports are.
 pub fn print_summary(r: &Report, out: &Path) {
     let s = &r.summary;
+    if let Some(m) = &r.mean_mesh {
+        println!(
+            "mean mesh: {} {} elements of size {:.3} in the shapes' unit ({:.2} % of the largest extent), smallest scaled Jacobian {:.3}",
+            m.elements,
+            m.element_kind,
+            m.element_size,
+            100.0 * m.element_size_share,
+            m.scaled_jacobian_min
+        );
+    }
     println!(
         "{} subjects: {} succeeded, {} meshes valid; median fit {:.1} ms; delivered meshes: median RMS distance {:.3} ({:.4} of the diagonal), median 95th percentile {:.3}; median normal correlation {:.3}",
         s.subjects,

@@ -165,14 +165,15 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("atlas_from_30_raw_femurs_2_cores", |b| {
         b.iter(|| {
-            let (corresponded, _) = atlasmesh::study::register_population(
+            let corresponded = atlasmesh::study::register_population(
                 &raw,
-                None,
+                atlasmesh::study::Template::Nearest,
                 &atlasmesh::register::RegisterParams::for_dimension(3),
                 0,
                 &atlasmesh::study::Silent,
             )
-            .expect("registration");
+            .expect("registration")
+            .shapes;
             Atlas::build(&corresponded, &params).expect("atlas")
         })
     });

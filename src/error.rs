@@ -109,7 +109,8 @@ impl Error {
         }
     }
 
-    pub(crate) fn shape(name: impl Into<String>, message: impl Into<String>) -> Self {
+    /// An [`Error::InvalidShape`] of the shape `name`.
+    pub fn shape(name: impl Into<String>, message: impl Into<String>) -> Self {
         Error::InvalidShape {
             name: name.into(),
             message: message.into(),

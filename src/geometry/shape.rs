@@ -104,6 +104,28 @@ impl<const D: usize> Shape<D> {
         norm(sub(hi, lo))
     }
 
+    /// A size that stray points cannot inflate: the diagonal of the box between the 0.5th and
+    /// the 99.5th percentiles of the points along each axis (shape units). Equal to the
+    /// bounding-box diagonal but for the outermost 1 % of the points; a far vertex or a small
+    /// fragment leaves it unchanged.
+    pub fn robust_diagonal(&self) -> f64 {
+        let n = self.points.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let lo_i = ((n - 1) as f64 * 0.005).round() as usize;
+        let hi_i = ((n - 1) as f64 * 0.995).round() as usize;
+        let mut axis: Vec<f64> = Vec::with_capacity(n);
+        let mut d2 = 0.0;
+        for d in 0..D {
+            axis.clear();
+            axis.extend(self.points.iter().map(|p| p[d]));
+            axis.sort_by(f64::total_cmp);
+            d2 += (axis[hi_i] - axis[lo_i]).powi(2);
+        }
+        d2.sqrt()
+    }
+
     /// Vertex normals: the area-weighted average of the surrounding facet normals (section
     /// 2.1; in 2D the length-weighted average of the segment normals), normalized. For a
     /// counter-clockwise outline or an outward-oriented surface they point outwards.

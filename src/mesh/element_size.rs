@@ -17,7 +17,8 @@ pub const COARSEST_SHARE: f64 = 0.015;
 pub enum ElementSize {
     /// From the mean's thickness: about [`ELEMENTS_ACROSS`] elements across its thinnest part
     /// (the 5th percentile of the local thickness), at most [`COARSEST_SHARE`] of its
-    /// largest extent, and no more elements than the budget.
+    /// largest extent, and no more elements than the budget. An open outline (no thickness
+    /// across its opening) gets [`COARSEST_SHARE`].
     Auto,
     /// A length in the unit of the population's data (mm for mm data).
     Length(f64),
@@ -78,8 +79,14 @@ pub fn resolve_element_size<const D: usize>(
         ElementSize::Share(s) => s,
         ElementSize::Length(l) => l / (data_per_mean * extent),
         ElementSize::Auto => {
-            let thin = thickness_quantile(&local_thickness(mean), 0.05)
-                .map_or(COARSEST_SHARE, |t| t / (ELEMENTS_ACROSS * extent));
+            // An open outline (the hands: no wrist) has no thickness across its opening.
+            let open = D == 2 && mean.facets.len() < mean.points.len();
+            let thin = if open {
+                COARSEST_SHARE
+            } else {
+                thickness_quantile(&local_thickness(mean), 0.05)
+                    .map_or(COARSEST_SHARE, |t| t / (ELEMENTS_ACROSS * extent))
+            };
             // The budget: the inside's measure over the element's.
             let inside = content(mean) / extent.powi(D as i32);
             let finest = (inside / element_budget(D)).powf(1.0 / D as f64);

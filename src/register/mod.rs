@@ -18,5 +18,8 @@ mod registration;
 mod resample;
 
 pub use pre_align::pre_align;
-pub use registration::{MAX_ALIGNMENT_MISFIT, RegisterParams, Registration, register};
+pub use registration::{
+    MAX_ALIGNMENT_MISFIT, REGISTRATION_WARNING_P95, RegisterParams, Registration,
+    RegistrationResiduals, register,
+};
 pub use resample::{resample_corresponding, resample_uniform};

@@ -82,7 +82,63 @@ pub struct Registration<const D: usize> {
     pub misfit: f64,
 }
 
+/// How far a registered template lies from its target, both ways (target units): the
+/// deformed template (its surface) against the target's.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RegistrationResiduals {
+    /// Two-way RMS distance.
+    pub rms: f64,
+    /// The larger of the two directions' 95th percentiles.
+    pub p95: f64,
+    /// The largest distance either way.
+    pub max: f64,
+    /// RMS distance from the deformed template's points to the target.
+    pub template_to_target_rms: f64,
+    /// `rms` over the target's bounding-box diagonal.
+    pub rms_relative: f64,
+    /// `p95` over the target's bounding-box diagonal.
+    pub p95_relative: f64,
+}
+
+/// A registration whose two-way 95th-percentile residual exceeds this share of the target's
+/// bounding-box diagonal is reported with a warning (the template did not reach part of the
+/// target, or reached past it).
+pub const REGISTRATION_WARNING_P95: f64 = 0.03;
+
 impl<const D: usize> Registration<D> {
+    /// The residuals of the registration of `template` to `target` (indexed by `index`): the
+    /// deformed template's surface against the target's, both ways.
+    pub fn residuals(
+        &self,
+        template: &Shape<D>,
+        target: &Shape<D>,
+        index: &ClosestPointIndex<D>,
+    ) -> RegistrationResiduals {
+        let deformed = Shape {
+            name: template.name.clone(),
+            points: self.deformed.clone(),
+            facets: template.facets.clone(),
+            landmarks: Vec::new(),
+        };
+        let d = crate::eval::surface_distances(&deformed, target, index, true, f64::INFINITY);
+        let one_way = (self
+            .deformed
+            .iter()
+            .map(|p| index.closest(p).dist2)
+            .sum::<f64>()
+            / self.deformed.len().max(1) as f64)
+            .sqrt();
+        let diag = target.bbox_diagonal();
+        RegistrationResiduals {
+            rms: d.rms,
+            p95: d.p95,
+            max: d.max,
+            template_to_target_rms: one_way,
+            rms_relative: d.rms / diag,
+            p95_relative: d.p95 / diag,
+        }
+    }
+
     /// The target resampled at the template's points: the template's connectivity and
     /// landmarks, the corresponding points' positions. Named after the target.
     pub fn resampled(&self, template: &Shape<D>, target: &Shape<D>) -> Shape<D> {

@@ -357,9 +357,9 @@ pub fn plot_subject(
         let (lo, hi) = bounding_box(&all);
         let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.55 + 1e-12;
         let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
-        // Image convention of the data (y down) is kept: y axis reversed.
+        // y up, as the mesh files show in ParaView or Gmsh.
         let xr = c[0] - ext..c[0] + ext;
-        let yr = c[1] + ext..c[1] - ext;
+        let yr = c[1] - ext..c[1] + ext;
         let line = |pts: &[Point<2>]| -> Vec<(f64, f64)> {
             let mut v: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
             if closed && let Some(f) = v.first().copied() {
@@ -376,14 +376,33 @@ pub fn plot_subject(
             let mut ch = b
                 .build_cartesian_2d(xr.clone(), yr.clone())
                 .map_err(perr(path))?;
-            for l in locus {
-                ch.draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1)))
+            for (k, l) in locus.iter().enumerate() {
+                let s = ch
+                    .draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1)))
                     .map_err(perr(path))?;
+                if k == 0 {
+                    s.label("locus of the fit").legend(|(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], GREEN.mix(0.5).stroke_width(2))
+                    });
+                }
             }
             ch.draw_series(LineSeries::new(line(mean), RED.stroke_width(2)))
-                .map_err(perr(path))?;
+                .map_err(perr(path))?
+                .label("mean")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
             ch.draw_series(LineSeries::new(line(subject), BLUE.stroke_width(2)))
-                .map_err(perr(path))?;
+                .map_err(perr(path))?
+                .label("subject")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
+            if text {
+                ch.configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK.mix(0.4))
+                    .label_font(("sans-serif", 14))
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()
+                    .map_err(perr(path))?;
+            }
         }
         {
             let mut b = ChartBuilder::on(&right);
@@ -518,10 +537,10 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
             let mut chart = b
                 .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
                 .map_err(perr(path))?;
-            for (shape, color) in [
-                (at(m, -2.0), BLUE.to_rgba()),
-                (atlas.mean.clone(), BLACK.to_rgba()),
-                (at(m, 2.0), RED.to_rgba()),
+            for (shape, color, label) in [
+                (at(m, -2.0), BLUE.to_rgba(), "-2σ"),
+                (atlas.mean.clone(), BLACK.to_rgba(), "mean"),
+                (at(m, 2.0), RED.to_rgba(), "+2σ"),
             ] {
                 chart
                     .draw_series(atlas.facets.iter().map(|f| {
@@ -532,6 +551,20 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
                             color.stroke_width(2),
                         )
                     }))
+                    .map_err(perr(path))?
+                    .label(label)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+            }
+            if text {
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK.mix(0.4))
+                    .label_font(("sans-serif", 13))
+                    .position(SeriesLabelPosition::LowerRight)
+                    .draw()
                     .map_err(perr(path))?;
             }
         }

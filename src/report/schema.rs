@@ -204,6 +204,32 @@ pub struct MeanMeshReport {
     pub element_size: f64,
 }
 
+/// One input shape of a population: its topology, what was dropped from it, and how well the
+/// registration template reached it.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct InputReport {
+    /// The shape's name.
+    pub name: String,
+    /// Its vertices (after dropping islands).
+    pub vertices: usize,
+    /// Its connected components as read.
+    pub components: usize,
+    /// The genus of its largest component (closed surfaces; `None` otherwise).
+    pub genus: Option<usize>,
+    /// Floating components dropped (each under the share of the area in `warnings`).
+    pub dropped_components: usize,
+    /// The share of the shape's area (length in 2D) dropped with them.
+    pub dropped_share: f64,
+    /// With `--register`: the template's residuals against it, both ways (shape units;
+    /// `None` for the template itself).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub registration: Option<crate::register::RegistrationResiduals>,
+    /// What a user should know about it (islands dropped, a registration that did not
+    /// reach).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+}
+
 /// `report.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Report {
@@ -219,6 +245,13 @@ pub struct Report {
     pub parameters: serde_json::Value,
     /// The atlas's mean mesh.
     pub mean_mesh: Option<MeanMeshReport>,
+    /// The population's shapes as read (leave-one-out): topology, islands dropped,
+    /// registration residuals.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub inputs: Vec<InputReport>,
+    /// The registration's template (with `--register`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub template: Option<String>,
     /// Every subject written (those that failed are in `failed`).
     pub subjects: Vec<SubjectReport>,
     /// Figures over all subjects.

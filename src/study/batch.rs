@@ -55,6 +55,10 @@ pub struct BatchFacts {
     pub resumed: usize,
     /// The population model's measures (the HTML report plots them).
     pub measures: Option<crate::eval::ShapeModelMeasures>,
+    /// The population's shapes as read (leave-one-out).
+    pub inputs: Vec<crate::report::InputReport>,
+    /// The registration's template (leave-one-out with registration).
+    pub template: Option<String>,
 }
 
 /// A subject's record `NAME/subject.json`: its report (files relative to the batch folder)
@@ -288,7 +292,7 @@ fn finish_batch<const D: usize>(
             failed,
             shard,
             resumed,
-            measures: None,
+            ..Default::default()
         },
     )
 }

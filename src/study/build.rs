@@ -125,3 +125,26 @@ pub fn write_model_measures<const D: usize>(
     }
     Ok((m, json))
 }
+
+/// Writes `ATLAS.inputs.json` beside the atlas file `atlas_path`: the population's shapes as
+/// read (topology, islands dropped, registration residuals and warnings), the registration's
+/// template and the mean mesh (its element size in the data's unit with `data_per_mean`).
+/// Returns its path.
+pub fn write_build_facts<const D: usize>(
+    atlas_path: &Path,
+    inputs: &[crate::report::InputReport],
+    template: Option<&str>,
+    atlas: &Atlas<D>,
+    data_per_mean: f64,
+) -> Result<PathBuf> {
+    let path = atlas_path.with_extension("inputs.json");
+    let json = serde_json::json!({
+        "inputs": inputs,
+        "template": template,
+        "mean_mesh": mean_mesh_report(atlas, data_per_mean),
+    });
+    let text = serde_json::to_vec_pretty(&json)
+        .map_err(|e| crate::error::Error::Numerical(format!("inputs.json: {e}")))?;
+    crate::formats::write_atomic(&path, &text)?;
+    Ok(path)
+}

@@ -14,6 +14,15 @@ use crate::report::{FailedSubject, Report, SubjectReport};
 use rayon::prelude::*;
 use std::path::Path;
 
+/// What the report of a leave-one-out says about its population.
+#[derive(Clone, Debug, Default)]
+pub struct PopulationFacts {
+    /// The shapes as read (topology, islands dropped, registration residuals).
+    pub inputs: Vec<crate::report::InputReport>,
+    /// The registration's template.
+    pub template: Option<String>,
+}
+
 /// The paper's leave-one-out experiment (section 6.1): for every shape, the atlas from the
 /// others, a fit of the held-out shape (its known correspondence unused: it is fitted as an
 /// outline), the morphed mesh and the measures. A fold that fails is listed in the report's
@@ -27,18 +36,30 @@ pub fn leave_one_out<const D: usize>(
     jobs: usize,
     progress: &dyn Progress,
 ) -> Result<Report> {
-    leave_one_out_of(shapes, shapes, None, dataset, params, out, jobs, progress)
+    leave_one_out_of(
+        shapes,
+        shapes,
+        None,
+        &Default::default(),
+        dataset,
+        params,
+        out,
+        jobs,
+        progress,
+    )
 }
 
 /// Leave-one-out where the atlas of fold `k` is built from `corresponded` without entry `k`
 /// (with `meshes`, one template volume mesh per shape, the mean of the training ones as its
 /// FE mesh), and `subjects[k]` (the same shape as given, before registration) is the one
-/// fitted.
+/// fitted; `population` (the shapes as read, the registration's template) goes into the
+/// report.
 #[allow(clippy::too_many_arguments)]
 pub fn leave_one_out_of<const D: usize>(
     corresponded: &[Shape<D>],
     subjects: &[Shape<D>],
     meshes: Option<&[FeMesh<D>]>,
+    population: &PopulationFacts,
     dataset: &str,
     params: &RunParams,
     out: &Path,
@@ -137,6 +158,8 @@ pub fn leave_one_out_of<const D: usize>(
         crate::study::batch::BatchFacts {
             measures,
             failed,
+            inputs: population.inputs.clone(),
+            template: population.template.clone(),
             ..Default::default()
         },
     )

@@ -35,9 +35,11 @@ pub struct RunParams {
     /// Repair of every morphed mesh (untangling and quality; `None`: off).
     pub repair: Option<crate::mesh::repair::RepairParams>,
     /// A fit whose two-way RMS distance to its subject (eq. 6 both ways) exceeds this share
-    /// of the subject's bounding-box diagonal did not converge: the subject is refused
-    /// ([`Error::NotConverged`](crate::Error::NotConverged)) and no mesh is written for it. A good fit is below 0.01. With
-    /// `fit.partial` the distance is the subject's to the instance only.
+    /// of the subject's robust size ([`Shape::robust_diagonal`](crate::geometry::Shape::robust_diagonal)),
+    /// or the 95th percentile of whose subject-to-instance distances exceeds twice it, did
+    /// not converge: the subject is refused ([`Error::NotConverged`](crate::Error::NotConverged))
+    /// and no mesh is written for it. A good fit is below 0.01. With `fit.partial` the
+    /// distances are the subject's to the instance only.
     #[serde(default = "default_max_misfit")]
     pub max_misfit: f64,
     /// `success` requires the fitted instance's two-way RMS distance to the subject within

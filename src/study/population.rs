@@ -3,7 +3,9 @@
 use super::Progress;
 use crate::error::{Error, Result};
 use crate::geometry::{ClosestPointIndex, Point, Shape};
+use crate::register::RegistrationResiduals;
 use crate::register::{resample_corresponding, resample_uniform};
+use crate::report::InputReport;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -96,29 +98,125 @@ pub fn attach_landmarks<const D: usize>(shapes: &mut [Shape<D>], files: &[PathBu
     Ok(())
 }
 
+/// A floating component under this share of a surface's area (an outline's length) is
+/// dropped, with a warning in the report.
+pub const ISLAND_SHARE: f64 = 0.01;
+
+/// Drops from every shape the floating components under `min_share` of its area (length),
+/// and describes each shape's topology (components, genus) and what was dropped.
+pub fn clean_shapes<const D: usize>(shapes: &mut [Shape<D>], min_share: f64) -> Vec<InputReport> {
+    shapes
+        .iter_mut()
+        .map(|s| {
+            let parts = crate::geometry::components(s);
+            let (clean, dropped) = crate::geometry::drop_small_components(s, min_share);
+            let dropped_share: f64 = dropped.iter().map(|d| d.1).sum();
+            let mut warnings = Vec::new();
+            if !dropped.is_empty() {
+                warnings.push(format!(
+                    "{} floating component(s) of {} vertices ({:.2} % of the {}) dropped",
+                    dropped.len(),
+                    dropped.iter().map(|d| d.0).sum::<usize>(),
+                    100.0 * dropped_share,
+                    if D == 2 { "length" } else { "area" }
+                ));
+            }
+            if parts.len() - dropped.len() > 1 {
+                warnings.push(format!(
+                    "{} components remain (each above {:.1} % of the {})",
+                    parts.len() - dropped.len(),
+                    100.0 * min_share,
+                    if D == 2 { "length" } else { "area" }
+                ));
+            }
+            *s = clean;
+            InputReport {
+                name: s.name.clone(),
+                vertices: s.points.len(),
+                components: parts.len(),
+                genus: parts.first().and_then(|c| c.genus),
+                dropped_components: dropped.len(),
+                dropped_share,
+                registration: None,
+                warnings,
+            }
+        })
+        .collect()
+}
+
+/// The template of a registration of a population.
+#[derive(Clone, Copy, Debug)]
+pub enum Template<'a, const D: usize> {
+    /// The member nearest to the others, among those of one component and the population's
+    /// most common genus.
+    Nearest,
+    /// The member of that name.
+    Member(&'a str),
+    /// A shape outside the population (a reference surface), used only as the template.
+    External(&'a Shape<D>),
+}
+
+/// A population brought into correspondence by registration.
+#[derive(Clone, Debug)]
+pub struct Registered<const D: usize> {
+    /// The shapes resampled at the template's points (same order; a member template as it
+    /// is).
+    pub shapes: Vec<Shape<D>>,
+    /// The template's name.
+    pub template: String,
+    /// The template's index in the population (`None` for an external template).
+    pub template_index: Option<usize>,
+    /// The residuals of every registration (`None` for the member template).
+    pub residuals: Vec<Option<RegistrationResiduals>>,
+}
+
 /// Brings shapes that are not in correspondence into correspondence (section 2.1): the
-/// template (`template` names it; by default the shape nearest to the others after
-/// alignment) is registered to every other shape ([`crate::register::register`]) and each is
-/// resampled at the template's points. Returns the corresponded shapes (same order; the
-/// template as it is) and the template's index. `jobs` threads (0 = all cores).
+/// template (see [`Template`]) is registered to every other shape
+/// ([`crate::register::register`]) and each is resampled at the template's points; with the
+/// residuals of every registration, both ways. `jobs` threads (0 = all cores).
 pub fn register_population<const D: usize>(
     shapes: &[Shape<D>],
-    template: Option<&str>,
+    template: Template<'_, D>,
     params: &crate::register::RegisterParams,
     jobs: usize,
     progress: &dyn Progress,
-) -> Result<(Vec<Shape<D>>, usize)> {
+) -> Result<Registered<D>> {
     if shapes.len() < 2 {
         return Err(Error::Population(format!(
             "registration needs at least 2 shapes, got {}",
             shapes.len()
         )));
     }
-    let t = match template {
-        Some(name) => shapes.iter().position(|s| s.name == name).ok_or_else(|| {
-            Error::Population(format!("--template {name}: no shape of that name"))
-        })?,
-        None => nearest_to_others(shapes, params)?,
+    let member = match template {
+        Template::Member(name) => {
+            Some(shapes.iter().position(|s| s.name == name).ok_or_else(|| {
+                Error::Population(format!(
+                    "--template {name}: no shape of that name, and no such file"
+                ))
+            })?)
+        }
+        Template::Nearest => Some(nearest_to_others(shapes, params)?),
+        Template::External(t) => {
+            t.validate()?;
+            if shapes
+                .iter()
+                .any(|s| s.landmarks.len() != t.landmarks.len())
+            {
+                return Err(Error::Population(format!(
+                    "the template {} has {} landmarks but the shapes have {}: give the \
+                     template's landmarks (--template-landmarks)",
+                    t.name,
+                    t.landmarks.len(),
+                    shapes[0].landmarks.len()
+                )));
+            }
+            None
+        }
+    };
+    let t: &Shape<D> = match (template, member) {
+        (Template::External(t), _) => t,
+        (_, Some(i)) => &shapes[i],
+        _ => unreachable!("a member template has an index"),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
@@ -126,17 +224,17 @@ pub fn register_population<const D: usize>(
         .map_err(|e| Error::Parameter(format!("--jobs: {e}")))?;
     let label = "registration";
     progress.items_started(label, shapes.len());
-    let out: Vec<Result<Shape<D>>> = pool.install(|| {
+    let out: Vec<Result<(Shape<D>, Option<RegistrationResiduals>)>> = pool.install(|| {
         shapes
             .par_iter()
             .enumerate()
             .map(|(k, s)| {
-                let r = if k == t {
-                    Ok(s.clone())
+                let r = if Some(k) == member {
+                    Ok((s.clone(), None))
                 } else {
                     let index = ClosestPointIndex::from_shape(s);
-                    crate::register::register(&shapes[t], s, &index, params)
-                        .map(|r| r.resampled(&shapes[t], s))
+                    crate::register::register(t, s, &index, params)
+                        .map(|r| (r.resampled(t, s), Some(r.residuals(t, s, &index))))
                 };
                 progress.item_done(label, &s.name);
                 r
@@ -144,11 +242,23 @@ pub fn register_population<const D: usize>(
             .collect()
     });
     progress.items_finished(label);
-    Ok((out.into_iter().collect::<Result<Vec<_>>>()?, t))
+    let (shapes_out, residuals) = out
+        .into_iter()
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
+    Ok(Registered {
+        shapes: shapes_out,
+        template: t.name.clone(),
+        template_index: member,
+        residuals,
+    })
 }
 
 /// The shape nearest to the others: every shape pre-aligned to the first, then the one of
-/// least mean two-way distance to the rest (on up to 200 points of each).
+/// least mean two-way distance to the rest (on up to 200 points of each), among the shapes
+/// of one component and the population's most common genus (a surface with islands or odd
+/// topology is never the template unless all are).
 fn nearest_to_others<const D: usize>(
     shapes: &[Shape<D>],
     params: &crate::register::RegisterParams,
@@ -188,9 +298,38 @@ fn nearest_to_others<const D: usize>(
                 .sum()
         })
         .collect();
+    let clean = clean_candidates(shapes);
     Ok((0..n)
+        .filter(|&i| clean[i])
         .min_by(|&a, &b| score[a].total_cmp(&score[b]))
         .unwrap_or(0))
+}
+
+/// Which shapes may be the automatic template: one component and the most common genus; all
+/// when none qualifies.
+fn clean_candidates<const D: usize>(shapes: &[Shape<D>]) -> Vec<bool> {
+    let parts: Vec<Vec<crate::geometry::Component>> =
+        shapes.par_iter().map(crate::geometry::components).collect();
+    let mut genus_count: std::collections::HashMap<Option<usize>, usize> = Default::default();
+    for p in &parts {
+        *genus_count
+            .entry(p.first().and_then(|c| c.genus))
+            .or_default() += 1;
+    }
+    let common = genus_count
+        .iter()
+        .max_by_key(|(g, c)| (**c, std::cmp::Reverse(**g)))
+        .map(|(g, _)| *g)
+        .flatten();
+    let ok: Vec<bool> = parts
+        .iter()
+        .map(|p| p.len() == 1 && p[0].genus == common)
+        .collect();
+    if ok.iter().any(|&b| b) {
+        ok
+    } else {
+        vec![true; shapes.len()]
+    }
 }
 
 /// Reads the triangle surfaces in `paths` (PLY, STL, OBJ), in the order given. Shapes in
@@ -300,20 +439,17 @@ pub fn read_template_meshes(paths: &[PathBuf]) -> Result<Vec<crate::mesh::FeMesh
 }
 
 /// The shapes in correspondence: with `register`, every shape registered to a template
-/// (by name, or the one nearest to the others) with `params`
-/// ([`register_population`]); else the shapes as given. Returns them and the template's
-/// index (`None` without registration).
+/// ([`register_population`]); else the shapes as given (no template, no residuals).
 pub fn correspond<const D: usize>(
     shapes: &[Shape<D>],
-    register: Option<(&crate::register::RegisterParams, Option<&str>)>,
+    register: Option<(&crate::register::RegisterParams, Template<'_, D>)>,
     jobs: usize,
     progress: &dyn Progress,
-) -> Result<(Vec<Shape<D>>, Option<usize>)> {
+) -> Result<Option<Registered<D>>> {
     match register {
-        None => Ok((shapes.to_vec(), None)),
+        None => Ok(None),
         Some((params, template)) => {
-            let (c, t) = register_population(shapes, template, params, jobs, progress)?;
-            Ok((c, Some(t)))
+            register_population(shapes, template, params, jobs, progress).map(Some)
         }
     }
 }

@@ -24,6 +24,8 @@ pub(crate) fn finish_report<const D: usize>(
         shard,
         resumed,
         measures,
+        inputs,
+        template,
     } = batch;
     let m = atlas_for_variance.num_modes();
     if params.plots {
@@ -52,6 +54,8 @@ pub(crate) fn finish_report<const D: usize>(
         variance_explained: atlas_for_variance.cumulative_variance[..m].to_vec(),
         parameters: serde_json::to_value(params).unwrap_or_default(),
         mean_mesh,
+        inputs,
+        template,
         summary: Summary {
             resumed,
             ..Summary::of(&subjects, failed.len())

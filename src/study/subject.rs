@@ -51,33 +51,7 @@ pub fn fit_subject<const D: usize>(
     let fit_seconds = t0.elapsed().as_secs_f64();
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
-    // A partial subject (`--partial`) misses parts of the model: only its own points' distance
-    // to the instance can tell whether the fit converged.
-    let misfit = if params.fit.partial {
-        let on_instance = ClosestPointIndex::new(&fit.instance, &atlas.facets);
-        let ms = subject
-            .points
-            .iter()
-            .map(|p| on_instance.closest(p).dist2)
-            .sum::<f64>()
-            / subject.points.len().max(1) as f64;
-        ms.sqrt() / subject.bbox_diagonal()
-    } else {
-        rel
-    };
-    if misfit.is_nan() || misfit > params.max_misfit {
-        return Err(Error::NotConverged {
-            name: subject.name.clone(),
-            message: format!(
-                "the fitted model instance stays {:.4} (RMS distance; {:.1} % of the subject's \
-                 bounding-box diagonal) from the subject, above the bound of {:.1} % \
-                 (--max-misfit): the subject lies outside what the model can represent",
-                misfit * subject.bbox_diagonal(),
-                100.0 * misfit,
-                100.0 * params.max_misfit
-            ),
-        });
-    }
+    check_misfit(&fit.instance, &atlas.facets, subject, rms, params)?;
     let morph = morpher.morph(&fit.correspondence())?;
     let mut mesh = morph.mesh;
     let mut per_element = morph.quality;
@@ -213,4 +187,51 @@ fn failed_checks(report: &SubjectReport, finite: bool, params: &RunParams) -> Ve
         failed.push("mesh_quality".to_string());
     }
     failed
+}
+
+/// The misfit guard: the fit did not converge when the instance stays farther from the
+/// subject than `params.max_misfit` of the subject's robust size
+/// ([`Shape::robust_diagonal`], which a stray vertex or a far fragment does not inflate),
+/// by the two-way RMS distance (`rms`), or when the 95th percentile of the subject's
+/// points' distances to the instance exceeds twice that (a part of the subject the instance
+/// does not reach). A partial subject (`--partial`) misses parts of the model: only its own
+/// points' distances count.
+fn check_misfit<const D: usize>(
+    instance: &[crate::geometry::Point<D>],
+    facets: &[[usize; D]],
+    subject: &Shape<D>,
+    rms: f64,
+    params: &RunParams,
+) -> Result<()> {
+    let size = subject.robust_diagonal();
+    let on_instance = ClosestPointIndex::new(instance, facets);
+    let mut d: Vec<f64> = subject
+        .points
+        .iter()
+        .map(|p| on_instance.closest(p).dist2.sqrt())
+        .collect();
+    let one_way = (d.iter().map(|x| x * x).sum::<f64>() / d.len().max(1) as f64).sqrt();
+    d.sort_by(f64::total_cmp);
+    let p95 = d
+        .get(((d.len().max(1) - 1) as f64 * 0.95).round() as usize)
+        .copied()
+        .unwrap_or(f64::NAN);
+    let rms = if params.fit.partial { one_way } else { rms };
+    let (rel, rel95) = (rms / size, p95 / size);
+    if rel.is_nan() || rel > params.max_misfit || !(rel95 <= 2.0 * params.max_misfit) {
+        return Err(Error::NotConverged {
+            name: subject.name.clone(),
+            message: format!(
+                "the fitted model instance stays {rms:.4} (RMS distance; {:.1} % of the \
+                 subject's size) from the subject, 95 % of the subject within {p95:.4} ({:.1} \
+                 %), above the bound of {:.1} % (RMS) or {:.1} % (95th percentile) \
+                 (--max-misfit): the subject lies outside what the model can represent",
+                100.0 * rel,
+                100.0 * rel95,
+                100.0 * params.max_misfit,
+                200.0 * params.max_misfit
+            ),
+        });
+    }
+    Ok(())
 }

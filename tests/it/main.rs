@@ -15,3 +15,4 @@ mod html;
 mod register;
 mod repair;
 mod solver;
+mod vertebrae;

@@ -9,7 +9,7 @@ use atlasmesh::model::ModeSelection;
 use atlasmesh::register::RegisterParams;
 use atlasmesh::register::resample_uniform;
 use atlasmesh::study::{
-    PopulationOptions, RunParams, leave_one_out, leave_one_out_of, load_population,
+    PopulationOptions, RunParams, Template, leave_one_out, leave_one_out_of, load_population,
     register_population,
 };
 use rand::{RngExt, SeedableRng};
@@ -58,14 +58,15 @@ fn hands_without_correspondence_register_and_fit() {
         })
         .collect();
     assert!(raw.iter().any(|s| s.points.len() != raw[0].points.len()));
-    let (corresponded, template) = register_population(
+    let reg = register_population(
         &raw,
-        None,
+        Template::Nearest,
         &RegisterParams::default(),
         0,
         &atlasmesh::study::Silent,
     )
     .unwrap();
+    let (corresponded, template) = (reg.shapes, reg.template_index.unwrap());
     eprintln!(
         "template: {} ({} points)",
         raw[template].name,
@@ -79,6 +80,7 @@ fn hands_without_correspondence_register_and_fit() {
         &corresponded,
         &raw,
         None,
+        &Default::default(),
         "raw hands",
         &params,
         &out,
@@ -138,14 +140,15 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
     let mut raw = atlasmesh::study::load_outlines_raw(&meshes, &opts).unwrap();
     atlasmesh::study::attach_landmarks(&mut raw, &lms).unwrap();
     assert!(raw.iter().all(|s| !s.landmarks.is_empty()));
-    let (corresponded, _) = register_population(
+    let reg = register_population(
         &raw,
-        None,
+        Template::Nearest,
         &RegisterParams::default(),
         0,
         &atlasmesh::study::Silent,
     )
     .unwrap();
+    let (corresponded, _) = (reg.shapes, reg.template_index.unwrap());
     let params = RunParams {
         plots: false,
         ..RunParams::default()
@@ -155,6 +158,7 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
         &corresponded,
         &raw,
         None,
+        &Default::default(),
         "dense hands",
         &params,
         &out,
@@ -296,14 +300,15 @@ fn femurs_without_correspondence() {
         counts.iter().max().unwrap()
     );
     assert!(counts.iter().any(|&c| c != counts[0]));
-    let (corresponded, t) = register_population(
+    let reg = register_population(
         &raw,
-        None,
+        Template::Nearest,
         &RegisterParams::for_dimension(3),
         0,
         &atlasmesh::study::Silent,
     )
     .unwrap();
+    let (corresponded, t) = (reg.shapes, reg.template_index.unwrap());
     // For template vertex v (original vertex truth[t][v]), the true partner on femur j is
     // original vertex truth[t][v] of femur j.
     let mut errors: Vec<f64> = Vec::new();
@@ -337,6 +342,7 @@ fn femurs_without_correspondence() {
         &corresponded,
         &raw,
         None,
+        &Default::default(),
         "raw femurs",
         &params,
         &out,
@@ -392,14 +398,15 @@ fn cells_without_landmarks_shape_model_measures() {
     assert_eq!(all.len(), 650);
     let cells: Vec<Shape<2>> = all.into_iter().step_by(6).take(100).collect();
     assert_eq!(cells.len(), 100);
-    let (corresponded, t) = register_population(
+    let reg = register_population(
         &cells,
-        None,
+        Template::Nearest,
         &RegisterParams::for_dimension(2),
         0,
         &atlasmesh::study::Silent,
     )
     .unwrap();
+    let (corresponded, t) = (reg.shapes, reg.template_index.unwrap());
     let ours = atlasmesh::eval::shape_model_measures(&corresponded, 20, 500, 7).unwrap();
     let naive = atlasmesh::eval::shape_model_measures(&cells, 20, 500, 7).unwrap();
     eprintln!("template {}", cells[t].name);

@@ -25,9 +25,19 @@ pub struct PopArgs {
     /// in 2D as the paper, 16 in 3D).
     #[arg(long, value_name = "N", requires = "register")]
     pub register_grid: Option<usize>,
-    /// The registration's template, by shape name (default: the shape nearest to the others).
-    #[arg(long, value_name = "NAME", requires = "register")]
+    /// The registration's template: a shape of --shapes by name, or a shape file outside the
+    /// population (a reference surface, used only as the template). Default: the shape
+    /// nearest to the others among those of one component and the most common genus.
+    #[arg(long, value_name = "NAME|FILE", requires = "register")]
     pub template: Option<String>,
+    /// Landmarks of a --template file (Scalismo JSON, .pts or CSV), when the shapes have
+    /// landmarks.
+    #[arg(long, value_name = "FILE", requires = "template")]
+    pub template_landmarks: Option<PathBuf>,
+    /// Refuse a shape with floating components under 1 % of its area (length) with an error,
+    /// instead of dropping them with a warning.
+    #[arg(long)]
+    pub refuse_islands: bool,
     /// Landmark files: one CSV for all shapes (shape,landmark,x,y[,z] or shape,landmark,index),
     /// or one Scalismo JSON / .pts per shape in the order of --shapes.
     #[arg(long, num_args = 1..)]
@@ -105,8 +115,10 @@ pub struct RunArgs {
     /// mean.inp`): every subject gets a copy with its node coordinates, NAME_deck.inp.
     #[arg(long, value_name = "INP")]
     pub deck: Option<PathBuf>,
-    /// A subject whose fit stays farther from it than this share of its bounding-box
-    /// diagonal (two-way RMS) did not converge: refused, no mesh written (exit 5).
+    /// A subject whose fit stays farther from it than this share of its size (two-way RMS;
+    /// or twice this for the 95th percentile of its points' distances) did not converge:
+    /// refused, no mesh written (exit 5). The size is the diagonal of the box of 99 % of
+    /// its points, which stray vertices do not inflate.
     #[arg(long, value_name = "SHARE", default_value_t = 0.05)]
     pub max_misfit: f64,
 }

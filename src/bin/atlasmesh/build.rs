@@ -1,11 +1,9 @@
 //! `atlasmesh build`: an atlas (shape model and mean mesh) from a population, saved.
 
 use crate::args::{PopArgs, RunArgs};
-use crate::population::{corresponded, outlines_and_params, surfaces_and_params};
+use crate::population::{Population, corresponded, outlines_and_params, surfaces_and_params};
 use crate::terminal::Terminal;
-use atlasmesh::geometry::Shape;
-use atlasmesh::mesh::FeMesh;
-use atlasmesh::study::{self, Progress, RunParams};
+use atlasmesh::study::{self, Progress};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -28,23 +26,23 @@ pub struct BuildArgs {
 /// Runs `atlasmesh build`.
 pub fn run(a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
     if study::inputs_are_surfaces(&a.pop.shapes)? {
-        let (shapes, params, meshes) = surfaces_and_params(&a.pop, &a.run)?;
-        build(&a, &shapes, meshes.as_deref(), &params, term)
+        build(&a, surfaces_and_params(&a.pop, &a.run, term)?, term)
     } else {
-        let (shapes, params) = outlines_and_params(&a.pop, &a.run)?;
-        build(&a, &shapes, None, &params, term)
+        build(&a, outlines_and_params(&a.pop, &a.run, term)?, term)
     }
 }
 
 /// `atlasmesh build` on shapes of either dimension.
-fn build<const D: usize>(
-    a: &BuildArgs,
-    shapes: &[Shape<D>],
-    meshes: Option<&[FeMesh<D>]>,
-    params: &RunParams,
-    term: &Terminal,
-) -> anyhow::Result<()> {
-    let shapes = corresponded(&a.pop, shapes, 0, term)?;
+fn build<const D: usize>(a: &BuildArgs, pop: Population<D>, term: &Terminal) -> anyhow::Result<()> {
+    let Population {
+        shapes,
+        mut inputs,
+        params,
+        meshes,
+    } = pop;
+    let (shapes, template) = corresponded(&a.pop, &shapes, &mut inputs, 0, term)?;
+    let meshes = meshes.as_deref();
+    let params = &params;
     let step = "atlas (GPA, PCA, mesh of the mean)";
     term.step_started(step);
     let atlas = study::build_with_meshes(&shapes, meshes, params, &a.out)?;
@@ -79,5 +77,7 @@ fn build<const D: usize>(
         atlas.params.element_size * unit,
         100.0 * atlas.params.element_size
     );
+    let facts = study::write_build_facts(&a.out, &inputs, template.as_deref(), &atlas, unit)?;
+    println!("inputs and registration: {}", facts.display());
     Ok(())
 }

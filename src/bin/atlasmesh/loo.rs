@@ -1,13 +1,11 @@
 //! `atlasmesh loo`: the leave-one-out experiment (section 6.1).
 
 use crate::args::{PopArgs, RunArgs, dataset_name};
-use crate::population::{corresponded, outlines_and_params, surfaces_and_params};
+use crate::population::{Population, corresponded, outlines_and_params, surfaces_and_params};
 use crate::summary::{failures, print_summary};
 use crate::terminal::Terminal;
-use atlasmesh::geometry::Shape;
-use atlasmesh::mesh::FeMesh;
 use atlasmesh::report::Report;
-use atlasmesh::study::{self, RunParams};
+use atlasmesh::study;
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -29,31 +27,30 @@ pub struct LooArgs {
 /// Runs `atlasmesh loo`.
 pub fn run(a: LooArgs, term: &Terminal) -> anyhow::Result<()> {
     let r = if study::inputs_are_surfaces(&a.pop.shapes)? {
-        let (shapes, params, meshes) = surfaces_and_params(&a.pop, &a.run)?;
-        loo(&a, &shapes, meshes.as_deref(), &params, term)?
+        loo(&a, surfaces_and_params(&a.pop, &a.run, term)?, term)?
     } else {
-        let (shapes, params) = outlines_and_params(&a.pop, &a.run)?;
-        loo(&a, &shapes, None, &params, term)?
+        loo(&a, outlines_and_params(&a.pop, &a.run, term)?, term)?
     };
     print_summary(&r, &a.out);
     failures(&r)
 }
 
 /// Leave-one-out on shapes of either dimension.
-fn loo<const D: usize>(
-    a: &LooArgs,
-    shapes: &[Shape<D>],
-    meshes: Option<&[FeMesh<D>]>,
-    params: &RunParams,
-    term: &Terminal,
-) -> anyhow::Result<Report> {
-    let corresponded = corresponded(&a.pop, shapes, a.jobs, term)?;
+fn loo<const D: usize>(a: &LooArgs, pop: Population<D>, term: &Terminal) -> anyhow::Result<Report> {
+    let Population {
+        shapes,
+        mut inputs,
+        params,
+        meshes,
+    } = pop;
+    let (corresponded, template) = corresponded(&a.pop, &shapes, &mut inputs, a.jobs, term)?;
     Ok(study::leave_one_out_of(
         &corresponded,
-        shapes,
-        meshes,
+        &shapes,
+        meshes.as_deref(),
+        &study::PopulationFacts { inputs, template },
         &dataset_name(&a.pop.shapes),
-        params,
+        &params,
         Path::new(&a.out),
         a.jobs,
         term,

@@ -4,33 +4,90 @@
 use crate::args::{PopArgs, RunArgs, apply_pop};
 use crate::terminal::Terminal;
 use atlasmesh::geometry::Shape;
+use atlasmesh::geometry::same_dim;
 use atlasmesh::mesh::FeMesh;
-use atlasmesh::register::RegisterParams;
-use atlasmesh::study::{self, PopulationOptions, RunParams};
+use atlasmesh::register::{REGISTRATION_WARNING_P95, RegisterParams};
+use atlasmesh::report::InputReport;
+use atlasmesh::study::{self, PopulationOptions, RunParams, Template};
+use std::path::Path;
+
+/// A population as read: its shapes (islands dropped), what was found in them, the run
+/// parameters and, in 3D, the template meshes.
+pub struct Population<const D: usize> {
+    /// The shapes with their landmarks.
+    pub shapes: Vec<Shape<D>>,
+    /// Topology and islands of each (registration residuals added by [`corresponded`]).
+    pub inputs: Vec<InputReport>,
+    /// The run's parameters.
+    pub params: RunParams,
+    /// `--template-mesh`, read.
+    pub meshes: Option<Vec<FeMesh<D>>>,
+}
+
+/// Drops the floating islands of `shapes` (or refuses them with `--refuse-islands`), with a
+/// warning for each on stderr.
+fn clean<const D: usize>(
+    pop: &PopArgs,
+    shapes: &mut [Shape<D>],
+    term: &Terminal,
+) -> anyhow::Result<Vec<InputReport>> {
+    let before: Vec<Shape<D>> = if pop.refuse_islands {
+        shapes.to_vec()
+    } else {
+        Vec::new()
+    };
+    let inputs = study::clean_shapes(shapes, study::ISLAND_SHARE);
+    for (k, i) in inputs.iter().enumerate() {
+        if pop.refuse_islands && i.dropped_components > 0 {
+            return Err(atlasmesh::Error::shape(
+                &before[k].name,
+                format!(
+                    "has {} floating component(s) under {:.0} % of its area (--refuse-islands)",
+                    i.dropped_components,
+                    100.0 * study::ISLAND_SHARE
+                ),
+            )
+            .into());
+        }
+        if !term.is_quiet() {
+            for w in &i.warnings {
+                eprintln!("warning: {}: {w}", i.name);
+            }
+        }
+    }
+    Ok(inputs)
+}
 
 /// The surfaces of `pop` (with their landmarks), the run parameters and the template meshes.
-#[allow(clippy::type_complexity)]
 pub fn surfaces_and_params(
     pop: &PopArgs,
     run: &RunArgs,
-) -> anyhow::Result<(Vec<Shape<3>>, RunParams, Option<Vec<FeMesh<3>>>)> {
+    term: &Terminal,
+) -> anyhow::Result<Population<3>> {
     let mut params = run.params()?;
     apply_pop(&mut params, pop);
     let mut shapes = study::load_surfaces(&pop.shapes)?;
     study::attach_landmarks(&mut shapes, &pop.landmarks)?;
+    let inputs = clean(pop, &mut shapes, term)?;
     let meshes = if pop.template_mesh.is_empty() {
         None
     } else {
         Some(study::read_template_meshes(&pop.template_mesh)?)
     };
-    Ok((shapes, params, meshes))
+    Ok(Population {
+        shapes,
+        inputs,
+        params,
+        meshes,
+    })
 }
 
 /// The outlines of `pop` (with their landmarks) and the run parameters.
 pub fn outlines_and_params(
     pop: &PopArgs,
     run: &RunArgs,
-) -> anyhow::Result<(Vec<Shape<2>>, RunParams)> {
+    term: &Terminal,
+) -> anyhow::Result<Population<2>> {
     if !pop.template_mesh.is_empty() {
         return Err(atlasmesh::Error::Parameter(
             "--template-mesh applies to 3D surfaces; 2D outlines get the automatic quad mesh"
@@ -50,26 +107,102 @@ pub fn outlines_and_params(
         study::load_population(&pop.shapes, &opts)?
     };
     study::attach_landmarks(&mut shapes, &pop.landmarks)?;
-    Ok((shapes, params))
+    let inputs = clean(pop, &mut shapes, term)?;
+    Ok(Population {
+        shapes,
+        inputs,
+        params,
+        meshes: None,
+    })
 }
 
-/// The shapes in correspondence: registered to a template with `--register`, else as given.
+/// The `--template` file, read in the population's dimension with its `--template-landmarks`.
+fn template_file<const D: usize>(pop: &PopArgs, path: &Path) -> anyhow::Result<Shape<D>> {
+    let files = [path.to_path_buf()];
+    let mut t: Shape<D> = if D == 3 {
+        let s = study::load_surfaces(&files)?.remove(0);
+        Shape {
+            name: s.name,
+            points: s.points.iter().map(same_dim::<3, D>).collect(),
+            facets: s
+                .facets
+                .iter()
+                .map(|f| std::array::from_fn(|k| f[k]))
+                .collect(),
+            landmarks: s.landmarks,
+        }
+    } else {
+        let opts = PopulationOptions {
+            closed: !pop.open,
+            resample: pop.resample,
+        };
+        let s = study::load_outlines_raw(&files, &opts)?.remove(0);
+        Shape {
+            name: s.name,
+            points: s.points.iter().map(same_dim::<2, D>).collect(),
+            facets: s
+                .facets
+                .iter()
+                .map(|f| std::array::from_fn(|k| f[k]))
+                .collect(),
+            landmarks: s.landmarks,
+        }
+    };
+    if let Some(l) = &pop.template_landmarks {
+        study::attach_landmarks(std::slice::from_mut(&mut t), std::slice::from_ref(l))?;
+    }
+    Ok(t)
+}
+
+/// The shapes in correspondence: registered to a template with `--register`, else as given;
+/// the registration's residuals go into `inputs` (with a warning where the template did not
+/// reach). Returns the shapes and the template's name.
 pub fn corresponded<const D: usize>(
     pop: &PopArgs,
     shapes: &[Shape<D>],
+    inputs: &mut [InputReport],
     jobs: usize,
     term: &Terminal,
-) -> anyhow::Result<Vec<Shape<D>>> {
+) -> anyhow::Result<(Vec<Shape<D>>, Option<String>)> {
     let mut params = RegisterParams::for_dimension(D);
     if let Some(g) = pop.register_grid {
         params.grid = g;
     }
-    let register = pop.register.then_some((&params, pop.template.as_deref()));
-    let (c, t) = study::correspond(shapes, register, jobs, term)?;
-    if let Some(t) = t
-        && !term.is_quiet()
-    {
-        eprintln!("registration template: {}", shapes[t].name);
+    let external: Option<Shape<D>> = match &pop.template {
+        Some(t) if !shapes.iter().any(|s| &s.name == t) && Path::new(t).exists() => {
+            Some(template_file(pop, Path::new(t))?)
+        }
+        _ => None,
+    };
+    let template = match (&external, &pop.template) {
+        (Some(t), _) => Template::External(t),
+        (None, Some(name)) => Template::Member(name),
+        (None, None) => Template::Nearest,
+    };
+    let register = pop.register.then_some((&params, template));
+    let Some(r) = study::correspond(shapes, register, jobs, term)? else {
+        return Ok((shapes.to_vec(), None));
+    };
+    if !term.is_quiet() {
+        eprintln!("registration template: {}", r.template);
     }
-    Ok(c)
+    for (i, res) in inputs.iter_mut().zip(&r.residuals) {
+        i.registration = *res;
+        if let Some(x) = res
+            && x.p95_relative > REGISTRATION_WARNING_P95
+        {
+            let w = format!(
+                "the registered template is up to {:.3} (95th percentile, {:.1} % of the \
+                 diagonal; two-way RMS {:.3}) from it: check its registration",
+                x.p95,
+                100.0 * x.p95_relative,
+                x.rms
+            );
+            if !term.is_quiet() {
+                eprintln!("warning: {}: {w}", i.name);
+            }
+            i.warnings.push(w);
+        }
+    }
+    Ok((r.shapes, Some(r.template)))
 }

@@ -129,14 +129,21 @@ fn summary(h: &mut String, report: &Report) {
     );
     let _ = writeln!(
         h,
-        "<table class=\"summary\"><tr><th>subjects</th><th>succeeded</th><th>meshes valid</th><th>failed</th><th>needed repair</th><th>below the repair bound</th><th>median fit</th><th>median relative RMS distance</th><th>median normal correlation</th></tr>\n<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} ms</td><td>{}</td><td>{}</td></tr></table>",
+        "<table class=\"summary\"><tr><th>subjects</th><th>succeeded</th><th>meshes valid</th><th>failed</th><th>fit too far</th><th>mesh too far</th><th>mesh quality</th><th>needed repair</th><th>below the repair bound</th><th>morphs stiffened</th><th>fits not converged</th><th>median fit</th><th>median mesh RMS distance</th><th>median mesh 95th percentile</th><th>median relative RMS distance of the fit</th><th>median normal correlation</th></tr>\n<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} ms</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
         s.subjects,
         s.succeeded,
         s.meshes_valid,
         s.failed,
+        s.failed_fit,
+        s.failed_mesh_distance,
+        s.failed_mesh_quality,
         s.repaired,
         s.below_repair_bound,
+        s.morph_escalations,
+        s.not_converged,
         num(s.median_fit_seconds * 1e3, 1),
+        num(s.median_mesh_rms_distance, 3),
+        num(s.median_mesh_p95_distance, 3),
         num(s.median_rms_distance_relative, 4),
         num(s.median_normal_correlation, 3)
     );
@@ -243,9 +250,12 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
     let mut cols = vec![
         "subject",
         "success",
+        "checks failed, warnings",
+        "mesh RMS distance",
+        "mesh 95th percentile",
         "iterations",
         "fit (ms)",
-        "relative RMS distance",
+        "relative RMS distance of the fit",
         "normal correlation",
     ];
     if baselines {
@@ -277,10 +287,20 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
 fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, pictures: bool) {
     let _ = write!(
         h,
-        "<tr><td>{}</td><td data-v=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        "<tr><td>{}</td><td data-v=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
         escape(&s.name),
         u8::from(s.success),
         if s.success { "yes" } else { "<b>no</b>" },
+        escape(
+            &s.failed_checks
+                .iter()
+                .chain(&s.warnings)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join("; ")
+        ),
+        num(s.mesh_rms_distance, 3),
+        num(s.mesh_p95_distance, 3),
         s.iterations,
         num(s.fit_seconds * 1e3, 1),
         num(s.rms_distance_relative, 4),

@@ -116,6 +116,13 @@ pub struct SubjectReport {
     /// Every check passed: the delivered mesh is within its distance bound of the subject and
     /// of valid quality (see `failed_checks`).
     pub success: bool,
+    /// When the fit was not close (above 0.75 % of the diagonal): the two-way RMS distance of
+    /// a fit of the subject's mirror image (subject units).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mirrored_rms_distance: Option<f64>,
+    /// What a user should know about this subject (a subject that may be mirrored).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Whether the last inner loop of Algorithm 1 met its tolerance.
     pub converged: bool,
     /// `E_d` at every iteration.

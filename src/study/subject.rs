@@ -51,7 +51,37 @@ pub fn fit_subject<const D: usize>(
     let fit_seconds = t0.elapsed().as_secs_f64();
     let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
-    check_misfit(&fit.instance, &atlas.facets, subject, rms, params)?;
+    if let Err(e) = check_misfit(&fit.instance, &atlas.facets, subject, rms, params) {
+        // A refused subject may be a mirror image: say so when its mirror fits clearly better.
+        return Err(
+            match (e, mirrored_fit_rms(atlas, fitter, subject, params)) {
+                (Error::NotConverged { name, message }, Some(m)) if m < MIRROR_BETTER * rms => {
+                    Error::NotConverged {
+                        name,
+                        message: format!(
+                            "{message}; its mirror image fits at an RMS distance of {m:.4}: the \
+                         subject may be mirrored (mirror it, or use an atlas of the other side)"
+                        ),
+                    }
+                }
+                (e, _) => e,
+            },
+        );
+    }
+    let mut warnings = Vec::new();
+    let mirrored_rms = if rel > MIRROR_CHECK_ABOVE {
+        mirrored_fit_rms(atlas, fitter, subject, params)
+    } else {
+        None
+    };
+    if let Some(m) = mirrored_rms
+        && m < MIRROR_BETTER * rms
+    {
+        warnings.push(format!(
+            "the subject may be mirrored: its mirror image fits the model at an RMS distance \
+             of {m:.4}, against {rms:.4} as given (mirror it, or use an atlas of the other side)"
+        ));
+    }
     let morph = morpher.morph(&fit.correspondence())?;
     let mut mesh = morph.mesh;
     let mut per_element = morph.quality;
@@ -116,6 +146,8 @@ pub fn fit_subject<const D: usize>(
         element_size: delivered.element_size,
         failed_checks: Vec::new(),
         success: false,
+        mirrored_rms_distance: mirrored_rms,
+        warnings,
         converged: fit.converged,
         e_d_history: fit.e_d_history.clone(),
         files: Vec::new(),
@@ -130,6 +162,49 @@ pub fn fit_subject<const D: usize>(
         index,
         report,
     })
+}
+
+/// A fit farther from its subject than this share of the diagonal (two-way RMS) is compared
+/// with a fit of the subject's mirror image.
+pub const MIRROR_CHECK_ABOVE: f64 = 0.0075;
+
+/// The mirror image fitting at less than this share of the given subject's RMS distance
+/// gives the warning that the subject may be mirrored.
+pub const MIRROR_BETTER: f64 = 0.7;
+
+/// The two-way RMS distance at which the model fits `subject` mirrored across the plane
+/// `x = 0` (its facets reversed, so that it stays outward), or `None` when that fit fails.
+fn mirrored_fit_rms<const D: usize>(
+    atlas: &Atlas<D>,
+    fitter: &Fitter<D>,
+    subject: &Shape<D>,
+    params: &RunParams,
+) -> Option<f64> {
+    let mirror = Shape {
+        name: subject.name.clone(),
+        points: subject
+            .points
+            .iter()
+            .map(|p| {
+                let mut q = *p;
+                q[0] = -q[0];
+                q
+            })
+            .collect(),
+        facets: subject
+            .facets
+            .iter()
+            .map(|f| {
+                let mut g = *f;
+                g.swap(0, 1);
+                g
+            })
+            .collect(),
+        landmarks: subject.landmarks.clone(),
+    };
+    let index = ClosestPointIndex::from_shape(&mirror);
+    let fit = fitter.fit(&mirror, &index, &params.fit).ok()?;
+    Some(two_way_rms(&fit.instance, &atlas.facets, &mirror, &index))
 }
 
 /// The delivered mesh measured against its subject.

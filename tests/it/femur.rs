@@ -44,6 +44,7 @@ fn femur_leave_one_out_with_15_and_5_modes() {
             "{modes} modes: every morphed hex mesh valid"
         );
         assert_eq!(r.summary.succeeded, 30, "{modes} modes: every femur fitted");
+        assert_eq!(common::assert_delivered(&r, &out, &shapes), 30);
         assert!(
             r.subjects.iter().all(|s| s.converged),
             "{modes} modes: every fit met the tolerance at the last gamma"
@@ -289,4 +290,64 @@ fn ssm_correspondence_is_nearer_the_truth_than_ffd() {
         mean(3) > mean(4),
         "FFD's normal correlation above the truth's"
     );
+}
+
+/// A femur given as its mirror image (a left femur for an atlas of right ones) is named as
+/// such, whether it is fitted (a warning in its report) or refused (in the error); the femur
+/// as given gets no such warning.
+#[test]
+fn a_mirrored_femur_is_named() {
+    use atlasmesh::fit::Fitter;
+    use atlasmesh::geometry::Shape;
+    use atlasmesh::model::{Atlas, AtlasParams};
+    let Some(data) = common::data_dir("a_mirrored_femur_is_named") else {
+        return;
+    };
+    let shapes = common::femurs(&data);
+    let atlas = Atlas::build(
+        &shapes[1..16],
+        &AtlasParams {
+            modes: ModeSelection::Count(5),
+            element_size: 0.05,
+            ..AtlasParams::default()
+        },
+    )
+    .unwrap();
+    let params = RunParams {
+        plots: false,
+        ..RunParams::default()
+    };
+    let fitter = Fitter::new(&atlas);
+    let morpher = atlas.morpher(&params.morph).unwrap();
+    let given =
+        atlasmesh::study::fit_subject(&atlas, &fitter, &morpher, &shapes[0], &params).unwrap();
+    assert!(
+        given.report.warnings.is_empty(),
+        "{:?}",
+        given.report.warnings
+    );
+    let s = &shapes[0];
+    let mirror = Shape {
+        name: "mirrored".into(),
+        points: s.points.iter().map(|p| [-p[0], p[1], p[2]]).collect(),
+        facets: s.facets.iter().map(|f| [f[1], f[0], f[2]]).collect(),
+        landmarks: s.landmarks.clone(),
+    };
+    match atlasmesh::study::fit_subject(&atlas, &fitter, &morpher, &mirror, &params) {
+        Ok(o) => {
+            eprintln!(
+                "mirrored femur: RMS {:.3} mm, mirror image {:?}; as given {:.3} mm",
+                o.report.rms_distance, o.report.mirrored_rms_distance, given.report.rms_distance
+            );
+            assert!(
+                o.report.warnings.iter().any(|w| w.contains("mirrored")),
+                "{:?}",
+                o.report.warnings
+            );
+        }
+        Err(e) => {
+            eprintln!("mirrored femur refused: {e}");
+            assert!(e.to_string().contains("mirrored"), "{e}");
+        }
+    }
 }

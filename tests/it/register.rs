@@ -108,6 +108,7 @@ fn hands_without_correspondence_register_and_fit() {
     );
     assert_eq!(r.summary.succeeded, 40);
     assert_eq!(r.summary.meshes_valid, 40);
+    assert_eq!(common::assert_delivered(&r, &out, &raw), 40);
     common::assert_repaired("raw hands", &r);
     assert!(
         r.summary.median_normal_correlation >= g.summary.median_normal_correlation - 0.02,
@@ -167,6 +168,7 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
     )
     .unwrap();
     assert_eq!(r.summary.succeeded, 12);
+    assert_eq!(common::assert_delivered(&r, &out, &raw), 12);
     assert_eq!(r.summary.meshes_valid, 12);
     common::assert_repaired("dense hands", &r);
     let registered: Vec<_> = (0..12)
@@ -357,6 +359,7 @@ fn femurs_without_correspondence() {
         r.summary.succeeded, r.summary.meshes_valid, rms[15]
     );
     assert_eq!(r.summary.succeeded, 30);
+    assert_eq!(common::assert_delivered(&r, &out, &raw), 30);
     assert_eq!(r.summary.meshes_valid, 30);
     common::assert_repaired("raw femurs", &r);
     // The paper's comparison (fig. 20): SSM fit vs FFD registration (3 landmarks) vs ICP.

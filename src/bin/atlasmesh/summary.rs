@@ -47,6 +47,11 @@ pub fn print_summary(r: &Report, out: &Path) {
             s.below_repair_bound, s.morph_escalations, s.not_converged
         );
     }
+    for x in &r.subjects {
+        for w in &x.warnings {
+            eprintln!("warning: {}: {w}", x.name);
+        }
+    }
     println!("report: {}", out.join("report.json").display());
     if out.join("report.html").is_file() {
         println!("report: {}", out.join("report.html").display());

@@ -18,13 +18,15 @@ pub struct PairRegistration {
     /// RMS distance of the deformed template's points to the target at the last update
     /// (target units).
     pub final_rms: f64,
+    /// The deformed template against the target, both ways (target units).
+    pub residuals: crate::register::RegistrationResiduals,
 }
 
 /// Registers `shapes[0]` (the template) to `shapes[1]` (the target), with the landmarks of
 /// `landmarks` (one file per shape, or none) and `grid` control points along the longest axis
 /// (default by dimension). Writes `deformed_template.vtp`, `correspondence.vtp` (the target
 /// resampled at the template's points) and `registration.json` (pre-alignment, mean squared
-/// distance per update, alignment misfit) into `out`.
+/// distance per update, alignment misfit, residuals both ways) into `out`.
 pub fn register_pair<const D: usize>(
     mut shapes: Vec<Shape<D>>,
     landmarks: &[PathBuf],
@@ -61,6 +63,7 @@ pub fn register_pair<const D: usize>(
         &out.join("correspondence.vtp"),
         &r.resampled(template, target),
     )?;
+    let residuals = r.residuals(template, target, &index);
     let json = serde_json::json!({
         "template": template.name,
         "target": target.name,
@@ -73,6 +76,7 @@ pub fn register_pair<const D: usize>(
         },
         "mean_squared_distance": r.history,
         "alignment_misfit": r.misfit,
+        "residuals": residuals,
     });
     let text = serde_json::to_string_pretty(&json)
         .map_err(|e| Error::Numerical(format!("registration.json: {e}")))?;
@@ -81,5 +85,6 @@ pub fn register_pair<const D: usize>(
         template: template.name.clone(),
         target: target.name.clone(),
         final_rms: r.history.last().copied().unwrap_or(0.0).sqrt(),
+        residuals,
     })
 }

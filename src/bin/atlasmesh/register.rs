@@ -43,12 +43,23 @@ pub fn run(a: RegisterArgs) -> anyhow::Result<()> {
         )?;
         study::register_pair(shapes, &a.landmarks, a.grid, &a.out)?
     };
+    let x = &r.residuals;
     println!(
-        "registered {} to {}: final RMS distance {:.4e}; outputs in {}",
+        "registered {} to {}: two-way RMS distance {:.4}, 95th percentile {:.4} ({:.2} % of the target's diagonal), max {:.4}; template to target RMS {:.4}; outputs in {}",
         r.template,
         r.target,
-        r.final_rms,
+        x.rms,
+        x.p95,
+        100.0 * x.p95_relative,
+        x.max,
+        x.template_to_target_rms,
         a.out.display()
     );
+    if x.p95_relative > atlasmesh::register::REGISTRATION_WARNING_P95 {
+        eprintln!(
+            "warning: the registered template stays up to {:.4} (95th percentile) from {}: check the registration",
+            x.p95, r.target
+        );
+    }
     Ok(())
 }

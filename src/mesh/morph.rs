@@ -3,7 +3,7 @@
 use super::FeMesh;
 use super::quality::{ElementQuality, mesh_quality, summarize};
 use crate::error::{Error, Result};
-use crate::ffd::{FfdFit, FfdParams};
+use crate::ffd::{FfdFit, FfdParams, FfdSystem};
 use crate::geometry::{Point, Similarity};
 
 /// Each retry of a morph that inverted an element multiplies `alpha` by this.
@@ -107,7 +107,11 @@ impl<const D: usize> Morpher<D> {
             ));
         }
         let mut alpha = self.params.alpha;
-        // A subject with missing parts has its own data term: factorize for its points.
+        // A subject with missing parts has its own data term: factorize for its points. The
+        // stiffer fits share one normal-matrix system (one structure, one symbolic
+        // factorization); each replaces the last, so at most one is held beside the shared
+        // one (each factor of a 20³ lattice holds tens of MB).
+        let mut system: Option<FfdSystem<D>> = None;
         let mut stiffer: Option<FfdFit<D>> = if all {
             None
         } else {
@@ -133,13 +137,18 @@ impl<const D: usize> Morpher<D> {
                 });
             }
             alpha *= STIFFEN_FACTOR;
-            stiffer = Some(FfdFit::new(
-                &sources,
-                &FfdParams {
-                    alpha,
-                    ..self.params
-                },
-            )?);
+            stiffer = None;
+            if system.is_none() {
+                system = Some(FfdSystem::new(
+                    &sources,
+                    None,
+                    self.params.grid,
+                    self.params.margin,
+                )?);
+            }
+            if let Some(s) = system.as_mut() {
+                stiffer = Some(s.factor(alpha)?);
+            }
         }
         Err(Error::Numerical("the morph did not run".into()))
     }

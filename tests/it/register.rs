@@ -485,7 +485,10 @@ fn raw_hands_fit_for_five_resamplings() {
         let worst = r
             .subjects
             .iter()
-            .max_by(|a, b| a.mesh_rms_distance_relative.total_cmp(&b.mesh_rms_distance_relative))
+            .max_by(|a, b| {
+                a.mesh_rms_distance_relative
+                    .total_cmp(&b.mesh_rms_distance_relative)
+            })
             .unwrap();
         eprintln!(
             "seed {seed}: {}/40 succeeded; worst delivered mesh {} at {:.2} % of its diagonal \

@@ -63,7 +63,7 @@ fn check(name: &str, r: &Report, out: &Path, subjects: &[Shape<3>], template: Op
     rms.sort_by(f64::total_cmp);
     eprintln!(
         "{name}: {}/{} succeeded, {} valid; delivered RMS median {:.3} mm, max {:.3} mm; \
-         instance RMS median {:.3} mm; mean mesh {} elements of {:.2} mm; template {:?}",
+         instance RMS median {:.4} of the diagonal; mean mesh {} elements of {:.2} mm; template {:?}",
         r.summary.succeeded,
         r.summary.subjects,
         r.summary.meshes_valid,

@@ -100,7 +100,7 @@ pub fn drop_small_components<const D: usize>(
 ) -> (Shape<D>, Vec<(usize, f64)>) {
     let parts = components(shape);
     let total: f64 = parts.iter().map(|c| c.size).sum();
-    if parts.len() < 2 || !(total > 0.0) {
+    if parts.len() < 2 || total.is_nan() || total <= 0.0 {
         return (shape.clone(), Vec::new());
     }
     let marked: HashSet<usize> = shape.landmarks.iter().copied().collect();

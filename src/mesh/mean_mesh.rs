@@ -58,14 +58,14 @@ fn meets_the_bar<const D: usize>(
 ) -> std::result::Result<(), String> {
     let q = summarize(&mesh_quality(mesh));
     let bound = default_bound(mesh.kind);
-    if !(q.scaled_jacobian_min >= bound) {
+    if q.scaled_jacobian_min.is_nan() || q.scaled_jacobian_min < bound {
         return Err(format!(
             "smallest scaled Jacobian {:.3} below {bound}",
             q.scaled_jacobian_min
         ));
     }
     let ratio = edge_ratio_max(mesh);
-    if !(ratio <= MEAN_MESH_EDGE_RATIO_MAX) {
+    if ratio.is_nan() || ratio > MEAN_MESH_EDGE_RATIO_MAX {
         return Err(format!(
             "edge ratio {ratio:.1} above {MEAN_MESH_EDGE_RATIO_MAX}"
         ));
@@ -76,7 +76,7 @@ fn meets_the_bar<const D: usize>(
     let index = ClosestPointIndex::from_shape(mean);
     let open = D == 2 && mean.facets.len() < mean.points.len();
     let d = surface_distances(&boundary, mean, &index, !open, h);
-    if !(d.max <= MEAN_MESH_COVERAGE * h) {
+    if d.max.is_nan() || d.max > MEAN_MESH_COVERAGE * h {
         return Err(format!(
             "its boundary and the mean lie up to {:.2} element sizes apart ({:.1} % of the \
              mean farther than one)",

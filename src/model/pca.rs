@@ -69,7 +69,7 @@ pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Resu
     let largest = eigenvalues.first().copied().unwrap_or(0.0);
     eigenvalues.retain(|&l| l.is_finite() && l > largest * 1e-24);
     let keep = eigenvalues.len();
-    if !(largest > 0.0) || keep == 0 {
+    if largest.is_nan() || largest <= 0.0 || keep == 0 {
         return Err(Error::Population(
             "the shapes are identical after alignment: there is no variance to model".into(),
         ));

@@ -100,8 +100,10 @@ pub fn demo_3d(out: &Path, progress: &dyn Progress) -> Result<Report> {
     create_dir(out)?;
     let shapes = demo_population_3d(30, 24, 20261122)?;
     let (train, test) = shapes.split_at(24);
-    let mut params = RunParams::default();
-    params.element_size = crate::mesh::ElementSize::Share(0.05);
+    let mut params = RunParams {
+        element_size: crate::mesh::ElementSize::Share(0.05),
+        ..RunParams::default()
+    };
     params.atlas.modes = crate::model::ModeSelection::Variance(0.99);
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<3>::load(&out.join("atlas.safetensors"))?;
@@ -123,8 +125,10 @@ pub fn demo(out: &Path, progress: &dyn Progress) -> Result<Report> {
     let population = demo_population(30, 180, 20261122);
     let (shapes, _) = resample_corresponding(&population, 400, true)?;
     let (train, test) = shapes.split_at(24);
-    let mut params = RunParams::default();
-    params.element_size = crate::mesh::ElementSize::Share(0.03);
+    let params = RunParams {
+        element_size: crate::mesh::ElementSize::Share(0.03),
+        ..RunParams::default()
+    };
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<2>::load(&out.join("atlas.safetensors"))?;
     let report = fit_shapes(

@@ -319,8 +319,7 @@ fn clean_candidates<const D: usize>(shapes: &[Shape<D>]) -> Vec<bool> {
     let common = genus_count
         .iter()
         .max_by_key(|(g, c)| (**c, std::cmp::Reverse(**g)))
-        .map(|(g, _)| *g)
-        .flatten();
+        .and_then(|(g, _)| *g);
     let ok: Vec<bool> = parts
         .iter()
         .map(|p| p.len() == 1 && p[0].genus == common)

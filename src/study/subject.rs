@@ -250,14 +250,14 @@ fn delivered_distances<const D: usize>(
 /// The checks of `success` that `report` fails: `fit`, `mesh_distance`, `mesh_quality`.
 fn failed_checks(report: &SubjectReport, finite: bool, params: &RunParams) -> Vec<String> {
     let mut failed = Vec::new();
-    if !(report.rms_distance_relative <= params.max_instance_distance) {
+    if !within(report.rms_distance_relative, params.max_instance_distance) {
         failed.push("fit".to_string());
     }
-    if !(report.mesh_rms_distance_relative <= params.max_mesh_distance) {
+    if !within(report.mesh_rms_distance_relative, params.max_mesh_distance) {
         failed.push("mesh_distance".to_string());
     }
     let below_bound =
-        params.repair.is_some() && !(report.scaled_jacobian_min >= report.repair_bound);
+        params.repair.is_some() && !within(report.repair_bound, report.scaled_jacobian_min);
     if !finite || report.inverted_elements > 0 || below_bound {
         failed.push("mesh_quality".to_string());
     }
@@ -293,7 +293,7 @@ fn check_misfit<const D: usize>(
         .unwrap_or(f64::NAN);
     let rms = if params.fit.partial { one_way } else { rms };
     let (rel, rel95) = (rms / size, p95 / size);
-    if rel.is_nan() || rel > params.max_misfit || !(rel95 <= 2.0 * params.max_misfit) {
+    if !within(rel, params.max_misfit) || !within(rel95, 2.0 * params.max_misfit) {
         return Err(Error::NotConverged {
             name: subject.name.clone(),
             message: format!(
@@ -309,4 +309,9 @@ fn check_misfit<const D: usize>(
         });
     }
     Ok(())
+}
+
+/// Whether `value <= bound` (false when either is NaN).
+fn within(value: f64, bound: f64) -> bool {
+    value <= bound
 }

@@ -108,9 +108,10 @@ pub struct SubjectReport {
     /// units).
     #[serde(default, deserialize_with = "f64_or_nan")]
     pub element_size: f64,
-    /// Which of the checks of `success` failed: `fit` (the instance farther than 1 % of the
-    /// diagonal), `mesh_distance` (the mesh farther than its bound), `mesh_quality`
-    /// (inverted elements, non-finite nodes, or elements below the repair bound).
+    /// Which of the checks of `success` failed: `fit` (the instance farther than its bound,
+    /// `max_instance_distance` of the diagonal, two-way RMS), `mesh_distance` (the mesh
+    /// farther than `max_mesh_distance`), `mesh_quality` (inverted elements, non-finite
+    /// nodes, or elements below the repair bound).
     #[serde(default)]
     pub failed_checks: Vec<String>,
     /// Every check passed: the delivered mesh is within its distance bound of the subject and

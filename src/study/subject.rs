@@ -31,13 +31,16 @@ pub struct SubjectOutcome<const D: usize> {
 }
 
 /// Fits `subject` with the atlas (Algorithm 1), morphs the mean mesh onto it (eq. 9), repairs
-/// the morphed mesh and takes the measures of section 5; writes nothing
-/// ([`write_subject`](super::write_subject) does).
+/// the morphed mesh and takes the measures of section 5, among them the delivered mesh's
+/// distance to the subject (its boundary against the subject's surface) and the checks of
+/// `success` (`fit`, `mesh_distance`, `mesh_quality`); a fit that is not close is compared
+/// with a fit of the subject's mirror image (a warning when that fits clearly better).
+/// Writes nothing ([`write_subject`](super::write_subject) does).
 ///
 /// # Errors
-/// [`Error::NotConverged`] when the fitted instance stays farther from the subject than
-/// `params.max_misfit` of its bounding-box diagonal; the errors of the fit, the morph and the
-/// repair.
+/// [`Error::NotConverged`] when the fitted instance stays farther from the subject than the
+/// misfit guard allows (`params.max_misfit`, see `check_misfit`); the errors of the fit, the
+/// morph and the repair.
 pub fn fit_subject<const D: usize>(
     atlas: &Atlas<D>,
     fitter: &Fitter<D>,
@@ -108,7 +111,7 @@ pub fn fit_subject<const D: usize>(
     } else {
         None
     };
-    let report = SubjectReport {
+    let mut report = SubjectReport {
         name: subject.name.clone(),
         iterations: fit.iterations,
         fit_seconds,
@@ -152,7 +155,6 @@ pub fn fit_subject<const D: usize>(
         e_d_history: fit.e_d_history.clone(),
         files: Vec::new(),
     };
-    let mut report = report;
     report.failed_checks = failed_checks(&report, delivered.finite, params);
     report.success = report.failed_checks.is_empty();
     Ok(SubjectOutcome {

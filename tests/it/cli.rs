@@ -518,3 +518,40 @@ fn repair_command_untangles_a_folded_block() {
     assert_eq!(q["inverted_elements"], 0);
     assert!(q["scaled_jacobian_min"].as_f64().unwrap() >= 0.2, "{q}");
 }
+
+/// More shapes than coordinates (120 outlines of 8 points: 16 coordinates), as with hundreds
+/// of hearts or molars of few landmarks: the atlas is built, with at most 16 modes.
+#[test]
+fn an_atlas_of_more_shapes_than_coordinates() {
+    let d = common::temp_dir("many-shapes");
+    let mut csv = String::from("shape,point,x,y\n");
+    for k in 0..120 {
+        for i in 0..8 {
+            let a = i as f64 * std::f64::consts::TAU / 8.0;
+            // A pseudo-random radius per shape and point (full rank).
+            let h = ((k * 8 + i) * 2_654_435_761_usize) % 1000;
+            let r = 1.0 + 0.15 * (h as f64 / 1000.0 - 0.5);
+            csv.push_str(&format!("{k},{i},{},{}\n", r * a.cos(), 0.7 * r * a.sin()));
+        }
+    }
+    let f = write(&d, "many.csv", &csv);
+    let atlas = d.join("many.safetensors");
+    let o = atlasmesh(&[
+        "build",
+        "--shapes",
+        &f,
+        "--variance",
+        "0.999",
+        "--out",
+        &atlas.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let a = atlasmesh::model::Atlas::<2>::load(&atlas).unwrap();
+    assert!(
+        a.num_modes() >= 5 && a.num_modes() <= 16,
+        "{} modes",
+        a.num_modes()
+    );
+    assert!(a.eigenvalues.iter().all(|&l| l > 0.0));
+    std::fs::remove_dir_all(&d).ok();
+}

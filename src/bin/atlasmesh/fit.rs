@@ -58,7 +58,14 @@ pub fn run(a: FitArgs, term: &Terminal) -> anyhow::Result<()> {
             if !study::is_surface_file(p) {
                 return Err(other(p, "a 2D outline", 3));
             }
-            Ok(vec![atlasmesh::formats::read_surface(p)?])
+            // Floating islands (under 1 % of the area) dropped, as in a population.
+            let mut s = vec![atlasmesh::formats::read_surface(p)?];
+            for i in study::clean_shapes(&mut s, study::ISLAND_SHARE) {
+                for w in i.warnings.iter().filter(|_| !term.is_quiet()) {
+                    eprintln!("warning: {}: {w}", i.name);
+                }
+            }
+            Ok(s)
         };
         fit::<3>(&a, &files, shard, &load, term)
     } else {

@@ -31,16 +31,11 @@ fn clean<const D: usize>(
     shapes: &mut [Shape<D>],
     term: &Terminal,
 ) -> anyhow::Result<Vec<InputReport>> {
-    let before: Vec<Shape<D>> = if pop.refuse_islands {
-        shapes.to_vec()
-    } else {
-        Vec::new()
-    };
     let inputs = study::clean_shapes(shapes, study::ISLAND_SHARE);
-    for (k, i) in inputs.iter().enumerate() {
+    for i in &inputs {
         if pop.refuse_islands && i.dropped_components > 0 {
             return Err(atlasmesh::Error::shape(
-                &before[k].name,
+                &i.name,
                 format!(
                     "has {} floating component(s) under {:.0} % of its area (--refuse-islands)",
                     i.dropped_components,

@@ -42,21 +42,27 @@ fn uneven(s: &Shape<2>, n: usize, phase: f64, amp: f64) -> Shape<2> {
     r
 }
 
-#[test]
-fn hands_without_correspondence_register_and_fit() {
-    let Some(data) = common::data_dir("hands_without_correspondence_register_and_fit") else {
-        return;
-    };
-    let landmarks = common::hands(&data, None);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2026);
-    let raw: Vec<Shape<2>> = landmarks
+/// The hands `landmarks` each resampled (seeded by `seed`) to 1800-2200 points of uneven
+/// spacing ([`uneven`]).
+fn raw_hands(landmarks: &[Shape<2>], seed: u64) -> Vec<Shape<2>> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    landmarks
         .iter()
         .map(|s| {
             let n = rng.random_range(1800..=2200);
             let phase = rng.random_range(0.0..std::f64::consts::TAU);
             uneven(s, n, phase, rng.random_range(0.2..0.5))
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn hands_without_correspondence_register_and_fit() {
+    let Some(data) = common::data_dir("hands_without_correspondence_register_and_fit") else {
+        return;
+    };
+    let landmarks = common::hands(&data, None);
+    let raw = raw_hands(&landmarks, 2026);
     assert!(raw.iter().any(|s| s.points.len() != raw[0].points.len()));
     let reg = register_population(
         &raw,
@@ -448,15 +454,7 @@ fn raw_hands_fit_for_five_resamplings() {
     };
     let landmarks = common::hands(&data, None);
     for seed in [1_u64, 7, 42, 1234] {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let raw: Vec<Shape<2>> = landmarks
-            .iter()
-            .map(|s| {
-                let n = rng.random_range(1800..=2200);
-                let phase = rng.random_range(0.0..std::f64::consts::TAU);
-                uneven(s, n, phase, rng.random_range(0.2..0.5))
-            })
-            .collect();
+        let raw = raw_hands(&landmarks, seed);
         let corresponded = register_population(
             &raw,
             Template::Nearest,

@@ -114,11 +114,11 @@ pub fn outlines_and_params(
 /// The `--template` file, read in the population's dimension with its `--template-landmarks`.
 fn template_file<const D: usize>(pop: &PopArgs, path: &Path) -> anyhow::Result<Shape<D>> {
     let files = [path.to_path_buf()];
-    let mut t: Shape<D> = if D == 3 {
-        let s = study::load_surfaces(&files)?.remove(0);
+    /// A shape read in dimension `E` (which is `D`) as a `Shape<D>`.
+    fn in_dimension<const E: usize, const D: usize>(s: Shape<E>) -> Shape<D> {
         Shape {
             name: s.name,
-            points: s.points.iter().map(same_dim::<3, D>).collect(),
+            points: s.points.iter().map(same_dim::<E, D>).collect(),
             facets: s
                 .facets
                 .iter()
@@ -126,22 +126,15 @@ fn template_file<const D: usize>(pop: &PopArgs, path: &Path) -> anyhow::Result<S
                 .collect(),
             landmarks: s.landmarks,
         }
+    }
+    let mut t: Shape<D> = if D == 3 {
+        in_dimension(study::load_surfaces(&files)?.remove(0))
     } else {
         let opts = PopulationOptions {
             closed: !pop.open,
             resample: pop.resample,
         };
-        let s = study::load_outlines_raw(&files, &opts)?.remove(0);
-        Shape {
-            name: s.name,
-            points: s.points.iter().map(same_dim::<2, D>).collect(),
-            facets: s
-                .facets
-                .iter()
-                .map(|f| std::array::from_fn(|k| f[k]))
-                .collect(),
-            landmarks: s.landmarks,
-        }
+        in_dimension(study::load_outlines_raw(&files, &opts)?.remove(0))
     };
     if let Some(l) = &pop.template_landmarks {
         study::attach_landmarks(std::slice::from_mut(&mut t), std::slice::from_ref(l))?;

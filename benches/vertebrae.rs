@@ -45,5 +45,10 @@ fn bench(c: &mut Criterion) {
     std::fs::remove_dir_all(&out).ok();
 }
 
-criterion_group!(benches, bench);
+criterion_group! {
+    name = benches;
+    // As the other benches: the figures are in the terminal and `target/criterion`.
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);

@@ -24,25 +24,30 @@ pub struct BoundaryFace<const D: usize> {
 /// The faces (edges in 2D) of `mesh` that belong to one element only.
 pub fn boundary_faces<const D: usize>(mesh: &FeMesh<D>) -> Vec<BoundaryFace<D>> {
     let faces = mesh.kind.faces();
-    let mut count: HashMap<Vec<usize>, u32> = HashMap::new();
+    // A face's key: its (at most 4) corner nodes sorted, padded; no allocation per face.
+    let key_of = |el: &[usize], f: &[usize]| -> [usize; 4] {
+        let mut key = [usize::MAX; 4];
+        for (k, &c) in f.iter().enumerate() {
+            key[k] = el[c];
+        }
+        key.sort_unstable();
+        key
+    };
+    let mut count: HashMap<[usize; 4], u32> = HashMap::with_capacity(mesh.num_elements() * 4);
     for e in 0..mesh.num_elements() {
         let el = mesh.element(e);
         for f in faces {
-            let mut key: Vec<usize> = f.iter().map(|&k| el[k]).collect();
-            key.sort_unstable();
-            *count.entry(key).or_default() += 1;
+            *count.entry(key_of(el, f)).or_default() += 1;
         }
     }
     let mut out = Vec::new();
     for e in 0..mesh.num_elements() {
         let el = mesh.element(e);
         for (fi, f) in faces.iter().enumerate() {
-            let nodes: Vec<usize> = f.iter().map(|&k| el[k]).collect();
-            let mut key = nodes.clone();
-            key.sort_unstable();
-            if count.get(&key) != Some(&1) {
+            if count.get(&key_of(el, f)) != Some(&1) {
                 continue;
             }
+            let nodes: Vec<usize> = f.iter().map(|&k| el[k]).collect();
             let p: Vec<Point<D>> = nodes.iter().map(|&n| mesh.nodes[n]).collect();
             let centroid: Point<D> =
                 std::array::from_fn(|d| p.iter().map(|q| q[d]).sum::<f64>() / p.len() as f64);

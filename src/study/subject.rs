@@ -52,9 +52,9 @@ pub fn fit_subject<const D: usize>(
     let t0 = Instant::now();
     let fit = fitter.fit(subject, &index, &params.fit)?;
     let fit_seconds = t0.elapsed().as_secs_f64();
-    let rms = two_way_rms(&fit.instance, &atlas.facets, subject, &index);
+    let (rms, to_instance) = fit_distances(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
-    if let Err(e) = check_misfit(&fit.instance, &atlas.facets, subject, rms, params) {
+    if let Err(e) = check_misfit(subject, rms, to_instance, params) {
         // A refused subject may be a mirror image: say so when its mirror fits clearly better.
         return Err(
             match (e, mirrored_fit_rms(atlas, fitter, subject, params)) {
@@ -266,27 +266,44 @@ fn failed_checks(report: &SubjectReport, finite: bool, params: &RunParams) -> Ve
     failed
 }
 
-/// The misfit guard: the fit did not converge when the instance stays farther from the
-/// subject than `params.max_misfit` of the subject's robust size
-/// ([`Shape::robust_diagonal`], which a stray vertex or a far fragment does not inflate),
-/// by the two-way RMS distance (`rms`), or when the 95th percentile of the subject's
-/// points' distances to the instance exceeds twice that (a part of the subject the instance
-/// does not reach). A partial subject (`--partial`) misses parts of the model: only its own
-/// points' distances count.
-fn check_misfit<const D: usize>(
+/// The fitted instance against its subject (indexed by `index`): the two-way RMS distance
+/// ([`two_way_rms`]) and the distance of every subject point to the instance, from one
+/// index of the instance. Subject units.
+fn fit_distances<const D: usize>(
     instance: &[crate::geometry::Point<D>],
     facets: &[[usize; D]],
     subject: &Shape<D>,
-    rms: f64,
-    params: &RunParams,
-) -> Result<()> {
-    let size = subject.robust_diagonal();
+    index: &ClosestPointIndex<D>,
+) -> (f64, Vec<f64>) {
     let on_instance = ClosestPointIndex::new(instance, facets);
-    let mut d: Vec<f64> = subject
+    let to_instance: Vec<f64> = subject
         .points
         .iter()
         .map(|p| on_instance.closest(p).dist2.sqrt())
         .collect();
+    let mean_sq = |v: &mut dyn Iterator<Item = f64>, n: usize| v.sum::<f64>() / n.max(1) as f64;
+    let forward = mean_sq(
+        &mut instance.iter().map(|p| index.closest(p).dist2),
+        instance.len(),
+    );
+    let backward = mean_sq(&mut to_instance.iter().map(|d| d * d), to_instance.len());
+    ((0.5 * (forward + backward)).sqrt(), to_instance)
+}
+
+/// The misfit guard: the fit did not converge when the instance stays farther from the
+/// subject than `params.max_misfit` of the subject's robust size
+/// ([`Shape::robust_diagonal`], which a stray vertex or a far fragment does not inflate),
+/// by the two-way RMS distance (`rms`), or when the 95th percentile of the subject's
+/// points' distances to the instance (`d`) exceeds twice that (a part of the subject the instance
+/// does not reach). A partial subject (`--partial`) misses parts of the model: only its own
+/// points' distances count.
+fn check_misfit<const D: usize>(
+    subject: &Shape<D>,
+    rms: f64,
+    mut d: Vec<f64>,
+    params: &RunParams,
+) -> Result<()> {
+    let size = subject.robust_diagonal();
     let one_way = (d.iter().map(|x| x * x).sum::<f64>() / d.len().max(1) as f64).sqrt();
     d.sort_by(f64::total_cmp);
     let p95 = d

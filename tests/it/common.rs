@@ -278,8 +278,56 @@ pub fn atlasmesh<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Output 
         .unwrap()
 }
 
+/// The Python with meshio named by `ATLASMESH_PYTHON`, or `None` (the check is skipped with a
+/// message); with `ATLASMESH_REQUIRE_TOOLS` set, a missing one is a failure.
+#[allow(dead_code)]
+pub fn python() -> Option<PathBuf> {
+    match std::env::var_os("ATLASMESH_PYTHON") {
+        Some(p) => Some(PathBuf::from(p)),
+        None => {
+            assert!(
+                std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
+                "ATLASMESH_PYTHON (a Python with meshio) is required"
+            );
+            eprintln!("meshio checks: skipped (ATLASMESH_PYTHON is not set)");
+            None
+        }
+    }
+}
+
+/// A mesh as meshio reads it: its points and the cells of its first block.
+type MeshioMesh = (Vec<Vec<f64>>, Vec<Vec<usize>>);
+
+/// The meshes of `files` as meshio reads them (one Python run for all), or `None` without a
+/// Python with meshio.
+fn meshio_meshes(files: &[PathBuf]) -> Option<Vec<MeshioMesh>> {
+    let py = python()?;
+    let script = r#"
+import sys, json, meshio
+out = []
+for f in sys.argv[1:]:
+    m = meshio.read(f)
+    out.append([m.points.tolist(), m.cells[0].data.tolist()])
+print(json.dumps(out))
+"#;
+    let o = std::process::Command::new(py)
+        .arg("-c")
+        .arg(script)
+        .args(files)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "meshio: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    Some(serde_json::from_slice(&o.stdout).unwrap())
+}
+
 /// Every subject of `r` that reports `success` delivered what it claims: its mesh file
-/// (`NAME_mesh.vtu` in `out`), read back, has no inverted element and no non-finite node, and
+/// (`NAME_mesh.vtu` in `out`), read back by meshio (when there is a Python with it; its
+/// nodes and cells must be those atlasmesh reads), has no inverted element and no non-finite
+/// node, and
 /// its boundary lies within the run's bound (`max_mesh_distance` of the subject's diagonal,
 /// two-way RMS; subject → mesh only for open outlines and partial fits) of the subject (found
 /// by name in `subjects`); the distance read back is the one reported. Returns how many were
@@ -296,18 +344,48 @@ pub fn assert_delivered<const D: usize>(
     let bound = r.parameters["max_mesh_distance"].as_f64().unwrap();
     let partial = r.parameters["fit"]["partial"].as_bool().unwrap_or(false);
     let mut checked = 0;
-    for s in r.subjects.iter().filter(|s| s.success) {
+    let successes: Vec<&atlasmesh::report::SubjectReport> =
+        r.subjects.iter().filter(|s| s.success).collect();
+    let files: Vec<PathBuf> = successes
+        .iter()
+        .map(|s| {
+            let f = s
+                .files
+                .iter()
+                .find(|f| f.ends_with("_mesh.vtu"))
+                .unwrap_or_else(|| panic!("{}: no mesh file in {:?}", s.name, s.files));
+            out.join(f)
+        })
+        .collect();
+    let by_meshio = meshio_meshes(&files);
+    for (k, s) in successes.into_iter().enumerate() {
         let subject = subjects
             .iter()
             .find(|x| x.name == s.name)
             .unwrap_or_else(|| panic!("{}: no such subject", s.name));
-        let file = s
-            .files
-            .iter()
-            .find(|f| f.ends_with("_mesh.vtu"))
-            .unwrap_or_else(|| panic!("{}: no mesh file in {:?}", s.name, s.files));
-        let mesh: atlasmesh::mesh::FeMesh<D> =
-            atlasmesh::formats::read_fe_mesh(&out.join(file)).unwrap();
+        let mesh: atlasmesh::mesh::FeMesh<D> = atlasmesh::formats::read_fe_mesh(&files[k]).unwrap();
+        if let Some(m) = &by_meshio {
+            let (points, cells) = &m[k];
+            assert_eq!(
+                points.len(),
+                mesh.nodes.len(),
+                "{}: meshio's node count",
+                s.name
+            );
+            for (p, q) in points.iter().zip(&mesh.nodes) {
+                assert!(
+                    (0..D).all(|d| (p[d] - q[d]).abs() <= 1e-9 * (1.0 + q[d].abs())),
+                    "{}: meshio reads node {p:?}, atlasmesh {q:?}",
+                    s.name
+                );
+            }
+            let connectivity: Vec<usize> = cells.iter().flatten().copied().collect();
+            assert_eq!(
+                connectivity, mesh.connectivity,
+                "{}: meshio's cells",
+                s.name
+            );
+        }
         assert!(
             mesh.nodes.iter().flatten().all(|v| v.is_finite()),
             "{}: non-finite node",

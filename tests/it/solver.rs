@@ -22,20 +22,6 @@ fn atlasmesh(args: &[&str]) {
     );
 }
 
-fn python() -> Option<PathBuf> {
-    match std::env::var_os("ATLASMESH_PYTHON") {
-        Some(p) => Some(PathBuf::from(p)),
-        None => {
-            assert!(
-                std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
-                "ATLASMESH_PYTHON (a Python with meshio) is required"
-            );
-            eprintln!("meshio checks: skipped (ATLASMESH_PYTHON is not set)");
-            None
-        }
-    }
-}
-
 const SETS: &str = r#"
 [[node_set]]
 name = "FIXED"
@@ -185,7 +171,7 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
             assert!(o.status.success() && !log.contains("Error"), "{log}");
         }
     }
-    if let Some(py) = python() {
+    if let Some(py) = common::python() {
         meshio_check(
             &py,
             &out.join("S001_Femur/S001_Femur_mesh"),
@@ -540,7 +526,7 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
                 assert!(o.status.success() && !log.contains("Error"), "{log}");
             }
         }
-        if let Some(py) = python() {
+        if let Some(py) = common::python() {
             let base = out.join("S026_Femur/S026_Femur_mesh");
             meshio_check(&py, &base, &reference, meshio_kind);
             // The same elements in every format (in any order: the .msh groups them by set):

@@ -31,9 +31,9 @@ pub fn parse_fe_mesh_raw(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
     let text = || super::outline::utf8(path, bytes);
     match mesh_extension(path)? {
         "inp" => Ok(parse_inp(path, text()?)?.mesh),
-        "msh" => parse_msh(path, text()?),
-        "vtu" => super::vtk_xml::parse_vtu(path, text()?),
-        _ => parse_vtk_unstructured(path, text()?),
+        "msh" => parse_msh(path, bytes),
+        "vtu" => super::vtk_xml::parse_vtu(path, bytes),
+        _ => parse_vtk_unstructured(path, bytes),
     }
 }
 

@@ -11,15 +11,107 @@ use std::path::Path;
 /// A Gmsh element as read: dimension, type, node tags, physical tags, element tag.
 pub(crate) type MshElement = (usize, u32, Vec<i64>, Vec<i64>, i64);
 
-/// Reads a Gmsh mesh, version 2.2 or 4.1, ASCII. The elements of the highest dimension form
-/// the mesh; physical groups become sets (see the module doc).
+/// Reads a Gmsh mesh, version 2.2 or 4.1, ASCII or binary (either byte order, as the file
+/// says). The elements of the highest dimension form the mesh; physical groups become sets
+/// (see the module doc).
 pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse_msh(path, &text)
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_msh(path, &bytes)
 }
 
-/// [`read_msh`] of a file's text (`path` only names the file in messages): no file is read.
-pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
+/// [`read_msh`] of a file's bytes (`path` only names the file in messages): no file is read.
+pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
+    let format = super::gmsh_binary::mesh_format(path, bytes)?;
+    let parsed = if format.binary {
+        super::gmsh_binary::parse(path, bytes, &format)?
+    } else {
+        let text = std::str::from_utf8(bytes)
+            .map_err(|_| Error::parse(path, 0, "an ASCII .msh file holds invalid UTF-8"))?;
+        parse_ascii(path, text)?
+    };
+    assemble(path, parsed)
+}
+
+/// A Gmsh file as read, before the mesh is assembled.
+#[derive(Default)]
+pub(crate) struct Parsed {
+    /// Physical names by (dimension, tag).
+    pub names: HashMap<(usize, i64), String>,
+    /// Node index by node tag.
+    pub node_index: HashMap<i64, usize>,
+    pub nodes: Vec<Point<3>>,
+    pub elements: Vec<MshElement>,
+    /// The line of `$Elements`, for messages (0 in binary files).
+    pub line: usize,
+}
+
+/// The physical names of a `$PhysicalNames` section's lines (the count line first).
+pub(crate) fn physical_names(
+    path: &Path,
+    ln: usize,
+    body: &[&str],
+) -> Result<HashMap<(usize, i64), String>> {
+    let mut names = HashMap::new();
+    for (k, l) in body.iter().enumerate().skip(1) {
+        let mut it = l.trim().splitn(3, char::is_whitespace);
+        let (Some(d), Some(t), Some(n)) = (it.next(), it.next(), it.next()) else {
+            return Err(Error::parse(
+                path,
+                ln + k,
+                "a physical name needs dim, tag, name",
+            ));
+        };
+        let d: usize = d
+            .parse()
+            .map_err(|_| Error::parse(path, ln + k, "bad dimension"))?;
+        let t: i64 = t
+            .parse()
+            .map_err(|_| Error::parse(path, ln + k, "bad tag"))?;
+        names.insert((d, t), n.trim().trim_matches('"').to_string());
+    }
+    Ok(names)
+}
+
+/// The dimension of Gmsh element type `t` (`None` when not known).
+pub(crate) fn gmsh_dimension(t: u32) -> Option<usize> {
+    Some(match t {
+        15 => 0,
+        1 | 8 | 26 | 27 | 28 => 1,
+        2 | 3 | 9 | 10 | 16 | 20..=25 | 36 | 37 => 2,
+        4..=7 | 11..=14 | 17..=19 | 29..=35 | 92 | 93 => 3,
+        _ => return None,
+    })
+}
+
+/// The node count of Gmsh element type `t` (`None` when not known).
+pub(crate) fn gmsh_nodes(t: u32) -> Option<usize> {
+    Some(match t {
+        15 => 1,
+        1 => 2,
+        2 | 8 => 3,
+        3 | 4 => 4,
+        5 => 8,
+        6 | 9 => 6,
+        7 => 5,
+        10 => 9,
+        11 | 21 => 10,
+        12 => 27,
+        13 => 18,
+        14 => 14,
+        16 => 8,
+        17 => 20,
+        18 => 15,
+        19 => 13,
+        20 => 9,
+        26 => 4,
+        29 => 20,
+        36 => 16,
+        _ => return None,
+    })
+}
+
+/// The ASCII `.msh` file's sections.
+fn parse_ascii(path: &Path, text: &str) -> Result<Parsed> {
     let section = |name: &str| -> Option<(usize, Vec<&str>)> {
         let start = text
             .find(&format!("${name}\n"))
@@ -36,13 +128,6 @@ pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
         .map(|l| l.split_whitespace().collect())
         .unwrap_or_default();
     let version = head.first().copied().unwrap_or("");
-    if head.get(1) != Some(&"0") {
-        return Err(Error::parse(
-            path,
-            2,
-            "binary .msh files are not read; save as ASCII",
-        ));
-    }
     let needed = |name: &str| {
         section(name).ok_or_else(|| {
             let m = if text.contains(&format!("${name}")) {
@@ -55,26 +140,10 @@ pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
     };
     let (nl, nbody) = needed("Nodes")?;
     let (el, ebody) = needed("Elements")?;
-    let mut names: HashMap<(usize, i64), String> = HashMap::new();
-    if let Some((ln, body)) = section("PhysicalNames") {
-        for (k, l) in body.iter().enumerate().skip(1) {
-            let mut it = l.splitn(3, char::is_whitespace);
-            let (Some(d), Some(t), Some(n)) = (it.next(), it.next(), it.next()) else {
-                return Err(Error::parse(
-                    path,
-                    ln + k,
-                    "a physical name needs dim, tag, name",
-                ));
-            };
-            let d: usize = d
-                .parse()
-                .map_err(|_| Error::parse(path, ln + k, "bad dimension"))?;
-            let t: i64 = t
-                .parse()
-                .map_err(|_| Error::parse(path, ln + k, "bad tag"))?;
-            names.insert((d, t), n.trim().trim_matches('"').to_string());
-        }
-    }
+    let names = match section("PhysicalNames") {
+        Some((ln, body)) => physical_names(path, ln, &body)?,
+        None => HashMap::new(),
+    };
     let num = |ln: usize, s: &str| -> Result<f64> {
         s.parse::<f64>()
             .map_err(|_| Error::parse(path, ln, format!("{s:?} is not a number")))
@@ -159,12 +228,8 @@ pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
             let t = f[1] as u32;
             let ntags = f[2] as usize;
             let phys = if ntags > 0 { vec![f[3]] } else { vec![] };
-            let dim = match t {
-                15 => 0,
-                1 => 1,
-                2 | 3 => 2,
-                4 | 5 => 3,
-                _ => continue,
+            let Some(dim) = gmsh_dimension(t) else {
+                continue;
             };
             elements.push((dim, t, f[3 + ntags..].to_vec(), phys, f[0]));
         }
@@ -274,6 +339,25 @@ pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
             format!("Gmsh format version {version}; 2.2 and 4.1 are read"),
         ));
     }
+    Ok(Parsed {
+        names,
+        node_index,
+        nodes,
+        elements,
+        line: el,
+    })
+}
+
+/// The FE mesh of a parsed file: the elements of the highest dimension, of one kind; physical
+/// groups of the lower dimensions as node sets (points) and surfaces (faces).
+fn assemble(path: &Path, p: Parsed) -> Result<FeMesh<3>> {
+    let Parsed {
+        names,
+        node_index,
+        nodes,
+        mut elements,
+        line: el,
+    } = p;
     let top = elements
         .iter()
         .filter(|e| ElementKind::from_gmsh_type(e.1).is_some())
@@ -301,17 +385,31 @@ pub fn parse_msh(path: &Path, text: &str) -> Result<FeMesh<3>> {
             )
         })
     };
+    let mut found: BTreeMap<u32, usize> = BTreeMap::new();
+    for e in elements.iter().filter(|e| e.0 == top) {
+        *found.entry(e.1).or_default() += 1;
+    }
+    if found.len() > 1
+        || found
+            .keys()
+            .any(|&t| ElementKind::from_gmsh_type(t).is_none())
+    {
+        let listed: Vec<String> = found
+            .iter()
+            .map(|(t, n)| format!("{n} of Gmsh type {t}"))
+            .collect();
+        return Err(Error::parse(
+            path,
+            el,
+            format!(
+                "the {top}D elements are {}; one kind of triangles (2), quadrangles (3), tetrahedra (4, 11) or hexahedra (5, 17) is read",
+                listed.join(", ")
+            ),
+        ));
+    }
     for (dim, t, tags, phys, _) in elements.iter().filter(|e| e.0 == top) {
-        let k = ElementKind::from_gmsh_type(*t).ok_or_else(|| {
-            Error::parse(
-                path,
-                el,
-                format!("element type {t} among the {top}D elements is not read"),
-            )
-        })?;
-        if kind.is_some_and(|k0| k0 != k) {
-            return Err(Error::parse(path, el, "one element type per mesh"));
-        }
+        let k = ElementKind::from_gmsh_type(*t)
+            .ok_or_else(|| Error::parse(path, el, format!("element type {t} is not read")))?;
         kind = Some(k);
         if tags.len() != k.nodes() {
             return Err(Error::parse(

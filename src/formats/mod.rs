@@ -11,7 +11,7 @@
 //! | `vtk_xml` | VTK XML: VTP shapes, VTU meshes |
 //! | `fe_mesh` | FE meshes: the format by extension ([`MeshFormat`]), shared checks |
 //! | `abaqus` | Abaqus/CalculiX `.inp` meshes and decks |
-//! | `gmsh` | Gmsh `.msh` |
+//! | `gmsh`, `gmsh_binary` | Gmsh `.msh`: ASCII and the mesh's assembly; binary files |
 //! | `febio` | FEBio `.feb` |
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
 //! | `sets_file` | the sets file (TOML) |
@@ -24,6 +24,7 @@ mod atomic;
 pub mod fe_mesh;
 pub mod febio;
 pub mod gmsh;
+mod gmsh_binary;
 pub mod landmarks;
 pub mod obj;
 pub mod outline;
@@ -33,8 +34,10 @@ pub mod ply;
 mod sets_file;
 pub mod stl;
 pub mod surface;
+mod vtk_cells;
 pub mod vtk_legacy;
 pub mod vtk_xml;
+mod vtk_xml_read;
 
 pub use abaqus::{InpDeck, parse_inp, read_inp};
 pub use atlas_file::{ATLAS_FORMAT_VERSION, atlas_dimension};
@@ -50,8 +53,9 @@ pub use outline_text::{parse_text_outlines, read_text_outlines};
 pub use ply::write_ply;
 pub use stl::write_stl;
 pub use surface::{parse_surface, read_surface};
+pub use vtk_cells::VtkPolyData;
 pub use vtk_legacy::{
-    VtkPolyData, parse_vtk_outline, parse_vtk_polydata, parse_vtk_unstructured, read_vtk_outline,
+    parse_vtk_outline, parse_vtk_polydata, parse_vtk_unstructured, read_vtk_outline,
     read_vtk_polydata, read_vtk_unstructured,
 };
 pub use vtk_xml::{

@@ -2,12 +2,14 @@
 
 use super::outline_csv::parse_long_csv;
 use super::outline_text::parse_text_outlines;
+use super::vtk_cells::outline_from_polydata;
 use super::vtk_legacy::parse_vtk_outline;
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use std::path::Path;
 
-/// Reads the outlines in `path` (format from the extension: `.csv`, `.vtk`, else text).
+/// Reads the outlines in `path` (format from the extension: `.csv`, `.vtk`, `.vtp`, else
+/// text).
 /// `closed` applies to CSV and text files; VTK files carry their own topology.
 pub fn read_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -24,6 +26,10 @@ pub fn parse_outlines(path: &Path, bytes: &[u8], closed: bool) -> Result<Vec<Sha
     let shapes = match ext.as_str() {
         "csv" => parse_long_csv(path, text_of(path, bytes)?, closed)?,
         "vtk" => vec![parse_vtk_outline(path, bytes)?],
+        "vtp" => vec![outline_from_polydata(
+            path,
+            &super::vtk_xml::parse_vtp(path, bytes)?,
+        )?],
         _ => parse_text_outlines(path, text_of(path, bytes)?, closed)?,
     };
     if shapes.is_empty() {

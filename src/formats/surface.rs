@@ -9,7 +9,7 @@ use crate::geometry::{Point, Shape, prepare_surface};
 use std::path::Path;
 
 /// Reads a triangle surface; the format comes from the extension (`.ply`, `.stl`, `.obj`,
-/// legacy `.vtk` POLYDATA with POLYGONS, `.vtp` with ASCII arrays).
+/// legacy `.vtk` POLYDATA with polygons or triangle strips, `.vtp` as VTK writes it).
 /// The surface is checked and oriented by [`prepare_surface`].
 pub fn read_surface(path: &Path) -> Result<Shape<3>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -31,14 +31,17 @@ pub fn parse_surface(path: &Path, bytes: &[u8]) -> Result<Shape<3>> {
         "ply" => parse_ply(path, bytes)?,
         "stl" => parse_stl(path, bytes)?,
         "obj" => parse_obj(path, bytes)?,
-        "vtp" => super::vtk_xml::parse_vtp(path, super::outline::utf8(path, bytes)?)?,
-        "vtk" => {
-            let v = super::vtk_legacy::parse_vtk_polydata(path, bytes)?;
+        "vtp" | "vtk" => {
+            let v = if ext == "vtp" {
+                super::vtk_xml::parse_vtp(path, bytes)?
+            } else {
+                super::vtk_legacy::parse_vtk_polydata(path, bytes)?
+            };
             if v.polygons.is_empty() {
                 return Err(Error::parse(
                     path,
                     0,
-                    "no POLYGONS: a surface needs polygons (an outline has LINES)",
+                    "no polygons: a surface needs polygons (an outline has lines)",
                 ));
             }
             (v.points, v.polygons)

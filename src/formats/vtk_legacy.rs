@@ -1,67 +1,412 @@
-//! Legacy VTK (`.vtk`): POLYDATA outlines and surfaces, UNSTRUCTURED_GRID meshes with their
-//! sets as point and cell data, read and written.
+//! Legacy VTK (`.vtk`), versions 2.0 to 5.1 (VTK ≥ 9.1 writes 5.1: cells as `OFFSETS` and
+//! `CONNECTIVITY`), ASCII and binary (big-endian): POLYDATA outlines and surfaces,
+//! UNSTRUCTURED_GRID meshes with their sets as point and cell data; field data, lookup tables,
+//! `METADATA` and attributes other than `set_NAME` scalars are read past. Meshes are written
+//! as 4.2 ASCII.
 
 use super::atomic::MAX_COUNT;
-use super::fe_mesh::{check_mesh, xyz};
-use super::outline::{parse_f64, stem};
+use super::fe_mesh::xyz;
+use super::vtk_cells::{DataArrays, VtkPolyData, mesh_from_cells, outline_from_polydata};
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use crate::mesh::quality::ElementQuality;
-use crate::mesh::{ALL_KINDS, ElementKind, FeMesh, MeshSets};
+use crate::mesh::{ALL_KINDS, ElementKind, FeMesh};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// A cursor over a legacy VTK file's bytes.
-pub(crate) struct Cursor<'a> {
+/// A legacy VTK file as parsed.
+#[derive(Default)]
+struct Legacy {
+    /// `DATASET` (upper case).
+    dataset: String,
+    points: Vec<[f64; 3]>,
+    /// POLYDATA: lines, polygons and the triangles of strips.
+    poly: VtkPolyData,
+    /// UNSTRUCTURED_GRID: cells and their types.
+    cells: Vec<Vec<usize>>,
+    types: Vec<u8>,
+    /// `set_NAME` scalars of the points and of the cells.
+    point_sets: DataArrays,
+    cell_sets: DataArrays,
+}
+
+/// A cursor over a legacy VTK file's bytes: keyword lines, and value blocks in ASCII or
+/// big-endian binary.
+struct Cursor<'a> {
+    path: &'a Path,
     b: &'a [u8],
     pos: usize,
     line: usize,
+    binary: bool,
 }
 
 impl<'a> Cursor<'a> {
-    fn next_line(&mut self) -> Option<&'a str> {
-        while self.pos < self.b.len() {
-            let start = self.pos;
-            let end = self.b[start..]
-                .iter()
-                .position(|&c| c == b'\n')
-                .map_or(self.b.len(), |k| start + k);
-            self.pos = (end + 1).min(self.b.len());
-            self.line += 1;
-            let s = std::str::from_utf8(&self.b[start..end]).ok()?.trim();
-            if !s.is_empty() {
-                return Some(s);
+    fn err(&self, m: impl Into<String>) -> Error {
+        Error::parse(self.path, self.line, m.into())
+    }
+
+    /// The next line, empty or not (`None` at the end of the file).
+    fn raw_line(&mut self) -> Result<Option<&'a str>> {
+        if self.pos >= self.b.len() {
+            return Ok(None);
+        }
+        let start = self.pos;
+        let end = self.b[start..]
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(self.b.len(), |k| start + k);
+        self.pos = (end + 1).min(self.b.len());
+        self.line += 1;
+        std::str::from_utf8(&self.b[start..end])
+            .map(|s| Some(s.trim()))
+            .map_err(|_| {
+                self.err("binary bytes where a keyword line was expected (a section longer than announced?)")
+            })
+    }
+
+    /// The next non-empty line.
+    fn line(&mut self) -> Result<Option<&'a str>> {
+        while let Some(l) = self.raw_line()? {
+            if !l.is_empty() {
+                return Ok(Some(l));
             }
         }
-        None
+        Ok(None)
     }
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
-        let s = self.b.get(self.pos..self.pos.checked_add(n)?)?;
-        self.pos += n;
-        Some(s)
-    }
-    fn tokens(&mut self, n: usize) -> Option<Vec<&'a str>> {
+
+    /// `n` values of VTK type `ty` (`float`, `int`, `vtktypeint64`...).
+    fn values(&mut self, n: usize, ty: &str, what: &str) -> Result<Vec<f64>> {
+        if n > MAX_COUNT.saturating_mul(9) {
+            return Err(self.err(format!("{what}: {n} values is beyond the limit")));
+        }
+        let ty = ty.to_ascii_lowercase();
+        let size = match ty.as_str() {
+            "unsigned_char" | "char" => 1,
+            "short" | "unsigned_short" => 2,
+            "int" | "unsigned_int" | "float" | "vtkidtype" => 4,
+            "long" | "unsigned_long" | "double" | "vtktypeint64" | "vtktypeuint64" => 8,
+            _ => return Err(self.err(format!("{what}: data type {ty:?} is not read"))),
+        };
+        if self.binary {
+            let raw = self
+                .b
+                .get(self.pos..self.pos.saturating_add(n * size))
+                .ok_or_else(|| {
+                    self.err(format!(
+                        "truncated: {what} announces {n} values but the file ends before"
+                    ))
+                })?;
+            self.pos += n * size;
+            let signed = !ty.starts_with("unsigned") && ty != "vtktypeuint64";
+            let v: Vec<f64> = raw
+                .chunks_exact(size)
+                .map(|c| {
+                    let mut w = [0u8; 8];
+                    w[8 - size..].copy_from_slice(c);
+                    let u = u64::from_be_bytes(w);
+                    match (ty.as_str(), size) {
+                        ("float", _) => f32::from_bits(u as u32) as f64,
+                        ("double", _) => f64::from_bits(u),
+                        (_, 8) if signed => u as i64 as f64,
+                        (_, 4) if signed => u as u32 as i32 as f64,
+                        (_, 2) if signed => u as u16 as i16 as f64,
+                        (_, 1) if signed => u as u8 as i8 as f64,
+                        _ => u as f64,
+                    }
+                })
+                .collect();
+            return Ok(v);
+        }
         let mut out = Vec::with_capacity(n.min(1 << 20));
         while out.len() < n {
-            let l = self.next_line()?;
-            out.extend(l.split_whitespace());
+            let l = self.line()?.ok_or_else(|| {
+                self.err(format!(
+                    "truncated: {what} announces {n} values, the file ends after {}",
+                    out.len()
+                ))
+            })?;
+            for t in l.split_whitespace() {
+                let v: f64 = t
+                    .parse()
+                    .map_err(|_| self.err(format!("{what}: {t:?} is not a number")))?;
+                out.push(v);
+            }
         }
-        (out.len() == n).then_some(out)
+        if out.len() != n {
+            return Err(self.err(format!(
+                "{what}: {} values where {n} were announced",
+                out.len()
+            )));
+        }
+        Ok(out)
+    }
+
+    /// Skips a `METADATA` block (up to its empty line).
+    fn skip_metadata(&mut self) -> Result<()> {
+        while let Some(l) = self.raw_line()? {
+            if l.is_empty() {
+                break;
+            }
+        }
+        Ok(())
     }
 }
 
-/// Points and line cells of a legacy VTK POLYDATA file.
-pub struct VtkPolyData {
-    /// The points.
-    pub points: Vec<[f64; 3]>,
-    /// The LINES cells (point indices).
-    pub lines: Vec<Vec<usize>>,
-    /// The POLYGONS cells (point indices).
-    pub polygons: Vec<Vec<usize>>,
+/// A count field of a keyword line.
+fn count(c: &Cursor, f: &[&str], i: usize, what: &str) -> Result<usize> {
+    f.get(i)
+        .and_then(|s| s.parse::<usize>().ok())
+        .filter(|&n| n <= MAX_COUNT)
+        .ok_or_else(|| c.err(format!("{}: a bad {what}", f[0])))
 }
 
-/// Reads a legacy VTK POLYDATA file (ASCII or binary big-endian): `POINTS`, `LINES`,
-/// `POLYGONS` (other sections are ignored).
+/// Cells as an index list (`n` cells) or, in 5.1, offsets and connectivity.
+fn read_cells(c: &mut Cursor, f: &[&str], v5: bool, points: usize) -> Result<Vec<Vec<usize>>> {
+    let key = f[0].to_ascii_uppercase();
+    let a = count(c, f, 1, "cell count")?;
+    let b = count(c, f, 2, "cell size")?;
+    let idx = |c: &Cursor, v: f64, n: usize| -> Result<usize> {
+        if v >= 0.0 && v.fract() == 0.0 && v < n as f64 {
+            Ok(v as usize)
+        } else {
+            Err(c.err(format!("{key}: index {v} is out of range (0..{n})")))
+        }
+    };
+    if v5 {
+        let mut section = |want: &str, n: usize| -> Result<Vec<f64>> {
+            let l = c
+                .line()?
+                .ok_or_else(|| c.err(format!("truncated: {key} has no {want}")))?;
+            let g: Vec<&str> = l.split_whitespace().collect();
+            if !g[0].eq_ignore_ascii_case(want) {
+                return Err(c.err(format!("{key}: {want} expected, found {:?}", g[0])));
+            }
+            let ty = g.get(1).copied().unwrap_or("vtktypeint64");
+            c.values(n, ty, &format!("{key} {want}"))
+        };
+        let offsets = section("OFFSETS", a)?;
+        let conn = section("CONNECTIVITY", b)?;
+        let mut cells = Vec::with_capacity(a.saturating_sub(1));
+        for w in offsets.windows(2) {
+            let (s, e) = (idx(c, w[0], b + 1)?, idx(c, w[1], b + 1)?);
+            if e < s {
+                return Err(c.err(format!("{key}: the offsets decrease")));
+            }
+            cells.push(
+                conn[s..e]
+                    .iter()
+                    .map(|&v| idx(c, v, points))
+                    .collect::<Result<_>>()?,
+            );
+        }
+        return Ok(cells);
+    }
+    let ints = c.values(b, "int", &key)?;
+    let mut cells = Vec::with_capacity(a);
+    let mut k = 0;
+    for _ in 0..a {
+        let m = idx(c, *ints.get(k).unwrap_or(&-1.0), b)?;
+        let ids = ints
+            .get(k + 1..k + 1 + m)
+            .ok_or_else(|| c.err(format!("{key}: fewer integers than announced")))?;
+        cells.push(
+            ids.iter()
+                .map(|&v| idx(c, v, points))
+                .collect::<Result<_>>()?,
+        );
+        k += 1 + m;
+    }
+    if k != b {
+        return Err(c.err(format!("{key}: {b} integers announced, the cells use {k}")));
+    }
+    Ok(cells)
+}
+
+/// Parses a legacy VTK file of any version from 2.0 to 5.1.
+fn parse_legacy(path: &Path, bytes: &[u8]) -> Result<Legacy> {
+    let mut c = Cursor {
+        path,
+        b: bytes,
+        pos: 0,
+        line: 0,
+        binary: false,
+    };
+    let h = c.raw_line()?.ok_or_else(|| c.err("empty file"))?;
+    let version = h
+        .strip_prefix("# vtk DataFile Version")
+        .ok_or_else(|| {
+            c.err("not a legacy VTK file (first line must start with '# vtk DataFile Version')")
+        })?
+        .trim();
+    let v5 = version
+        .split('.')
+        .next()
+        .and_then(|m| m.parse::<u32>().ok())
+        .unwrap_or(0)
+        >= 5;
+    c.raw_line()?.ok_or_else(|| c.err("truncated header"))?;
+    c.binary = match c.line()?.map(str::to_ascii_uppercase).as_deref() {
+        Some("ASCII") => false,
+        Some("BINARY") => true,
+        _ => return Err(c.err("the third line must be ASCII or BINARY")),
+    };
+    let mut out = Legacy::default();
+    // Point or cell attributes, and how many values each has.
+    let mut target: Option<(bool, usize)> = None;
+    while let Some(l) = c.line()? {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        let key = f[0].to_ascii_uppercase();
+        match key.as_str() {
+            "DATASET" => {
+                out.dataset = f.get(1).map(|s| s.to_ascii_uppercase()).unwrap_or_default();
+                if !matches!(out.dataset.as_str(), "POLYDATA" | "UNSTRUCTURED_GRID") {
+                    return Err(c.err(format!(
+                        "DATASET {}: POLYDATA and UNSTRUCTURED_GRID are read",
+                        out.dataset
+                    )));
+                }
+            }
+            "POINTS" => {
+                let n = count(&c, &f, 1, "point count")?;
+                let ty = f.get(2).copied().unwrap_or("float");
+                let v = c.values(3 * n, ty, "POINTS")?;
+                if v.iter().any(|x| !x.is_finite()) {
+                    return Err(c.err("a point coordinate is NaN or infinite"));
+                }
+                out.points = v.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+            }
+            "VERTICES" | "LINES" | "POLYGONS" | "TRIANGLE_STRIPS" | "CELLS" => {
+                let cells = read_cells(&mut c, &f, v5, out.points.len())?;
+                match key.as_str() {
+                    "LINES" => out.poly.lines.extend(cells),
+                    "POLYGONS" => out.poly.polygons.extend(cells),
+                    "TRIANGLE_STRIPS" => cells.iter().for_each(|s| out.poly.push_strip(s)),
+                    "CELLS" => out.cells = cells,
+                    _ => {}
+                }
+            }
+            "CELL_TYPES" => {
+                let n = count(&c, &f, 1, "count")?;
+                out.types = c
+                    .values(n, "int", "CELL_TYPES")?
+                    .into_iter()
+                    .map(|t| {
+                        if (0.0..=255.0).contains(&t) {
+                            t as u8
+                        } else {
+                            255
+                        }
+                    })
+                    .collect();
+            }
+            "POINT_DATA" | "CELL_DATA" => {
+                target = Some((key == "POINT_DATA", count(&c, &f, 1, "count")?));
+            }
+            "METADATA" => c.skip_metadata()?,
+            "FIELD" => {
+                let arrays = count(&c, &f, 2, "array count")?;
+                for _ in 0..arrays {
+                    let l = c
+                        .line()?
+                        .ok_or_else(|| c.err("truncated: FIELD is short"))?;
+                    let g: Vec<&str> = l.split_whitespace().collect();
+                    if g[0] == "NULL_ARRAY" {
+                        continue;
+                    }
+                    let comps = count(&c, &g, 1, "component count")?;
+                    let tuples = count(&c, &g, 2, "tuple count")?;
+                    let ty = g.get(3).copied().unwrap_or("float");
+                    c.values(comps.saturating_mul(tuples), ty, "FIELD")?;
+                    let next = c.pos;
+                    let line = c.line;
+                    match c.line()? {
+                        Some("METADATA") => c.skip_metadata()?,
+                        _ => (c.pos, c.line) = (next, line),
+                    }
+                }
+            }
+            "SCALARS"
+            | "VECTORS"
+            | "NORMALS"
+            | "TENSORS"
+            | "TENSORS6"
+            | "TEXTURE_COORDINATES"
+            | "COLOR_SCALARS"
+            | "LOOKUP_TABLE" => {
+                let (points, n) = target.unwrap_or((true, out.points.len()));
+                let name = f.get(1).copied().unwrap_or("");
+                let (width, ty) = match key.as_str() {
+                    "SCALARS" => {
+                        let comps = match f.get(3) {
+                            Some(s) => s
+                                .parse()
+                                .map_err(|_| c.err("SCALARS: a bad component count"))?,
+                            None => 1,
+                        };
+                        // Its LOOKUP_TABLE line, when there is one.
+                        let next = c.pos;
+                        let line = c.line;
+                        match c.line()? {
+                            Some(l) if l.to_ascii_uppercase().starts_with("LOOKUP_TABLE") => {}
+                            _ => (c.pos, c.line) = (next, line),
+                        }
+                        (comps, f.get(2).copied().unwrap_or("float"))
+                    }
+                    "VECTORS" | "NORMALS" => (3, f.get(2).copied().unwrap_or("float")),
+                    "TENSORS" => (9, f.get(2).copied().unwrap_or("float")),
+                    "TENSORS6" => (6, f.get(2).copied().unwrap_or("float")),
+                    "TEXTURE_COORDINATES" => (
+                        count(&c, &f, 2, "dimension")?,
+                        f.get(3).copied().unwrap_or("float"),
+                    ),
+                    "COLOR_SCALARS" => (
+                        count(&c, &f, 2, "component count")?,
+                        if c.binary { "unsigned_char" } else { "float" },
+                    ),
+                    _ => {
+                        // A lookup table: its size, four colour values each.
+                        let size = count(&c, &f, 2, "size")?;
+                        let ty = if c.binary { "unsigned_char" } else { "float" };
+                        c.values(4 * size, ty, "LOOKUP_TABLE")?;
+                        continue;
+                    }
+                };
+                let v = c.values(width.saturating_mul(n), ty, &format!("{key} {name}"))?;
+                if key == "SCALARS" && width == 1 && name.starts_with("set_") {
+                    let d = (name.to_string(), v);
+                    if points {
+                        out.point_sets.push(d);
+                    } else {
+                        out.cell_sets.push(d);
+                    }
+                }
+                let next = c.pos;
+                let line = c.line;
+                match c.line()? {
+                    Some("METADATA") => c.skip_metadata()?,
+                    _ => (c.pos, c.line) = (next, line),
+                }
+            }
+            _ => {
+                return Err(c.err(format!(
+                    "{:?} is not a legacy VTK keyword (or a section before it is longer than announced)",
+                    f[0]
+                )));
+            }
+        }
+    }
+    if out.dataset.is_empty() {
+        return Err(Error::parse(path, c.line, "no DATASET line"));
+    }
+    if out.points.is_empty() {
+        return Err(Error::parse(path, c.line, "no POINTS section"));
+    }
+    Ok(out)
+}
+
+/// Reads a legacy VTK POLYDATA file: its points, lines and polygons (triangle strips as
+/// triangles; vertices and attributes read past). An UNSTRUCTURED_GRID of vertices, lines,
+/// triangles, polygons and quadrilaterals (as meshio writes surfaces) is read as polydata.
 pub fn read_vtk_polydata(path: &Path) -> Result<VtkPolyData> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     parse_vtk_polydata(path, &bytes)
@@ -69,171 +414,36 @@ pub fn read_vtk_polydata(path: &Path) -> Result<VtkPolyData> {
 
 /// [`read_vtk_polydata`] of a file's bytes (`path` only names the file in messages): no file is read.
 pub fn parse_vtk_polydata(path: &Path, bytes: &[u8]) -> Result<VtkPolyData> {
-    let mut c = Cursor {
-        b: bytes,
-        pos: 0,
-        line: 0,
-    };
-    let err = |c: &Cursor, m: &str| Error::parse(path, c.line, m.to_string());
-    let h = c.next_line().ok_or_else(|| err(&c, "empty file"))?;
-    if !h.starts_with("# vtk DataFile") {
-        return Err(err(
-            &c,
-            "not a legacy VTK file (first line must start with '# vtk DataFile')",
-        ));
+    let l = parse_legacy(path, bytes)?;
+    if l.dataset == "POLYDATA" {
+        return Ok(VtkPolyData {
+            points: l.points,
+            ..l.poly
+        });
     }
-    c.next_line().ok_or_else(|| err(&c, "truncated header"))?;
-    let fmt = c
-        .next_line()
-        .ok_or_else(|| err(&c, "truncated header"))?
-        .to_uppercase();
-    let binary = match fmt.as_str() {
-        "ASCII" => false,
-        "BINARY" => true,
-        _ => return Err(err(&c, "third line must be ASCII or BINARY")),
+    // An unstructured grid of surface cells (meshio writes every .vtk so).
+    let mut poly = VtkPolyData {
+        points: l.points,
+        ..Default::default()
     };
-    let ds = c.next_line().ok_or_else(|| err(&c, "truncated header"))?;
-    if !ds.to_uppercase().starts_with("DATASET POLYDATA") {
-        return Err(err(
-            &c,
-            &format!("{ds:?}: only DATASET POLYDATA is read here"),
-        ));
-    }
-    let mut out = VtkPolyData {
-        points: Vec::new(),
-        lines: Vec::new(),
-        polygons: Vec::new(),
-    };
-    while let Some(l) = c.next_line() {
-        let f: Vec<&str> = l.split_whitespace().collect();
-        let key = f[0].to_uppercase();
-        match key.as_str() {
-            "POINTS" => {
-                let n: usize = f
-                    .get(1)
-                    .and_then(|s| s.parse().ok())
-                    .filter(|&n| n <= MAX_COUNT)
-                    .ok_or_else(|| err(&c, "bad POINTS count"))?;
-                let ty = f.get(2).map(|s| s.to_lowercase()).unwrap_or_default();
-                let size = match ty.as_str() {
-                    "float" => 4,
-                    "double" => 8,
-                    _ => {
-                        return Err(err(
-                            &c,
-                            &format!("POINTS type {ty:?}: float or double expected"),
-                        ));
-                    }
-                };
-                let vals: Vec<f64> = if binary {
-                    let raw = c.take(n * 3 * size).ok_or_else(|| {
-                        err(
-                            &c,
-                            &format!(
-                                "truncated: POINTS announces {n} points but the file ends before"
-                            ),
-                        )
-                    })?;
-                    raw.chunks_exact(size)
-                        .map(|ch| {
-                            if size == 4 {
-                                f32::from_be_bytes([ch[0], ch[1], ch[2], ch[3]]) as f64
-                            } else {
-                                f64::from_be_bytes(ch.try_into().unwrap_or([0; 8]))
-                            }
-                        })
-                        .collect()
-                } else {
-                    let line = c.line;
-                    let toks = c.tokens(n * 3).ok_or_else(|| {
-                        err(&c, &format!("truncated: POINTS announces {n} points"))
-                    })?;
-                    toks.iter()
-                        .map(|t| parse_f64(path, line, t))
-                        .collect::<Result<_>>()?
-                };
-                if vals.iter().any(|v| !v.is_finite()) {
-                    return Err(err(&c, "a point coordinate is NaN or infinite"));
-                }
-                out.points = vals.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
-            }
-            "LINES" | "POLYGONS" | "VERTICES" | "TRIANGLE_STRIPS" => {
-                if f.get(1).map(|s| s.to_uppercase()) == Some("OFFSETS".into()) {
-                    return Err(err(
-                        &c,
-                        "VTK 5.1 cell arrays (OFFSETS/CONNECTIVITY) are not supported; save as legacy 4.2",
-                    ));
-                }
-                let n: usize = f
-                    .get(1)
-                    .and_then(|s| s.parse().ok())
-                    .filter(|&n| n <= MAX_COUNT)
-                    .ok_or_else(|| err(&c, "bad cell count"))?;
-                let size: usize = f
-                    .get(2)
-                    .and_then(|s| s.parse().ok())
-                    .filter(|&n| n <= MAX_COUNT)
-                    .ok_or_else(|| err(&c, "bad cell size"))?;
-                let ints: Vec<i64> = if binary {
-                    let raw = c.take(size * 4).ok_or_else(|| {
-                        err(&c, &format!("truncated: {key} announces {size} integers"))
-                    })?;
-                    raw.chunks_exact(4)
-                        .map(|ch| i32::from_be_bytes([ch[0], ch[1], ch[2], ch[3]]) as i64)
-                        .collect()
-                } else {
-                    let toks = c.tokens(size).ok_or_else(|| {
-                        err(&c, &format!("truncated: {key} announces {size} integers"))
-                    })?;
-                    toks.iter()
-                        .map(|t| {
-                            t.parse::<i64>()
-                                .map_err(|_| err(&c, &format!("{t:?} is not an integer")))
-                        })
-                        .collect::<Result<_>>()?
-                };
-                let mut cells = Vec::with_capacity(n);
-                let mut k = 0;
-                for _ in 0..n {
-                    let m = *ints
-                        .get(k)
-                        .ok_or_else(|| err(&c, &format!("{key}: fewer integers than announced")))?;
-                    let m = usize::try_from(m).map_err(|_| err(&c, "negative cell size"))?;
-                    let ids = ints
-                        .get(k + 1..k + 1 + m)
-                        .ok_or_else(|| err(&c, &format!("{key}: fewer integers than announced")))?;
-                    let ids: Vec<usize> = ids
-                        .iter()
-                        .map(|&i| {
-                            usize::try_from(i)
-                                .ok()
-                                .filter(|&i| i < out.points.len())
-                                .ok_or_else(|| {
-                                    err(&c, &format!("{key}: point index {i} out of range"))
-                                })
-                        })
-                        .collect::<Result<_>>()?;
-                    cells.push(ids);
-                    k += 1 + m;
-                }
-                match key.as_str() {
-                    "LINES" => out.lines = cells,
-                    "POLYGONS" => out.polygons = cells,
-                    _ => {}
-                }
-            }
+    for (cell, &t) in l.cells.iter().zip(&l.types) {
+        match t {
+            1 | 2 => {}
+            3 | 4 => poly.lines.push(cell.clone()),
+            5 | 7 | 9 => poly.polygons.push(cell.clone()),
+            6 => poly.push_strip(cell),
             _ => {
-                // POINT_DATA, CELL_DATA, FIELD ... : nothing the shape needs.
-                if binary {
-                    break;
-                }
+                return Err(Error::parse(
+                    path,
+                    0,
+                    format!(
+                        "an UNSTRUCTURED_GRID with cells of VTK type {t}: a shape needs polygons or lines (a volume mesh is read as a mesh)"
+                    ),
+                ));
             }
         }
     }
-    if out.points.is_empty() {
-        return Err(Error::parse(path, c.line, "no POINTS section"));
-    }
-    Ok(out)
+    Ok(poly)
 }
 
 /// Reads a 2D outline from a legacy VTK POLYDATA file with LINES. Points are reordered along
@@ -246,279 +456,37 @@ pub fn read_vtk_outline(path: &Path) -> Result<Shape<2>> {
 
 /// [`read_vtk_outline`] of a file's bytes (`path` only names the file in messages).
 pub fn parse_vtk_outline(path: &Path, bytes: &[u8]) -> Result<Shape<2>> {
-    let vtk = parse_vtk_polydata(path, bytes)?;
-    let z0 = vtk.points[0][2];
-    if vtk
-        .points
-        .iter()
-        .any(|p| (p[2] - z0).abs() > 1e-9 * (1.0 + z0.abs()))
-    {
-        return Err(Error::parse(
-            path,
-            0,
-            "the points have varying z: this is a 3D shape, a 2D outline was expected",
-        ));
-    }
-    let n = vtk.points.len();
-    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n];
-    let mut nseg = 0;
-    for l in &vtk.lines {
-        for w in l.windows(2) {
-            if w[0] != w[1] {
-                adj[w[0]].push(w[1]);
-                adj[w[1]].push(w[0]);
-                nseg += 1;
-            }
-        }
-    }
-    if nseg == 0 {
-        return Err(Error::parse(
-            path,
-            0,
-            "no LINES: an outline needs line segments",
-        ));
-    }
-    if let Some(i) = adj.iter().position(|a| a.len() > 2) {
-        return Err(Error::parse(
-            path,
-            0,
-            format!(
-                "point {i} has {} neighbours: the lines branch; one chain or loop is expected",
-                adj[i].len()
-            ),
-        ));
-    }
-    let used: Vec<usize> = (0..n).filter(|&i| !adj[i].is_empty()).collect();
-    let start = used
-        .iter()
-        .copied()
-        .find(|&i| adj[i].len() == 1)
-        .unwrap_or(used[0]);
-    let closed = adj[start].len() == 2;
-    let mut order = vec![start];
-    let mut prev = usize::MAX;
-    let mut cur = start;
-    loop {
-        let next = adj[cur]
-            .iter()
-            .copied()
-            .find(|&j| j != prev && (order.len() < 2 || j != order[order.len() - 2]));
-        match next {
-            Some(j) if j != start => {
-                order.push(j);
-                prev = cur;
-                cur = j;
-            }
-            _ => break,
-        }
-        if order.len() > n {
-            break;
-        }
-    }
-    if order.len() != used.len() {
-        return Err(Error::parse(
-            path,
-            0,
-            format!(
-                "the lines form several pieces ({} of {} points in the first); one outline is expected",
-                order.len(),
-                used.len()
-            ),
-        ));
-    }
-    let pts = order
-        .iter()
-        .map(|&i| [vtk.points[i][0], vtk.points[i][1]])
-        .collect();
-    Ok(Shape::polyline(stem(path), pts, closed))
+    outline_from_polydata(path, &parse_vtk_polydata(path, bytes)?)
 }
 
-/// Reads a legacy VTK ASCII `UNSTRUCTURED_GRID` (one cell type), with `set_NAME` scalars as
-/// sets.
+/// Reads a legacy VTK UNSTRUCTURED_GRID mesh (ASCII or binary, 4.2 or 5.1): the cells of the
+/// highest dimension, of one kind, with `set_NAME` scalars as sets.
 pub fn read_vtk_unstructured(path: &Path) -> Result<FeMesh<3>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse_vtk_unstructured(path, &text)
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_vtk_unstructured(path, &bytes)
 }
 
-/// [`read_vtk_unstructured`] of a file's text (`path` only names the file in messages): no file is read.
-pub fn parse_vtk_unstructured(path: &Path, text: &str) -> Result<FeMesh<3>> {
-    let lines: Vec<&str> = text.lines().collect();
-    if !lines
-        .first()
-        .is_some_and(|l| l.starts_with("# vtk DataFile"))
-    {
-        return Err(Error::parse(path, 1, "not a legacy VTK file"));
-    }
-    if lines.get(2).map(|l| l.trim().to_ascii_uppercase()) != Some("ASCII".into()) {
+/// [`read_vtk_unstructured`] of a file's bytes (`path` only names the file in messages): no file is read.
+pub fn parse_vtk_unstructured(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
+    let l = parse_legacy(path, bytes)?;
+    if l.dataset != "UNSTRUCTURED_GRID" {
         return Err(Error::parse(
             path,
-            3,
-            "binary legacy VTK meshes are not read; use ASCII or VTU",
+            0,
+            format!(
+                "DATASET {}: an UNSTRUCTURED_GRID (a mesh) was expected",
+                l.dataset
+            ),
         ));
     }
-    if !text.contains("UNSTRUCTURED_GRID") {
-        return Err(Error::parse(path, 4, "not an UNSTRUCTURED_GRID"));
-    }
-    // Tokens with their line numbers.
-    let toks: Vec<(usize, &str)> = lines
-        .iter()
-        .enumerate()
-        .skip(3)
-        .flat_map(|(i, l)| l.split_whitespace().map(move |t| (i + 1, t)))
-        .collect();
-    let mut at = 0;
-    let find = |kw: &str, from: usize| {
-        toks[from..]
-            .iter()
-            .position(|t| t.1.eq_ignore_ascii_case(kw))
-            .map(|p| p + from)
-    };
-    let count = |i: usize| -> Result<usize> {
-        let (ln, t) = toks
-            .get(i)
-            .copied()
-            .ok_or_else(|| Error::parse(path, 0, "truncated"))?;
-        let n: usize = t
-            .parse()
-            .map_err(|_| Error::parse(path, ln, format!("{t:?} is not a count")))?;
-        if n > crate::formats::MAX_COUNT {
-            return Err(Error::parse(path, ln, format!("count {n} is out of range")));
-        }
-        Ok(n)
-    };
-    let p = find("POINTS", at).ok_or_else(|| Error::parse(path, 0, "no POINTS"))?;
-    let n = count(p + 1)?;
-    at = p + 3;
-    let vals = toks
-        .get(at..at + 3 * n)
-        .ok_or_else(|| Error::parse(path, 0, "POINTS is short (truncated?)"))?;
-    let mut nodes = Vec::with_capacity(n);
-    for c in vals.chunks(3) {
-        let v: Vec<f64> = c
-            .iter()
-            .map(|(ln, t)| {
-                t.parse::<f64>()
-                    .map_err(|_| Error::parse(path, *ln, format!("{t:?} is not a number")))
-            })
-            .collect::<Result<_>>()?;
-        nodes.push([v[0], v[1], v[2]]);
-    }
-    at += 3 * n;
-    let c = find("CELLS", at).ok_or_else(|| Error::parse(path, 0, "no CELLS"))?;
-    let ne = count(c + 1)?;
-    let size = count(c + 2)?;
-    let body = toks
-        .get(c + 3..c + 3 + size)
-        .ok_or_else(|| Error::parse(path, 0, "CELLS is short (truncated?)"))?;
-    let t =
-        find("CELL_TYPES", c + 3 + size).ok_or_else(|| Error::parse(path, 0, "no CELL_TYPES"))?;
-    let types = toks
-        .get(t + 2..t + 2 + ne)
-        .ok_or_else(|| Error::parse(path, 0, "CELL_TYPES is short"))?;
-    let kind = types
-        .first()
-        .and_then(|(_, s)| s.parse::<u8>().ok())
-        .and_then(ElementKind::from_vtk_type)
-        .ok_or_else(|| {
-            Error::parse(
-                path,
-                0,
-                "cell type: triangles, quads, tetrahedra or hexahedra",
-            )
-        })?;
-    if types
-        .iter()
-        .any(|(_, s)| s.parse::<u8>().ok() != Some(kind.vtk_type()))
-    {
-        return Err(Error::parse(path, 0, "one cell type per mesh"));
-    }
-    let mut conn = Vec::with_capacity(ne * kind.nodes());
-    let mut i = 0;
-    for _ in 0..ne {
-        let (ln, k) = body
-            .get(i)
-            .copied()
-            .ok_or_else(|| Error::parse(path, 0, "CELLS is short"))?;
-        if k.parse::<usize>().ok() != Some(kind.nodes()) {
-            return Err(Error::parse(
-                path,
-                ln,
-                format!("a cell of {k} nodes; {} expected", kind.nodes()),
-            ));
-        }
-        for (ln, v) in body
-            .get(i + 1..i + 1 + kind.nodes())
-            .ok_or_else(|| Error::parse(path, ln, "CELLS is short"))?
-        {
-            let v: usize = v
-                .parse()
-                .map_err(|_| Error::parse(path, *ln, "a bad node index"))?;
-            if v >= n {
-                return Err(Error::parse(
-                    path,
-                    *ln,
-                    format!("node index {v} of {n} nodes"),
-                ));
-            }
-            conn.push(v);
-        }
-        i += 1 + kind.nodes();
-    }
-    let mut sets = MeshSets::default();
-    let mut section = 0; // 1 point data, 2 cell data
-    let mut k = t + 2 + ne;
-    while k < toks.len() {
-        let w = toks[k].1.to_ascii_uppercase();
-        if w == "POINT_DATA" {
-            section = 1;
-            k += 2;
-            continue;
-        }
-        if w == "CELL_DATA" {
-            section = 2;
-            k += 2;
-            continue;
-        }
-        let len = if section == 1 { n } else { ne };
-        if w == "SCALARS" {
-            let name = toks.get(k + 1).map(|t| t.1).unwrap_or("");
-            let mut j = k + 3;
-            if toks.get(j).is_some_and(|t| t.1.parse::<usize>().is_ok()) {
-                j += 1;
-            }
-            if toks
-                .get(j)
-                .is_some_and(|t| t.1.eq_ignore_ascii_case("LOOKUP_TABLE"))
-            {
-                j += 2;
-            }
-            let v = toks
-                .get(j..j + len)
-                .ok_or_else(|| Error::parse(path, 0, format!("{name} is short")))?;
-            if let Some(set) = name.strip_prefix("set_") {
-                let members: Vec<usize> = (0..len).filter(|&q| v[q].1 != "0").collect();
-                if section == 1 {
-                    sets.node_sets.insert(set.to_string(), members);
-                } else {
-                    sets.element_sets.insert(set.to_string(), members);
-                }
-            }
-            k = j + len;
-            continue;
-        }
-        if w == "VECTORS" {
-            k += 3 + 3 * len;
-            continue;
-        }
-        k += 1;
-    }
-    check_mesh(path, &nodes, kind, &conn, &sets)?;
-    Ok(FeMesh {
-        nodes,
-        kind,
-        connectivity: conn,
-        sets,
-    })
+    mesh_from_cells(
+        path,
+        l.points,
+        &l.cells,
+        &l.types,
+        &l.point_sets,
+        &l.cell_sets,
+    )
 }
 
 /// Legacy VTK, ASCII.

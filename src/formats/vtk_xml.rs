@@ -1,337 +1,172 @@
 //! VTK XML: VTP (polydata: outlines and surfaces) and VTU (unstructured grids: FE meshes with
 //! their sets and quality) read and written.
 
+use super::vtk_cells::{DataArrays, VtkPolyData, mesh_from_cells, split_cells};
+use super::vtk_xml_read::{Document, Piece};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
+use crate::mesh::FeMesh;
 use crate::mesh::quality::mesh_quality;
-use crate::mesh::{ElementKind, FeMesh};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The numbers of the first `DataArray` inside `<section>` (named `name` when given).
-pub(crate) fn array(
-    path: &Path,
-    text: &str,
-    section: &str,
-    name: Option<&str>,
-) -> Result<Vec<f64>> {
-    let open = format!("<{section}");
-    let start = text
-        .find(&open)
-        .ok_or_else(|| Error::parse(path, 0, format!("no <{section}> section")))?;
-    let end = text[start..]
-        .find(&format!("</{section}>"))
-        .map(|e| start + e)
-        .ok_or_else(|| Error::parse(path, 0, format!("<{section}> is not closed (truncated?)")))?;
-    let body = &text[start..end];
-    let mut at = 0;
-    while let Some(p) = body[at..].find("<DataArray") {
-        let tag_start = at + p;
-        let tag_end = body[tag_start..]
-            .find('>')
-            .map(|e| tag_start + e)
-            .ok_or_else(|| Error::parse(path, 0, "a <DataArray> tag is not closed"))?;
-        let tag = &body[tag_start..tag_end];
-        let close = body[tag_end..]
-            .find("</DataArray>")
-            .map(|e| tag_end + e)
-            .ok_or_else(|| Error::parse(path, 0, "a <DataArray> is not closed (truncated?)"))?;
-        at = close;
-        if let Some(n) = name
-            && !tag.contains(&format!("Name=\"{n}\""))
-        {
-            continue;
-        }
-        if tag.contains("format=\"binary\"") {
-            return binary_values(path, text, section, tag, &body[tag_end + 1..close]);
-        }
-        if !tag.contains("format=\"ascii\"") {
-            return Err(Error::parse(
-                path,
-                0,
-                format!(
-                    "the {section} data are appended; ASCII and inline binary VTK XML are read"
-                ),
-            ));
-        }
-        return body[tag_end + 1..close]
-            .split_whitespace()
-            .map(|t| {
-                t.parse::<f64>().map_err(|_| {
-                    Error::parse(path, 0, format!("'{t}' in <{section}> is not a number"))
-                })
-            })
-            .collect();
-    }
-    Err(Error::parse(
-        path,
-        0,
-        format!(
-            "no DataArray{} in <{section}>",
-            name.map(|n| format!(" '{n}'")).unwrap_or_default()
-        ),
-    ))
-}
-
-/// The values of an inline binary `DataArray` (base64 of a byte-count header, `UInt32` or
-/// `UInt64` per the file's `header_type`, then the little-endian values; uncompressed).
-pub(crate) fn binary_values(
-    path: &Path,
-    text: &str,
-    section: &str,
-    tag: &str,
-    content: &str,
-) -> Result<Vec<f64>> {
-    use base64::Engine as _;
-    let bad = |m: String| Error::parse(path, 0, format!("<{section}>: {m}"));
-    if text.contains("compressor=") {
-        return Err(bad("compressed data are not read; save uncompressed".into()));
-    }
-    if text.contains("byte_order=\"BigEndian\"") {
-        return Err(bad("big-endian binary data are not read".into()));
-    }
-    let clean: String = content.chars().filter(|c| !c.is_whitespace()).collect();
-    let raw = base64::engine::general_purpose::STANDARD
-        .decode(clean.as_bytes())
-        .map_err(|e| bad(format!("bad base64 ({e})")))?;
-    let header = if text.contains("header_type=\"UInt64\"") {
-        8
-    } else {
-        4
-    };
-    if raw.len() < header {
-        return Err(bad("a binary array is truncated".into()));
-    }
-    let n = if header == 8 {
-        u64::from_le_bytes(raw[..8].try_into().unwrap_or([0; 8])) as usize
-    } else {
-        u32::from_le_bytes(raw[..4].try_into().unwrap_or([0; 4])) as usize
-    };
-    let data = raw.get(header..header.saturating_add(n)).ok_or_else(|| {
-        bad(format!(
-            "a binary array announces {n} bytes but holds {}",
-            raw.len() - header
-        ))
-    })?;
-    let ty = tag
-        .split("type=\"")
-        .nth(1)
-        .and_then(|t| t.split('"').next())
-        .unwrap_or("");
-    let width = match ty {
-        "Float64" | "Int64" | "UInt64" => 8,
-        "Float32" | "Int32" | "UInt32" => 4,
-        "Int16" | "UInt16" => 2,
-        "Int8" | "UInt8" => 1,
-        _ => return Err(bad(format!("data type {ty:?} is not read"))),
-    };
-    if data.len() % width != 0 {
-        return Err(bad(
-            "a binary array's size is not a whole number of values".into()
-        ));
-    }
-    Ok(data
-        .chunks_exact(width)
-        .map(|c| match ty {
-            "Float64" => f64::from_le_bytes(c.try_into().unwrap_or([0; 8])),
-            "Int64" => i64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f64,
-            "UInt64" => u64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f64,
-            "Float32" => f32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as f64,
-            "Int32" => i32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as f64,
-            "UInt32" => u32::from_le_bytes(c.try_into().unwrap_or([0; 4])) as f64,
-            "Int16" => i16::from_le_bytes(c.try_into().unwrap_or([0; 2])) as f64,
-            "UInt16" => u16::from_le_bytes(c.try_into().unwrap_or([0; 2])) as f64,
-            "Int8" => c[0] as i8 as f64,
-            _ => c[0] as f64,
-        })
-        .collect())
-}
-
-pub(crate) fn points(path: &Path, text: &str) -> Result<Vec<Point<3>>> {
-    let v = array(path, text, "Points", None)?;
-    if v.len() % 3 != 0 {
-        return Err(Error::parse(
-            path,
-            0,
-            "the point coordinates are not triples",
-        ));
-    }
-    Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
-}
-
-pub(crate) fn index(path: &Path, v: f64, n: usize, what: &str) -> Result<usize> {
-    if v >= 0.0 && v.fract() == 0.0 && (v as usize) < n {
-        Ok(v as usize)
-    } else {
-        Err(Error::parse(
-            path,
-            0,
-            format!("{what} {v} is out of range (0..{n})"),
-        ))
-    }
-}
-
-/// Reads the points and polygons (or, without polygons, the lines) of a VTK XML PolyData
-/// file (ASCII arrays).
-pub fn read_vtp(path: &Path) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse_vtp(path, &text)
-}
-
-/// [`read_vtp`] of a file's text (`path` only names the file in messages): no file is read.
-pub fn parse_vtp(path: &Path, text: &str) -> Result<(Vec<Point<3>>, Vec<Vec<usize>>)> {
-    if !text.contains("type=\"PolyData\"") {
-        return Err(Error::parse(path, 1, "not a VTK XML PolyData file"));
-    }
-    let pts = points(path, text)?;
-    // Surfaces have Polys; outlines (as atlasmesh writes them) Lines.
-    let cells = if text.contains("<Polys") {
-        "Polys"
-    } else {
-        "Lines"
-    };
-    let conn = array(path, text, cells, Some("connectivity"))?;
-    let offs = array(path, text, cells, Some("offsets"))?;
-    let mut polys = Vec::with_capacity(offs.len());
-    let mut prev = 0usize;
-    for &o in &offs {
-        let o = index(path, o, conn.len() + 1, "offset")?;
-        if o < prev {
-            return Err(Error::parse(path, 0, "the polygon offsets decrease"));
-        }
-        let poly = conn[prev..o]
-            .iter()
-            .map(|&v| index(path, v, pts.len(), "vertex index"))
-            .collect::<Result<Vec<_>>>()?;
-        polys.push(poly);
-        prev = o;
-    }
-    Ok((pts, polys))
-}
-
-/// Reads an FE mesh from a VTK XML UnstructuredGrid file (ASCII arrays; one cell type of
-/// VTK's 5, 9, 10 or 12: triangles, quadrilaterals, tetrahedra, hexahedra, in VTK's node
-/// order). Point and cell data `set_NAME` (0/1, as [`crate::formats::write_vtu`] writes them)
-/// are read back as node and element sets.
-pub fn read_vtu(path: &Path) -> Result<FeMesh<3>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse_vtu(path, &text)
-}
-
-/// [`read_vtu`] of a file's text (`path` only names the file in messages): no file is read.
-pub fn parse_vtu(path: &Path, text: &str) -> Result<FeMesh<3>> {
-    if !text.contains("type=\"UnstructuredGrid\"") {
-        return Err(Error::parse(path, 1, "not a VTK XML UnstructuredGrid file"));
-    }
-    let nodes = points(path, text)?;
-    let conn = array(path, text, "Cells", Some("connectivity"))?;
-    let offs = array(path, text, "Cells", Some("offsets"))?;
-    let types = array(path, text, "Cells", Some("types"))?;
-    if types.len() != offs.len() {
-        return Err(Error::parse(
-            path,
-            0,
-            "cell types and offsets differ in number",
-        ));
-    }
-    let kind = types
-        .first()
-        .and_then(|&t| ElementKind::from_vtk_type(t as u8))
+/// The values of the array `name` (the first array when `None`) of section `tag` in `piece`.
+fn array(doc: &Document, piece: &Piece, tag: &str, name: Option<&str>) -> Result<Vec<f64>> {
+    let path = doc.path();
+    let s = piece
+        .section(tag)
+        .ok_or_else(|| Error::parse(path, 0, format!("no <{tag}> section")))?;
+    let a = s
+        .arrays
+        .iter()
+        .find(|a| name.is_none_or(|n| a.name == n))
         .ok_or_else(|| {
             Error::parse(
                 path,
                 0,
                 format!(
-                    "cell type {:?}: only triangles (5), quadrilaterals (9), tetrahedra (10) and hexahedra (12) are read",
-                    types.first()
+                    "no DataArray{} in <{tag}>",
+                    name.map(|n| format!(" '{n}'")).unwrap_or_default()
                 ),
             )
         })?;
-    let k = kind.nodes();
-    let mut connectivity = Vec::with_capacity(conn.len());
-    let mut prev = 0usize;
-    for (e, (&o, &t)) in offs.iter().zip(&types).enumerate() {
-        if t != kind.vtk_type() as f64 {
-            return Err(Error::parse(
-                path,
-                0,
-                format!(
-                    "cell {e} has VTK type {t} but cell 0 has {}; one element type per mesh",
-                    kind.vtk_type()
-                ),
-            ));
-        }
-        let o = index(path, o, conn.len() + 1, "offset")?;
-        if o != prev + k {
-            return Err(Error::parse(
-                path,
-                0,
-                format!("cell {e} does not have {k} nodes"),
-            ));
-        }
-        for &v in &conn[prev..o] {
-            connectivity.push(index(path, v, nodes.len(), "node index")?);
-        }
-        prev = o;
-    }
-    if connectivity.is_empty() {
-        return Err(Error::parse(path, 0, "the mesh has no cells"));
-    }
-    if nodes.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+    doc.values(a, tag)
+}
+
+/// The points of a piece (checked against its `NumberOfPoints`, finite).
+fn points(doc: &Document, piece: &Piece) -> Result<Vec<Point<3>>> {
+    let path = doc.path();
+    let v = array(doc, piece, "Points", None)?;
+    if v.len() != 3 * piece.points {
         return Err(Error::parse(
             path,
             0,
-            "a node has a NaN or infinite coordinate",
+            format!(
+                "<Points> holds {} coordinates for NumberOfPoints=\"{}\" (truncated?)",
+                v.len(),
+                piece.points
+            ),
         ));
     }
-    let mut sets = crate::mesh::MeshSets::default();
-    for (section, n, target) in [
-        ("PointData", nodes.len(), 0),
-        ("CellData", connectivity.len() / k, 1),
-    ] {
-        let Some(body) = section_body(text, section) else {
-            continue;
-        };
-        for name in set_array_names(body) {
-            let v = array(path, text, section, Some(&format!("set_{name}")))?;
-            if v.len() != n {
-                return Err(Error::parse(
-                    path,
-                    0,
-                    format!("set_{name} has {} values, {n} expected", v.len()),
-                ));
-            }
-            let members: Vec<usize> = (0..n).filter(|&i| v[i] != 0.0).collect();
-            if target == 0 {
-                sets.node_sets.insert(name, members);
-            } else {
-                sets.element_sets.insert(name, members);
-            }
-        }
+    if v.iter().any(|c| !c.is_finite()) {
+        return Err(Error::parse(
+            path,
+            0,
+            "a point has a NaN or infinite coordinate",
+        ));
     }
-    Ok(FeMesh {
-        nodes,
-        kind,
-        connectivity,
-        sets,
-    })
+    Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
-/// The text between `<section` and `</section>`.
-pub(crate) fn section_body<'a>(text: &'a str, section: &str) -> Option<&'a str> {
-    let a = text.find(&format!("<{section}"))?;
-    let b = text[a..].find(&format!("</{section}>"))? + a;
-    Some(&text[a..b])
+/// The cells of section `tag` (`connectivity` and `offsets`), empty when the piece has none.
+fn cells(doc: &Document, piece: &Piece, tag: &str, points: usize) -> Result<Vec<Vec<usize>>> {
+    if piece.section(tag).is_none_or(|s| s.arrays.is_empty()) {
+        return Ok(Vec::new());
+    }
+    let conn = array(doc, piece, tag, Some("connectivity"))?;
+    let offs = array(doc, piece, tag, Some("offsets"))?;
+    split_cells(doc.path(), &conn, &offs, points)
 }
 
-/// Names `X` of the `DataArray`s named `set_X` in `body`.
-pub(crate) fn set_array_names(body: &str) -> Vec<String> {
-    body.match_indices("Name=\"set_")
-        .filter_map(|(i, m)| {
-            let rest = &body[i + m.len()..];
-            rest.find('"').map(|j| rest[..j].to_string())
-        })
+/// The data arrays of section `tag` (`PointData`, `CellData`) whose names start with `prefix`.
+fn data(doc: &Document, piece: &Piece, tag: &str, prefix: &str) -> Result<DataArrays> {
+    let Some(s) = piece.section(tag) else {
+        return Ok(Vec::new());
+    };
+    s.arrays
+        .iter()
+        .filter(|a| a.name.starts_with(prefix))
+        .map(|a| Ok((a.name.clone(), doc.values(a, tag)?)))
         .collect()
+}
+
+/// Reads the points, polygons and lines of a VTK XML PolyData file (`.vtp`) as VTK, ParaView,
+/// PyVista and meshio write it: ASCII, base64 or appended raw data, compressed with zlib or
+/// LZ4 or not (see [`super::vtk_xml_read`]). Triangle strips become triangles; vertices are
+/// dropped; several pieces are joined.
+pub fn read_vtp(path: &Path) -> Result<VtkPolyData> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_vtp(path, &bytes)
+}
+
+/// [`read_vtp`] of a file's bytes (`path` only names the file in messages): no file is read.
+pub fn parse_vtp(path: &Path, bytes: &[u8]) -> Result<VtkPolyData> {
+    let doc = Document::parse(path, bytes)?;
+    if doc.kind != "PolyData" {
+        return Err(Error::parse(
+            path,
+            1,
+            format!("a VTK XML {:?} file, not PolyData", doc.kind),
+        ));
+    }
+    let mut out = VtkPolyData::default();
+    for piece in &doc.pieces {
+        let base = out.points.len();
+        let pts = points(&doc, piece)?;
+        let shift = |c: Vec<usize>| c.into_iter().map(|i| i + base).collect::<Vec<_>>();
+        for p in cells(&doc, piece, "Polys", pts.len())? {
+            out.polygons.push(shift(p));
+        }
+        for s in cells(&doc, piece, "Strips", pts.len())? {
+            out.push_strip(&shift(s));
+        }
+        for l in cells(&doc, piece, "Lines", pts.len())? {
+            out.lines.push(shift(l));
+        }
+        out.points.extend(pts);
+    }
+    if out.points.is_empty() {
+        return Err(Error::parse(path, 0, "the file has no points"));
+    }
+    Ok(out)
+}
+
+/// Reads an FE mesh from a VTK XML UnstructuredGrid file (`.vtu`), encoded as [`read_vtp`]
+/// reads: the cells of the highest dimension, of one kind (VTK's 5, 9, 10, 12, 24 or 25:
+/// triangles, quadrilaterals, tetrahedra, hexahedra and their quadratic forms, in VTK's node
+/// order), lower-dimensional cells dropped. Point and cell data `set_NAME` (0/1, as
+/// [`crate::formats::write_vtu`] writes them) are read back as node and element sets.
+pub fn read_vtu(path: &Path) -> Result<FeMesh<3>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_vtu(path, &bytes)
+}
+
+/// [`read_vtu`] of a file's bytes (`path` only names the file in messages): no file is read.
+pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
+    let doc = Document::parse(path, bytes)?;
+    if doc.kind != "UnstructuredGrid" {
+        return Err(Error::parse(
+            path,
+            1,
+            format!("a VTK XML {:?} file, not UnstructuredGrid", doc.kind),
+        ));
+    }
+    let piece = match doc.pieces.as_slice() {
+        [p] => p,
+        [] => return Err(Error::parse(path, 0, "the file has no <Piece>")),
+        _ => {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("{} pieces; a mesh in one piece is read", doc.pieces.len()),
+            ));
+        }
+    };
+    let nodes = points(&doc, piece)?;
+    let cells = cells(&doc, piece, "Cells", nodes.len())?;
+    let types: Vec<u8> = array(&doc, piece, "Cells", Some("types"))?
+        .into_iter()
+        .map(|t| {
+            if (0.0..=255.0).contains(&t) {
+                t as u8
+            } else {
+                255
+            }
+        })
+        .collect();
+    let point_data = data(&doc, piece, "PointData", "set_")?;
+    let cell_data = data(&doc, piece, "CellData", "set_")?;
+    mesh_from_cells(path, nodes, &cells, &types, &point_data, &cell_data)
 }
 
 pub(crate) fn points_xml<const D: usize>(out: &mut String, pts: &[Point<D>]) {

@@ -19,10 +19,10 @@ fn written_vtp_and_vtu_read_back() {
     };
     let p = dir.join("t.vtp");
     crate::formats::write_vtp(&p, &s).unwrap();
-    let (pts, polys) = read_vtp(&p).unwrap();
-    assert_eq!(pts, s.points);
+    let v = read_vtp(&p).unwrap();
+    assert_eq!(v.points, s.points);
     assert_eq!(
-        polys,
+        v.polygons,
         s.facets.iter().map(|f| f.to_vec()).collect::<Vec<_>>()
     );
     let cube = FeMesh {

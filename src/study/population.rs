@@ -344,19 +344,30 @@ pub fn load_surfaces(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
 }
 
 /// Whether `path` names a 3D surface file: by its extension (`.ply`, `.stl`, `.obj`), and
-/// for legacy `.vtk` files by their content (POLYGONS make a surface, LINES an outline).
-pub fn is_surface_file(path: &Path) -> bool {
-    match path
+/// for VTK files (`.vtk`, `.vtp`) by what they hold once parsed (polygons make a surface,
+/// lines an outline).
+///
+/// # Errors
+/// A VTK file that does not parse, or holds neither polygons nor lines.
+pub fn is_surface_file(path: &Path) -> Result<bool> {
+    let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
-        .as_deref()
-    {
-        Some("ply" | "stl" | "obj" | "vtp") => true,
-        Some("vtk") => {
-            crate::formats::read_vtk_polydata(path).is_ok_and(|v| !v.polygons.is_empty())
-        }
-        _ => false,
+        .unwrap_or_default();
+    let v = match ext.as_str() {
+        "ply" | "stl" | "obj" => return Ok(true),
+        "vtk" => crate::formats::read_vtk_polydata(path)?,
+        "vtp" => crate::formats::read_vtp(path)?,
+        _ => return Ok(false),
+    };
+    if v.polygons.is_empty() && v.lines.is_empty() {
+        return Err(Error::parse(
+            path,
+            0,
+            "neither polygons (a surface) nor lines (an outline)",
+        ));
     }
+    Ok(!v.polygons.is_empty())
 }
 
 /// Reads the outlines in `paths` and, with `resample`, resamples them: in correspondence when
@@ -415,15 +426,20 @@ pub fn load_population(paths: &[PathBuf], opts: &PopulationOptions) -> Result<Ve
 /// # Errors
 /// [`Error::Population`] when surfaces and outlines are mixed.
 pub fn inputs_are_surfaces(paths: &[PathBuf]) -> Result<bool> {
-    let n = paths.iter().filter(|p| is_surface_file(p)).count();
+    let surface = paths
+        .iter()
+        .map(|p| is_surface_file(p))
+        .collect::<Result<Vec<bool>>>()?;
+    let n = surface.iter().filter(|&&s| s).count();
     if n > 0 && n < paths.len() {
         let odd = paths
             .iter()
-            .find(|p| !is_surface_file(p))
-            .map(|p| p.display().to_string())
+            .zip(&surface)
+            .find(|(_, s)| !**s)
+            .map(|(p, _)| p.display().to_string())
             .unwrap_or_default();
         return Err(Error::Population(format!(
-            "2D and 3D shapes mixed: {odd} is an outline, other inputs are surfaces (.ply/.stl/.obj)"
+            "2D and 3D shapes mixed: {odd} is an outline, other inputs are surfaces"
         )));
     }
     Ok(n > 0)

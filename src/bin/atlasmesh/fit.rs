@@ -55,7 +55,7 @@ pub fn run(a: FitArgs, term: &Terminal) -> anyhow::Result<()> {
     };
     if atlasmesh::formats::atlas_dimension(&a.atlas)? == 3 {
         let load = |p: &Path| -> atlasmesh::Result<Vec<_>> {
-            if !study::is_surface_file(p) {
+            if !study::is_surface_file(p)? {
                 return Err(other(p, "a 2D outline", 3));
             }
             // Floating islands (under 1 % of the area) dropped, as in a population.
@@ -70,7 +70,7 @@ pub fn run(a: FitArgs, term: &Terminal) -> anyhow::Result<()> {
         fit::<3>(&a, &files, shard, &load, term)
     } else {
         let load = |p: &Path| -> atlasmesh::Result<Vec<_>> {
-            if study::is_surface_file(p) {
+            if study::is_surface_file(p)? {
                 return Err(other(p, "a 3D surface", 2));
             }
             let shapes = atlasmesh::formats::read_outlines(p, !a.open)?;

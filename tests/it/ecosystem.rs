@@ -1,0 +1,179 @@
+//! Files as the field's programs save them at their defaults (PyVista/VTK, meshio, Gmsh;
+//! `tests/ecosystem/write_files.py`), read by atlasmesh: the geometry equals what the writer
+//! was given, and what is refused says why.
+
+use crate::common::{python, temp_dir, tool};
+use std::path::Path;
+
+#[derive(serde::Deserialize)]
+struct Written {
+    file: String,
+    kind: String,
+    points: Vec<Vec<f64>>,
+    cells: Vec<Vec<usize>>,
+    refuse: Option<String>,
+}
+
+/// Point lists equal to `tol` of the largest coordinate.
+fn assert_points(file: &str, got: &[Vec<f64>], want: &[Vec<f64>], tol: f64) {
+    assert_eq!(got.len(), want.len(), "{file}: point count");
+    let scale = want
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        .max(1.0);
+    for (i, (g, w)) in got.iter().zip(want).enumerate() {
+        for (a, b) in g.iter().zip(w) {
+            assert!(
+                (a - b).abs() <= tol * scale,
+                "{file}: point {i} is {g:?}, written {w:?}"
+            );
+        }
+    }
+}
+
+/// Cells equal as sets of sorted node lists (a reader may orient faces, not change them).
+fn assert_cells(file: &str, got: &[Vec<usize>], want: &[Vec<usize>]) {
+    let key = |c: &[Vec<usize>]| {
+        let mut v: Vec<Vec<usize>> = c
+            .iter()
+            .map(|c| {
+                let mut c = c.clone();
+                c.sort_unstable();
+                c
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(key(got), key(want), "{file}: cells");
+}
+
+#[test]
+fn files_saved_by_pyvista_vtk_meshio_and_gmsh_read_as_written() {
+    let Some(py) = python() else { return };
+    if !tool("gmsh", "files written by Gmsh") {
+        return;
+    }
+    let dir = temp_dir("ecosystem");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ecosystem/write_files.py");
+    let o = std::process::Command::new(&py)
+        .arg(&script)
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "the writers ran: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let manifest: Vec<Written> =
+        serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).unwrap()).unwrap();
+    assert!(manifest.len() >= 35, "{} files", manifest.len());
+    for w in &manifest {
+        let path = dir.join(&w.file);
+        // float32 where the writer stores single precision (STL), VTK's legacy ASCII
+        // writer's 11 significant digits; else float64.
+        let tol = if w.file.ends_with(".stl") {
+            1e-6
+        } else if w.file.ends_with("_ascii.vtk") {
+            1e-9
+        } else {
+            1e-12
+        };
+        if let Some(why) = &w.refuse {
+            let e = match w.kind.as_str() {
+                "surface" => atlasmesh::formats::read_surface(&path).map(|_| ()),
+                _ => atlasmesh::formats::read_fe_mesh_raw(&path).map(|_| ()),
+            }
+            .expect_err(&w.file)
+            .to_string();
+            assert!(
+                e.contains(&w.file) && e.to_lowercase().contains(&why.to_lowercase()),
+                "{}: refused saying why: {e}",
+                w.file
+            );
+            continue;
+        }
+        match w.kind.as_str() {
+            "surface" | "surface_area" => {
+                assert!(
+                    atlasmesh::study::is_surface_file(&path).unwrap(),
+                    "{} is a surface",
+                    w.file
+                );
+                let s = atlasmesh::formats::read_surface(&path)
+                    .unwrap_or_else(|e| panic!("{}: {e}", w.file));
+                let mut got: Vec<Vec<f64>> = s.points.iter().map(|p| p.to_vec()).collect();
+                let facets: Vec<Vec<usize>> = s.facets.iter().map(|f| f.to_vec()).collect();
+                if w.file.ends_with(".stl") {
+                    // STL stores triangles, not shared vertices: welded, in another order.
+                    let mut want = w.points.clone();
+                    let order = |a: &Vec<f64>, b: &Vec<f64>| a.partial_cmp(b).unwrap();
+                    want.sort_by(order);
+                    got.sort_by(order);
+                    assert_points(&w.file, &got, &want, tol);
+                    assert_eq!(facets.len(), w.cells.len(), "{}", w.file);
+                    continue;
+                }
+                assert_points(&w.file, &got, &w.points, tol);
+                if w.kind == "surface" {
+                    assert_cells(&w.file, &facets, &w.cells);
+                } else {
+                    // Strips: other triangles, the same surface (its area).
+                    let area = |f: &[Vec<usize>]| -> f64 {
+                        f.iter()
+                            .map(|t| {
+                                let p = |i: usize| w.points[t[i]].clone();
+                                let (a, b, c) = (p(0), p(1), p(2));
+                                let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                                let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+                                let n = [
+                                    u[1] * v[2] - u[2] * v[1],
+                                    u[2] * v[0] - u[0] * v[2],
+                                    u[0] * v[1] - u[1] * v[0],
+                                ];
+                                0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+                            })
+                            .sum()
+                    };
+                    let (a, b) = (area(&facets), area(&w.cells));
+                    assert!((a - b).abs() < 1e-9 * b, "{}: area {a} vs {b}", w.file);
+                }
+            }
+            "outline" => {
+                assert!(!atlasmesh::study::is_surface_file(&path).unwrap());
+                let s = atlasmesh::formats::read_outlines(&path, true)
+                    .unwrap_or_else(|e| panic!("{}: {e}", w.file));
+                assert_eq!(s.len(), 1);
+                assert!(s[0].is_closed(), "{}: closed", w.file);
+                let got: Vec<Vec<f64>> = s[0].points.iter().map(|p| p.to_vec()).collect();
+                assert_points(&w.file, &got, &w.points, tol);
+            }
+            _ => {
+                let m = atlasmesh::formats::read_fe_mesh_raw(&path)
+                    .unwrap_or_else(|e| panic!("{}: {e}", w.file));
+                let got: Vec<Vec<f64>> = m.nodes.iter().map(|p| p.to_vec()).collect();
+                assert_points(&w.file, &got, &w.points, tol);
+                let cells: Vec<Vec<usize>> = (0..m.num_elements())
+                    .map(|e| m.element(e).to_vec())
+                    .collect();
+                if w.kind == "gmsh" {
+                    // Gmsh's own files: the same tetrahedra as meshio reads, and the
+                    // physical groups as sets.
+                    assert_cells(&w.file, &cells, &w.cells);
+                    assert!(
+                        m.sets.element_sets.contains_key("bone"),
+                        "{}: {:?}",
+                        w.file,
+                        m.sets.element_sets.keys()
+                    );
+                    assert!(m.sets.surfaces.contains_key("base"), "{}", w.file);
+                } else {
+                    assert_eq!(cells, w.cells, "{}: cells in order", w.file);
+                }
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

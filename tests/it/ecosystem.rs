@@ -177,3 +177,64 @@ fn files_saved_by_pyvista_vtk_meshio_and_gmsh_read_as_written() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A femur saved by PyVista at its defaults (binary, zlib-compressed VTP) is fitted exactly
+/// as the same femur in the data's PLY: the same mesh, node for node.
+#[test]
+fn a_femur_saved_by_pyvista_fits_as_its_ply() {
+    let Some(data) = crate::common::data_dir("a_femur_saved_by_pyvista_fits_as_its_ply") else {
+        return;
+    };
+    let Some(py) = python() else { return };
+    let femurs = data.join("knee-distal-femur-synthetic-3d/femur");
+    let ply = |k: usize| femurs.join(format!("S{k:03}_Femur.ply"));
+    let dir = temp_dir("pyvista-femur");
+    let atlas = dir.join("atlas.safetensors");
+    let mut args: Vec<String> = vec!["build".into(), "--shapes".into()];
+    args.extend((2..=16).map(|k| ply(k).display().to_string()));
+    args.extend(
+        ["--modes", "5", "--out", &atlas.display().to_string()].map(String::from),
+    );
+    let o = crate::common::atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let subjects = dir.join("subjects");
+    std::fs::create_dir_all(&subjects).unwrap();
+    std::fs::copy(ply(1), subjects.join("S001_Femur.ply")).unwrap();
+    let vtp = subjects.join("S001_pyvista.vtp");
+    let o = std::process::Command::new(&py)
+        .args(["-c", "import sys, pyvista; pyvista.read(sys.argv[1]).save(sys.argv[2])"])
+        .arg(ply(1))
+        .arg(&vtp)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let head = std::fs::read(&vtp).unwrap();
+    assert!(
+        String::from_utf8_lossy(&head[..400.min(head.len())]).contains("vtkZLibDataCompressor"),
+        "PyVista's default VTP is compressed"
+    );
+    let out = dir.join("fit");
+    let o = crate::common::atlasmesh(&[
+        "fit",
+        "--atlas",
+        &atlas.display().to_string(),
+        "--subjects",
+        &subjects.display().to_string(),
+        "--out",
+        &out.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mesh = |name: &str| {
+        atlasmesh::formats::read_vtu(&out.join(name).join(format!("{name}_mesh.vtu"))).unwrap()
+    };
+    let (a, b) = (mesh("S001_Femur"), mesh("S001_pyvista"));
+    assert_eq!(a.connectivity, b.connectivity);
+    let worst = a
+        .nodes
+        .iter()
+        .zip(&b.nodes)
+        .map(|(p, q)| (0..3).map(|i| (p[i] - q[i]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-9, "the two meshes differ by {worst} mm");
+    std::fs::remove_dir_all(&dir).ok();
+}

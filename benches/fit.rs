@@ -19,6 +19,7 @@ fn hands() -> (Vec<Shape<2>>, bool) {
             &PopulationOptions {
                 closed: false,
                 resample: Some(2001),
+                ..Default::default()
             },
         )
         .expect("hands data");

@@ -106,8 +106,10 @@ pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<La
     }
 }
 
-/// Reads a population's landmarks from CSV: `shape,landmark,x,y[,z]` or
-/// `shape,landmark,index`. Per shape name, the landmarks ordered by their `landmark` column.
+/// Reads a population's landmarks from CSV, columns by name (others ignored): `shape`,
+/// `landmark` (or `point`, `id`), then either coordinates `x`, `y`[, `z`] or a point index,
+/// `index` (0-based) or `index1` (1-based, as R and Momocs number). Per shape name, the
+/// landmarks ordered by their `landmark` column.
 pub fn read_landmarks_csv<const D: usize>(
     path: &Path,
 ) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
@@ -120,57 +122,69 @@ pub fn parse_landmarks_csv<const D: usize>(
     path: &Path,
     text: &str,
 ) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
-    let mut lines = text.lines().enumerate();
-    let header = lines
-        .next()
-        .ok_or_else(|| Error::parse(path, 1, "empty file"))?
-        .1;
-    let cols = header.split(',').count();
-    let by_index = cols == 3;
-    if !(by_index || cols == 2 + D) {
-        return Err(Error::parse(
-            path,
-            1,
-            format!("expected a header shape,landmark,index or shape,landmark and {D} coordinates"),
-        ));
-    }
-    let mut rows: BTreeMap<String, Vec<(String, Landmark<D>)>> = BTreeMap::new();
-    for (i, l) in lines {
-        if l.trim().is_empty() {
-            continue;
-        }
-        let t: Vec<&str> = l.split(',').map(str::trim).collect();
-        if t.len() != cols {
+    let expected = "shape,landmark and x,y[,z], index (0-based) or index1 (1-based)";
+    let t = super::csv_table::Table::parse(path, text, &Default::default())?;
+    let shape = t.required(path, "shape", expected)?;
+    let id = t.required(path, "point", expected)?;
+    let index = match (t.column(path, "index")?, t.column(path, "index1")?) {
+        (Some(c), None) => Some((c, 0)),
+        (None, Some(c)) => Some((c, 1)),
+        (Some(_), Some(_)) => {
             return Err(Error::parse(
                 path,
-                i + 1,
-                format!("{} fields, {cols} expected", t.len()),
+                1,
+                "both index and index1 columns: give one (index is 0-based, index1 1-based)",
             ));
         }
-        let lm = if by_index {
-            Landmark::Index(t[2].parse().map_err(|_| {
-                Error::parse(path, i + 1, format!("'{}' is not a point index", t[2]))
-            })?)
+        (None, None) => None,
+    };
+    let axes = ["x", "y", "z"];
+    let mut coords = [0usize; D];
+    if index.is_none() {
+        for (d, c) in coords.iter_mut().enumerate() {
+            *c = t.required(path, axes[d], expected)?;
+        }
+    }
+    let mut rows: BTreeMap<String, Vec<(String, Landmark<D>)>> = BTreeMap::new();
+    for (ln, f) in &t.rows {
+        let ln = *ln;
+        let lm = if let Some((c, base)) = index {
+            let i: usize = f[c]
+                .parse()
+                .ok()
+                .filter(|&i: &usize| i >= base)
+                .ok_or_else(|| {
+                    Error::parse(
+                        path,
+                        ln,
+                        format!(
+                            "'{}' is not a point index ({}-based)",
+                            f[c],
+                            base
+                        ),
+                    )
+                })?;
+            Landmark::Index(i - base)
         } else {
             let mut p = [0.0; D];
             for d in 0..D {
-                p[d] = t[2 + d]
+                p[d] = f[coords[d]]
                     .parse::<f64>()
                     .ok()
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| {
                         Error::parse(
                             path,
-                            i + 1,
-                            format!("'{}' is not a finite number", t[2 + d]),
+                            ln,
+                            format!("'{}' is not a finite number", f[coords[d]]),
                         )
                     })?;
             }
             Landmark::At(p)
         };
-        rows.entry(t[0].to_string())
+        rows.entry(f[shape].to_string())
             .or_default()
-            .push((t[1].to_string(), lm));
+            .push((f[id].to_string(), lm));
     }
     Ok(rows
         .into_iter()

@@ -5,7 +5,8 @@
 //!
 //! | file | format |
 //! |---|---|
-//! | `outline`, `outline_csv`, `outline_text` | 2D outlines: the dispatch, long CSV tables, plain text |
+//! | `outline`, `outline_csv`, `outline_text` | 2D outlines: the dispatch, long CSV tables (and 3D point sets), plain text |
+//! | `csv_table` | CSV tables with columns by name |
 //! | `surface`, `ply`, `stl`, `obj` | 3D surfaces: the dispatch and checks, PLY, STL, OBJ |
 //! | `vtk_legacy` | legacy VTK: POLYDATA outlines and surfaces, UNSTRUCTURED_GRID meshes |
 //! | `vtk_xml` | VTK XML: VTP shapes, VTU meshes |
@@ -21,6 +22,7 @@
 pub mod abaqus;
 pub mod atlas_file;
 mod atomic;
+pub mod csv_table;
 pub mod fe_mesh;
 pub mod febio;
 pub mod gmsh;
@@ -47,8 +49,9 @@ pub use fe_mesh::{
     MeshFormat, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh,
 };
 pub use gmsh::{parse_msh, read_msh};
-pub use outline::{parse_outlines, read_outlines};
-pub use outline_csv::{parse_long_csv, read_long_csv};
+pub use outline::{parse_outlines, parse_outlines_with, read_outlines, read_outlines_with};
+pub use csv_table::CsvColumns;
+pub use outline_csv::{parse_long_csv, parse_long_csv_with, parse_point_sets_csv, read_long_csv};
 pub use outline_text::{parse_text_outlines, read_text_outlines};
 pub use ply::write_ply;
 pub use stl::write_stl;

@@ -1,6 +1,7 @@
 //! Reading 2D outlines: the format by extension, and the checks every reader shares.
 
-use super::outline_csv::parse_long_csv;
+use super::csv_table::CsvColumns;
+use super::outline_csv::parse_long_csv_with;
 use super::outline_text::parse_text_outlines;
 use super::vtk_cells::outline_from_polydata;
 use super::vtk_legacy::parse_vtk_outline;
@@ -12,19 +13,34 @@ use std::path::Path;
 /// text).
 /// `closed` applies to CSV and text files; VTK files carry their own topology.
 pub fn read_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
+    read_outlines_with(path, closed, &CsvColumns::default())
+}
+
+/// [`read_outlines`] with the columns of a CSV file mapped by `columns`.
+pub fn read_outlines_with(path: &Path, closed: bool, columns: &CsvColumns) -> Result<Vec<Shape<2>>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_outlines(path, &bytes, closed)
+    parse_outlines_with(path, &bytes, closed, columns)
 }
 
 /// [`read_outlines`] of a file's bytes: the format from the extension of `path`, which only
 /// names the file in messages (no file is read).
 pub fn parse_outlines(path: &Path, bytes: &[u8], closed: bool) -> Result<Vec<Shape<2>>> {
+    parse_outlines_with(path, bytes, closed, &CsvColumns::default())
+}
+
+/// [`parse_outlines`] with the columns of a CSV file mapped by `columns`.
+pub fn parse_outlines_with(
+    path: &Path,
+    bytes: &[u8],
+    closed: bool,
+    columns: &CsvColumns,
+) -> Result<Vec<Shape<2>>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
     let shapes = match ext.as_str() {
-        "csv" => parse_long_csv(path, text_of(path, bytes)?, closed)?,
+        "csv" => parse_long_csv_with(path, text_of(path, bytes)?, closed, columns)?,
         "vtk" => vec![parse_vtk_outline(path, bytes)?],
         "vtp" => vec![outline_from_polydata(
             path,

@@ -1,14 +1,18 @@
-//! Outlines from a long CSV table (`shape,point,x,y`).
+//! Outlines and point sets from a long CSV table: one row per point, columns found by name
+//! (`shape`, `point`/`landmark`, `x`, `y`, `z`; others ignored; see [`super::csv_table`]).
 
 use super::atomic::MAX_COUNT;
-use super::outline::{parse_f64, read_text};
+use super::csv_table::{CsvColumns, Table};
+use super::outline::{parse_f64, read_text, stem};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
 use std::collections::HashMap;
 use std::path::Path;
 
-/// Long CSV: header `name,index,x,y`; rows grouped by name (first-appearance order), sorted by
-/// index, which must run 0..n-1 without gaps or repeats.
+/// Long CSV of outlines: a header naming `shape`, `point` (or `landmark`), `x`, `y` in any
+/// order among other columns; rows grouped by shape (first-appearance order), sorted by point
+/// index, which must run 0..n-1 without gaps or repeats. Without a `point` column the rows
+/// are in order; without a `shape` column the file holds one shape named after the file.
 pub fn read_long_csv(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
     let text = read_text(path)?;
     parse_long_csv(path, &text, closed)
@@ -16,60 +20,94 @@ pub fn read_long_csv(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
 
 /// [`read_long_csv`] of a file's text (`path` only names the file in messages): no file is read.
 pub fn parse_long_csv(path: &Path, text: &str, closed: bool) -> Result<Vec<Shape<2>>> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty());
-    let Some((_, header)) = lines.next() else {
-        return Err(Error::parse(
-            path,
-            1,
-            "empty file; expected a header like shape,point,x,y",
-        ));
+    parse_long_csv_with(path, text, closed, &CsvColumns::default())
+}
+
+/// [`parse_long_csv`] with the columns mapped by `columns`.
+pub fn parse_long_csv_with(
+    path: &Path,
+    text: &str,
+    closed: bool,
+    columns: &CsvColumns,
+) -> Result<Vec<Shape<2>>> {
+    Ok(point_table::<2>(path, text, columns)?
+        .into_iter()
+        .map(|(name, pts)| Shape::polyline(name, pts, closed))
+        .collect())
+}
+
+/// 3D point sets in correspondence from a long CSV (`shape`, `point`, `x`, `y`, `z`): shapes
+/// without facets, for what needs no surface.
+pub fn parse_point_sets_csv(path: &Path, text: &str, columns: &CsvColumns) -> Result<Vec<Shape<3>>> {
+    Ok(point_table::<3>(path, text, columns)?
+        .into_iter()
+        .map(|(name, points)| Shape {
+            name,
+            points,
+            facets: Vec::new(),
+            landmarks: Vec::new(),
+        })
+        .collect())
+}
+
+/// The shapes of a long table of points in dimension `D`.
+fn point_table<const D: usize>(
+    path: &Path,
+    text: &str,
+    columns: &CsvColumns,
+) -> Result<Vec<(String, Vec<Point<D>>)>> {
+    let expected = if D == 2 {
+        "shape,point,x,y"
+    } else {
+        "shape,point,x,y,z"
     };
-    let cols: Vec<String> = header.split(',').map(|c| c.trim().to_lowercase()).collect();
-    if cols.len() != 4
-        || cols[2] != "x"
-        || cols[3] != "y"
-        || !["point", "landmark", "index"].contains(&cols[1].as_str())
-    {
-        return Err(Error::parse(
-            path,
-            1,
-            format!("header {header:?}: expected shape,point,x,y (or shape,landmark,x,y)"),
-        ));
+    let t = Table::parse(path, text, columns)?;
+    let shape = t.column(path, "shape")?;
+    let point = t.column(path, "point")?;
+    let axes = ["x", "y", "z"];
+    let mut cols = [0usize; D];
+    for (d, c) in cols.iter_mut().enumerate() {
+        *c = t.required(path, axes[d], expected)?;
     }
+    let z = if D == 2 { t.column(path, "z")? } else { None };
     let mut order: Vec<String> = Vec::new();
-    let mut rows: HashMap<String, Vec<(usize, Point<2>, usize)>> = HashMap::new();
-    for (i, l) in lines {
-        let ln = i + 1;
-        let f: Vec<&str> = l.split(',').collect();
-        if f.len() != 4 {
+    let mut rows: HashMap<String, Vec<(usize, Point<D>, usize)>> = HashMap::new();
+    for (ln, f) in &t.rows {
+        let ln = *ln;
+        let name = shape.map_or_else(|| stem(path), |c| f[c].to_string());
+        let idx = match point {
+            Some(c) => {
+                let idx: usize = f[c].parse().map_err(|_| {
+                    Error::parse(
+                        path,
+                        ln,
+                        format!("point index {:?} is not a non-negative integer", f[c]),
+                    )
+                })?;
+                if idx > MAX_COUNT {
+                    return Err(Error::parse(
+                        path,
+                        ln,
+                        format!("point index {idx} is implausibly large"),
+                    ));
+                }
+                idx
+            }
+            None => rows.get(&name).map_or(0, Vec::len),
+        };
+        let mut p = [0.0; D];
+        for d in 0..D {
+            p[d] = parse_f64(path, ln, f[cols[d]])?;
+        }
+        if let Some(c) = z
+            && parse_f64(path, ln, f[c])? != 0.0
+        {
             return Err(Error::parse(
                 path,
                 ln,
-                format!("{} fields, 4 expected", f.len()),
+                "a point has a non-zero z: 3D points, where 2D outlines were expected",
             ));
         }
-        let name = f[0].trim().to_string();
-        let idx: usize = f[1].trim().parse().map_err(|_| {
-            Error::parse(
-                path,
-                ln,
-                format!(
-                    "point index {:?} is not a non-negative integer",
-                    f[1].trim()
-                ),
-            )
-        })?;
-        if idx > MAX_COUNT {
-            return Err(Error::parse(
-                path,
-                ln,
-                format!("point index {idx} is implausibly large"),
-            ));
-        }
-        let p = [parse_f64(path, ln, f[2])?, parse_f64(path, ln, f[3])?];
         if !rows.contains_key(&name) {
             order.push(name.clone());
         }
@@ -85,7 +123,7 @@ pub fn parse_long_csv(path: &Path, text: &str, closed: bool) -> Result<Vec<Shape
                     return Err(Error::parse(path, *ln, format!("shape {name}: point index {idx} where {k} was expected (indices must run 0..n-1 once each)")));
                 }
             }
-            Ok(Shape::polyline(name, r.into_iter().map(|x| x.1).collect(), closed))
+            Ok((name, r.into_iter().map(|x| x.1).collect()))
         })
         .collect()
 }

@@ -1,4 +1,5 @@
 use super::*;
+use std::path::Path;
 
 fn tmp(name: &str, content: &[u8]) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("atlasmesh-io-{}", std::process::id()));
@@ -54,4 +55,60 @@ fn csv_with_a_gap_in_indices_is_an_error() {
     );
     let e = read_long_csv(&p, false).unwrap_err().to_string();
     assert!(e.contains("gap.csv") && e.contains("index 4"), "{e}");
+}
+
+#[test]
+fn csv_columns_are_found_by_name_and_mapped() {
+    use crate::formats::csv_table::CsvColumns;
+    let p = Path::new("pop.csv");
+    // R's write.csv: quoted names, a row-number column, columns in another order.
+    let r = "\"\",\"y\",\"x\",\"specimen\",\"lm\",\"sex\"\n\"1\",2,1,\"A\",0,\"f\"\n\"2\",4,3,\"A\",1,\"f\"\n\"3\",6,5,\"A\",2,\"f\"\n";
+    let s = parse_long_csv(p, r, true).unwrap();
+    assert_eq!(s.len(), 1);
+    assert_eq!(s[0].name, "A");
+    assert_eq!(s[0].points, vec![[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]]);
+    // Other names, mapped.
+    let t = "Bone,Id,PX,PY\nB,1,0,0\nB,0,1,0\nB,2,0,1\n";
+    let e = parse_long_csv(p, t, true).unwrap_err().to_string();
+    assert!(e.contains("no x column") && e.contains("--columns"), "{e}");
+    let cols: CsvColumns = "shape=Bone,point=Id,x=PX,y=PY".parse().unwrap();
+    let s = parse_long_csv_with(p, t, true, &cols).unwrap();
+    assert_eq!(s[0].points, vec![[1.0, 0.0], [0.0, 0.0], [0.0, 1.0]]);
+    assert!("colour=c".parse::<CsvColumns>().unwrap_err().contains("roles"));
+    let e = parse_long_csv_with(p, "shape,x,y\nA,0,0\n", true, &cols)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no column \"bone\""), "{e}");
+    // A z column: zero in 2D is fine, else a 3D point set.
+    let z = "shape,point,x,y,z\nA,0,0,0,0\nA,1,1,0,0\nA,2,0,1,0\n";
+    assert_eq!(parse_long_csv(p, z, true).unwrap()[0].points.len(), 3);
+    let z3 = z.replace("A,2,0,1,0", "A,2,0,1,5");
+    let e = parse_long_csv(p, &z3, true).unwrap_err().to_string();
+    assert!(e.contains("3D points"), "{e}");
+    let sets = crate::formats::parse_point_sets_csv(p, &z3, &CsvColumns::default()).unwrap();
+    assert_eq!(sets[0].points[2], [0.0, 1.0, 5.0]);
+    assert!(sets[0].facets.is_empty());
+}
+
+#[test]
+fn landmark_csvs_say_their_index_base() {
+    use crate::formats::landmarks::{Landmark, parse_landmarks_csv};
+    let p = Path::new("lm.csv");
+    let zero = parse_landmarks_csv::<2>(p, "shape,landmark,index\nA,0,4\nA,1,7\n").unwrap();
+    let one = parse_landmarks_csv::<2>(p, "landmark,shape,index1,note\n0,A,5,x\n1,A,8,y\n").unwrap();
+    let idx = |m: &std::collections::BTreeMap<String, Vec<Landmark<2>>>| -> Vec<usize> {
+        m["A"]
+            .iter()
+            .map(|l| match l {
+                Landmark::Index(i) => *i,
+                Landmark::At(_) => usize::MAX,
+            })
+            .collect()
+    };
+    assert_eq!(idx(&zero), vec![4, 7]);
+    assert_eq!(idx(&one), idx(&zero));
+    let e = parse_landmarks_csv::<2>(p, "shape,landmark,index1\nA,0,0\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("1-based"), "{e}");
 }

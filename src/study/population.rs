@@ -10,12 +10,14 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// How to read a population of outlines.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct PopulationOptions {
     /// Outlines are closed (CSV and text inputs; VTK files carry their own topology).
     pub closed: bool,
     /// Resample every outline to this many points.
     pub resample: Option<usize>,
+    /// The columns of CSV inputs, where their names are not the usual ones.
+    pub columns: crate::formats::CsvColumns,
 }
 
 /// Reads outlines that need not correspond (any point counts), each resampled evenly by arc
@@ -26,7 +28,7 @@ pub fn load_outlines_raw(paths: &[PathBuf], opts: &PopulationOptions) -> Result<
     }
     let mut shapes = Vec::new();
     for p in paths {
-        for s in crate::formats::read_outlines(p, opts.closed)? {
+        for s in crate::formats::read_outlines_with(p, opts.closed, &opts.columns)? {
             s.validate()
                 .map_err(|e| Error::parse(p, 0, e.to_string()))?;
             let closed = s.is_closed();
@@ -380,7 +382,7 @@ pub fn load_population(paths: &[PathBuf], opts: &PopulationOptions) -> Result<Ve
     let mut shapes = Vec::new();
     let mut origin: Vec<PathBuf> = Vec::new();
     for p in paths {
-        let s = crate::formats::read_outlines(p, opts.closed)?;
+        let s = crate::formats::read_outlines_with(p, opts.closed, &opts.columns)?;
         origin.extend(std::iter::repeat_n(p.clone(), s.len()));
         shapes.extend(s);
     }

@@ -37,6 +37,7 @@ pub fn hands(
         &atlasmesh::study::PopulationOptions {
             closed: false,
             resample,
+            ..Default::default()
         },
     )
     .unwrap()

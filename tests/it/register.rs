@@ -137,6 +137,7 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
     let opts = PopulationOptions {
         closed: true,
         resample: None,
+        ..Default::default()
     };
     let meshes: Vec<_> = (0..12)
         .map(|k| dir.join(format!("aligned/mesh/hand-{k}.vtk")))
@@ -401,6 +402,7 @@ fn cells_without_landmarks_shape_model_measures() {
         &PopulationOptions {
             closed: true,
             resample: Some(200),
+            ..Default::default()
         },
     )
     .unwrap();

@@ -48,6 +48,10 @@ pub struct PopArgs {
     /// Outlines are closed (default).
     #[arg(long)]
     pub closed: bool,
+    /// Columns of CSV shape files whose names are not the usual ones (shape, point or
+    /// landmark, x, y), as ROLE=COLUMN pairs: `shape=specimen,point=lm,x=X,y=Y`.
+    #[arg(long, value_name = "MAP")]
+    pub columns: Option<atlasmesh::formats::CsvColumns>,
     /// Resample every outline to N points along a smooth curve through its points.
     #[arg(long, value_name = "N")]
     pub resample: Option<usize>,

@@ -23,6 +23,10 @@ pub struct FitArgs {
     /// Outlines in CSV/text files are open.
     #[arg(long)]
     open: bool,
+    /// Columns of CSV subject files whose names are not the usual ones (shape, point, x, y),
+    /// as ROLE=COLUMN pairs: `shape=specimen,x=X,y=Y`.
+    #[arg(long, value_name = "MAP")]
+    columns: Option<atlasmesh::formats::CsvColumns>,
     #[command(flatten)]
     run: RunArgs,
     /// Output folder.
@@ -73,7 +77,8 @@ pub fn run(a: FitArgs, term: &Terminal) -> anyhow::Result<()> {
             if study::is_surface_file(p)? {
                 return Err(other(p, "a 3D surface", 2));
             }
-            let shapes = atlasmesh::formats::read_outlines(p, !a.open)?;
+            let columns = a.columns.clone().unwrap_or_default();
+            let shapes = atlasmesh::formats::read_outlines_with(p, !a.open, &columns)?;
             for s in &shapes {
                 s.validate()
                     .map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;

@@ -95,6 +95,7 @@ pub fn outlines_and_params(
     let opts = PopulationOptions {
         closed: !pop.open,
         resample: pop.resample,
+        columns: pop.columns.clone().unwrap_or_default(),
     };
     let mut shapes = if pop.register {
         study::load_outlines_raw(&pop.shapes, &opts)?
@@ -133,6 +134,7 @@ fn template_file<const D: usize>(pop: &PopArgs, path: &Path) -> anyhow::Result<S
         let opts = PopulationOptions {
             closed: !pop.open,
             resample: pop.resample,
+            columns: pop.columns.clone().unwrap_or_default(),
         };
         in_dimension(study::load_outlines_raw(&files, &opts)?.remove(0))
     };

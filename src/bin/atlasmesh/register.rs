@@ -38,7 +38,7 @@ pub fn run(a: RegisterArgs) -> anyhow::Result<()> {
             &files,
             &PopulationOptions {
                 closed: !a.open,
-                resample: None,
+                ..Default::default()
             },
         )?;
         study::register_pair(shapes, &a.landmarks, a.grid, &a.out)?

@@ -540,7 +540,8 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
 
 /// The physical groups of a mesh as the `.msh` writer lays them out: tags unique over all sets
 /// (element sets of dimension D, surfaces D-1, node sets 0), the elements grouped by the
-/// element sets that hold them, the nodes by their node sets.
+/// element sets that hold them, one point entity per node set (a node in two sets is a point
+/// element in both).
 struct Groups<'m> {
     /// `(dimension, tag, name)` of every physical group.
     names: Vec<(usize, usize, String)>,
@@ -548,10 +549,8 @@ struct Groups<'m> {
     sf_tags: BTreeMap<&'m str, usize>,
     /// Elements by the tags of the sets that hold them.
     groups: BTreeMap<Vec<usize>, Vec<usize>>,
-    /// Tags of the node sets of every node.
-    node_member: Vec<Vec<usize>>,
-    /// The nodes in some node set.
-    tagged_nodes: Vec<usize>,
+    /// Every node set: its physical tag and its nodes.
+    node_sets: Vec<(usize, &'m Vec<usize>)>,
     /// The surfaces, by name.
     surfaces: Vec<(&'m String, &'m Vec<(usize, u8)>)>,
 }
@@ -597,62 +596,43 @@ impl<'m> Groups<'m> {
         for (e, t) in member_of.into_iter().enumerate() {
             groups.entry(t).or_default().push(e);
         }
-        // Nodes grouped by the node sets that hold them.
-        let nn = mesh.nodes.len();
-        let mut node_member: Vec<Vec<usize>> = vec![Vec::new(); nn];
-        for (n, m) in &sets.node_sets {
-            for &i in m {
-                if i < nn {
-                    node_member[i].push(nd_tags[n.as_str()]);
-                }
-            }
-        }
-        let tagged_nodes: Vec<usize> = (0..nn).filter(|&i| !node_member[i].is_empty()).collect();
+        let node_sets = sets
+            .node_sets
+            .iter()
+            .filter(|(_, m)| !m.is_empty())
+            .map(|(n, m)| (nd_tags[n.as_str()], m))
+            .collect();
         let surfaces: Vec<(&String, &Vec<(usize, u8)>)> = sets.surfaces.iter().collect();
         Groups {
             names,
             sf_tags,
             groups,
-            node_member,
-            tagged_nodes,
+            node_sets,
             surfaces,
         }
     }
 }
 
-/// The `$Entities` section: points (tagged nodes), then D-1 (surfaces), then D (element
-/// groups), each within the bounding box `bbox`.
+/// The `$Entities` section: points (one per node set, at its first node), then D-1
+/// (surfaces), then D (element groups), each within the bounding box `bbox`.
 fn entities<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups, bbox: &str) {
     let Groups {
         sf_tags,
         groups,
-        node_member,
-        tagged_nodes,
+        node_sets,
         surfaces,
         ..
     } = g;
     let mut counts = [0usize; 4];
-    counts[0] = tagged_nodes.len();
+    counts[0] = node_sets.len();
     counts[D - 1] += surfaces.len();
     counts[D] += groups.len();
     s.push_str("$Entities\n");
     let _ = writeln!(s, "{} {} {} {}", counts[0], counts[1], counts[2], counts[3]);
     let mut entity_lines: [Vec<String>; 4] = Default::default();
-    for (k, &i) in tagged_nodes.iter().enumerate() {
-        let q = xyz(&mesh.nodes[i]);
-        let t = &node_member[i];
-        entity_lines[0].push(format!(
-            "{} {} {} {} {} {}",
-            k + 1,
-            q[0],
-            q[1],
-            q[2],
-            t.len(),
-            t.iter()
-                .map(|v| v.to_string())
-                .collect::<Vec<_>>()
-                .join(" ")
-        ));
+    for (k, (t, m)) in node_sets.iter().enumerate() {
+        let q = xyz(&mesh.nodes[m[0]]);
+        entity_lines[0].push(format!("{} {} {} {} 1 {t}", k + 1, q[0], q[1], q[2]));
     }
     for (k, (n, _)) in surfaces.iter().enumerate() {
         entity_lines[D - 1].push(format!("{} {bbox} 1 {} 0", k + 1, sf_tags[n.as_str()]));
@@ -682,11 +662,11 @@ fn entities<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups, bbox: 
 }
 
 /// The `$Elements` section: the FE elements by group (in Gmsh's node order), then the
-/// surfaces' faces, then one point element per tagged node.
+/// surfaces' faces, then the point elements of every node set.
 fn elements<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups) {
     let Groups {
         groups,
-        tagged_nodes,
+        node_sets,
         surfaces,
         ..
     } = g;
@@ -700,8 +680,9 @@ fn elements<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups) {
         (_, _, true) => 16, // 8-node quadrangle
     };
     let n_faces: usize = surfaces.iter().map(|(_, f)| f.len()).sum();
-    let total = ne + n_faces + tagged_nodes.len();
-    let n_blocks = groups.len() + surfaces.len() + tagged_nodes.len();
+    let n_points: usize = node_sets.iter().map(|(_, m)| m.len()).sum();
+    let total = ne + n_faces + n_points;
+    let n_blocks = groups.len() + surfaces.len() + node_sets.len();
     let _ = writeln!(s, "$Elements\n{n_blocks} {total} 1 {total}");
     for (k, (_, els)) in groups.iter().enumerate() {
         let _ = writeln!(s, "{D} {} {} {}", k + 1, mesh.kind.gmsh_type(), els.len());
@@ -735,9 +716,12 @@ fn elements<const D: usize>(s: &mut String, mesh: &FeMesh<D>, g: &Groups) {
             s.push('\n');
         }
     }
-    for (k, &i) in tagged_nodes.iter().enumerate() {
-        next += 1;
-        let _ = writeln!(s, "0 {} 15 1\n{next} {}", k + 1, i + 1);
+    for (k, (_, m)) in node_sets.iter().enumerate() {
+        let _ = writeln!(s, "0 {} 15 {}", k + 1, m.len());
+        for &i in m.iter() {
+            next += 1;
+            let _ = writeln!(s, "{next} {}", i + 1);
+        }
     }
     s.push_str("$EndElements\n");
 }

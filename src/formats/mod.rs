@@ -8,6 +8,7 @@
 //! | `outline`, `outline_csv`, `outline_text` | 2D outlines: the dispatch, long CSV tables (and 3D point sets), plain text |
 //! | `csv_table` | CSV tables with columns by name |
 //! | `surface`, `ply`, `stl`, `obj` | 3D surfaces: the dispatch and checks, PLY, STL, OBJ |
+//! | `shape_file` | shapes out in the formats asked (VTP, VTK, PLY, STL) |
 //! | `vtk_legacy` | legacy VTK: POLYDATA outlines and surfaces, UNSTRUCTURED_GRID meshes |
 //! | `vtk_xml` | VTK XML: VTP shapes, VTU meshes |
 //! | `fe_mesh` | FE meshes: the format by extension ([`MeshFormat`]), shared checks |
@@ -34,6 +35,7 @@ pub mod outline_csv;
 pub mod outline_text;
 pub mod ply;
 mod sets_file;
+pub mod shape_file;
 pub mod stl;
 pub mod surface;
 mod vtk_cells;
@@ -54,6 +56,7 @@ pub use csv_table::CsvColumns;
 pub use outline_csv::{parse_long_csv, parse_long_csv_with, parse_point_sets_csv, read_long_csv};
 pub use outline_text::{parse_text_outlines, read_text_outlines};
 pub use ply::write_ply;
+pub use shape_file::{ShapeFormat, write_shape};
 pub use stl::write_stl;
 pub use surface::{parse_surface, read_surface};
 pub use vtk_cells::VtkPolyData;

@@ -25,6 +25,9 @@ pub struct RunParams {
     pub baselines: bool,
     /// Formats of every subject's FE mesh (`NAME_mesh.EXT`).
     pub formats: Vec<crate::formats::MeshFormat>,
+    /// Formats of every subject's fitted outline or surface (`NAME_fit.EXT`).
+    #[serde(default = "default_surface_formats")]
+    pub surface_formats: Vec<crate::formats::ShapeFormat>,
     /// Sets defined on the mean mesh (added to those the atlas carries).
     #[serde(skip)]
     pub sets: Option<crate::mesh::sets::SetsConfig>,
@@ -51,6 +54,10 @@ pub struct RunParams {
     pub max_mesh_distance: f64,
 }
 
+fn default_surface_formats() -> Vec<crate::formats::ShapeFormat> {
+    vec![crate::formats::ShapeFormat::Vtp]
+}
+
 fn default_max_misfit() -> f64 {
     0.05
 }
@@ -60,6 +67,7 @@ impl Default for RunParams {
         RunParams {
             baselines: false,
             formats: vec![crate::formats::MeshFormat::Vtu],
+            surface_formats: default_surface_formats(),
             sets: None,
             deck: None,
             repair: Some(crate::mesh::repair::RepairParams::default()),

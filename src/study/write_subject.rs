@@ -5,7 +5,7 @@ use super::params::RunParams;
 use super::subject::SubjectOutcome;
 use crate::error::Result;
 use crate::fit::{FitResult, Fitter};
-use crate::formats::{write_atomic, write_mesh, write_vtp};
+use crate::formats::{write_atomic, write_mesh, write_shape};
 use crate::geometry::{ClosestPointIndex, Point, Shape, same_dim};
 use crate::mesh::{ElementQuality, FeMesh, Morpher};
 use crate::model::Atlas;
@@ -159,7 +159,7 @@ pub fn process_subject<const D: usize>(
 /// Writes what [`fit_subject`](super::fit_subject) made of `subject` into `out`: the mesh in
 /// every `params.formats` (`NAME_mesh.EXT`, with the mean mesh in the subject's frame beside
 /// it for the displacement), the deck (`NAME_deck.inp`), the fitted surface or outline
-/// (`NAME_fit.vtp`) and, with `params.plots`, its pictures. Returns the subject's report with
+/// (`NAME_fit.EXT` in every `params.surface_formats`) and, with `params.plots`, its pictures. Returns the subject's report with
 /// the files written (relative to `out`).
 pub fn write_subject<const D: usize>(
     atlas: &Atlas<D>,
@@ -209,9 +209,11 @@ pub fn write_subject<const D: usize>(
         facets: atlas.facets.clone(),
         landmarks: atlas.landmarks.clone(),
     };
-    let outline_file = format!("{base}_fit.vtp");
-    write_vtp(&out.join(&outline_file), &fitted)?;
-    files.push(outline_file);
+    for &f in &params.surface_formats {
+        let fit_file = format!("{base}_fit.{}", f.extension());
+        write_shape(&out.join(&fit_file), &fitted, f)?;
+        files.push(fit_file);
+    }
     if params.plots && D == 3 {
         files.extend(pictures_3d(
             atlas,

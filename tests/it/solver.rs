@@ -169,6 +169,16 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
             let log = String::from_utf8_lossy(&o.stdout).to_string()
                 + &String::from_utf8_lossy(&o.stderr);
             assert!(o.status.success() && !log.contains("Error"), "{log}");
+            // One point entity per node set, not one per node.
+            let text = std::fs::read_to_string(&p).unwrap();
+            let points: usize = text
+                .split("$Entities\n")
+                .nth(1)
+                .and_then(|r| r.split_whitespace().next())
+                .and_then(|n| n.parse().ok())
+                .unwrap();
+            let sets = atlasmesh::formats::read_msh(&p).unwrap().sets.node_sets.len();
+            assert_eq!(points, sets, "{}: point entities", p.display());
         }
     }
     if let Some(py) = common::python() {

@@ -104,6 +104,15 @@ pub struct RunArgs {
         value_name = "FORMATS"
     )]
     pub format: Vec<String>,
+    /// Formats of each subject's fitted surface or outline, comma-separated: vtp, vtk (legacy,
+    /// meshio reads it), ply, stl (3D). NAME_fit.EXT.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "vtp",
+        value_name = "FORMATS"
+    )]
+    pub surface_format: Vec<String>,
     /// Node sets, element sets and surfaces defined on the mean mesh (TOML; see
     /// docs/guide.md), carried to every subject's mesh.
     #[arg(long, value_name = "TOML")]
@@ -128,7 +137,20 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
-    pub fn params(&self) -> anyhow::Result<RunParams> {
+    /// The run's parameters for shapes of dimension `dim`.
+    pub fn params_for(&self, dim: usize) -> anyhow::Result<RunParams> {
+        let p = self.params()?;
+        if let Some(f) = p.surface_formats.iter().find(|f| !f.holds(dim)) {
+            return Err(atlasmesh::Error::Parameter(format!(
+                "--surface-format {}: it holds surfaces; write 2D outlines as vtp or vtk",
+                f.extension()
+            ))
+            .into());
+        }
+        Ok(p)
+    }
+
+    fn params(&self) -> anyhow::Result<RunParams> {
         let formats = self
             .format
             .iter()
@@ -140,8 +162,20 @@ impl RunArgs {
                 })
             })
             .collect::<Result<_, _>>()?;
+        let surface_formats = self
+            .surface_format
+            .iter()
+            .map(|f| {
+                atlasmesh::formats::ShapeFormat::parse(f).ok_or_else(|| {
+                    atlasmesh::Error::Parameter(format!(
+                        "--surface-format {f}: use vtp, vtk, ply or stl"
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?;
         let mut p = RunParams {
             formats,
+            surface_formats,
             ..RunParams::default()
         };
         if let Some(f) = &self.sets {

@@ -99,7 +99,7 @@ fn fit<const D: usize>(
 ) -> anyhow::Result<()> {
     let mut atlas = Atlas::<D>::load(&a.atlas)?;
     let atlas_crc = batch::file_crc32(&a.atlas)?;
-    let mut params = a.run.params()?;
+    let mut params = a.run.params_for(D)?;
     params.atlas = atlas.params;
     if let Some(c) = &params.sets {
         study::apply_sets(&mut atlas, c)?;

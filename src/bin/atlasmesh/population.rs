@@ -59,7 +59,7 @@ pub fn surfaces_and_params(
     run: &RunArgs,
     term: &Terminal,
 ) -> anyhow::Result<Population<3>> {
-    let mut params = run.params()?;
+    let mut params = run.params_for(3)?;
     apply_pop(&mut params, pop);
     let mut shapes = study::load_surfaces(&pop.shapes)?;
     study::attach_landmarks(&mut shapes, &pop.landmarks)?;
@@ -90,7 +90,7 @@ pub fn outlines_and_params(
         )
         .into());
     }
-    let mut params = run.params()?;
+    let mut params = run.params_for(2)?;
     apply_pop(&mut params, pop);
     let opts = PopulationOptions {
         closed: !pop.open,

@@ -15,6 +15,7 @@
 //! | `abaqus` | Abaqus/CalculiX `.inp` meshes and decks |
 //! | `gmsh`, `gmsh_binary` | Gmsh `.msh`: ASCII and the mesh's assembly; binary files |
 //! | `febio` | FEBio `.feb` |
+//! | `deck` | solver decks (`.inp`, `.feb`) copied per subject with its nodes |
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
 //! | `sets_file` | the sets file (TOML) |
 //! | `atlas_file` | the atlas file (safetensors) |
@@ -22,6 +23,7 @@
 
 pub mod abaqus;
 pub mod atlas_file;
+mod deck;
 mod atomic;
 pub mod csv_table;
 pub mod fe_mesh;
@@ -47,6 +49,7 @@ pub use abaqus::{InpDeck, parse_inp, read_inp};
 pub use atlas_file::{ATLAS_FORMAT_VERSION, atlas_dimension};
 pub(crate) use atomic::MAX_COUNT;
 pub use atomic::{create_dir, write_atomic};
+pub use deck::{Deck, FebDeck};
 pub use fe_mesh::{
     MeshFormat, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh,
 };

@@ -146,3 +146,55 @@ fn deck_nodes_are_replaced_and_nothing_else() {
     assert_eq!(again.mesh.sets, m.sets);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn febio_deck_nodes_are_replaced_and_the_model_kept() {
+    let m = two_cubes();
+    let path = std::path::Path::new("model.feb");
+    let text = super::febio::feb(&m, path).unwrap().replace(
+        "  <Mesh>",
+        "  <Material>\n    <material id=\"1\" name=\"bone\" type=\"isotropic elastic\"><E>17000</E></material>\n  </Material>\n  <Mesh>",
+    );
+    let deck = FebDeck::parse(path, &text).unwrap();
+    assert_eq!(deck.mesh.nodes, m.nodes);
+    assert_eq!(deck.mesh.connectivity, m.connectivity);
+    let moved: Vec<Point<3>> = m.nodes.iter().map(|p| [p[0] + 1.0, p[1], p[2] * 2.0]).collect();
+    let out = Deck::Feb(deck).with_nodes(&moved).unwrap();
+    let again = FebDeck::parse(path, &out).unwrap();
+    assert_eq!(again.mesh.nodes, moved);
+    assert_eq!(again.mesh.connectivity, m.connectivity);
+    assert!(out.contains("<E>17000</E>") && out.contains("NodeSet") == text.contains("NodeSet"));
+    // Not FEBio, or a broken mesh: errors naming the file.
+    for bad in [
+        "<x/>",
+        "<febio_spec><Mesh><Nodes><node id=\"2\">0,0,0</node></Nodes></Mesh></febio_spec>",
+        "<febio_spec><Mesh><Nodes><node id=\"1\">0,0</node></Nodes></Mesh></febio_spec>",
+    ] {
+        let e = FebDeck::parse(path, bad).unwrap_err().to_string();
+        assert!(e.contains("model.feb"), "{e}");
+    }
+}
+
+#[test]
+fn outlines_written_as_vtp_and_vtk_read_back() {
+    let t: Vec<[f64; 2]> = (0..12)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 12.0;
+            [3.0 * a.cos(), a.sin()]
+        })
+        .collect();
+    let s = crate::geometry::Shape::polyline("o", t.clone(), true);
+    let dir = std::env::temp_dir().join(format!("atlasmesh-outline-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in [ShapeFormat::Vtp, ShapeFormat::Vtk] {
+        let p = dir.join(format!("o.{}", f.extension()));
+        write_shape(&p, &s, f).unwrap();
+        let r = read_outlines(&p, false).unwrap();
+        assert_eq!(r.len(), 1);
+        assert!(r[0].is_closed(), "{f:?}");
+        assert_eq!(r[0].points, t, "{f:?}");
+    }
+    let e = write_shape(&dir.join("o.ply"), &s, ShapeFormat::Ply).unwrap_err();
+    assert!(e.to_string().contains("vtp or vtk"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}

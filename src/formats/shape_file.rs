@@ -15,7 +15,8 @@ use std::path::Path;
 pub enum ShapeFormat {
     /// VTK XML PolyData (`.vtp`): lines (2D) or triangles (3D).
     Vtp,
-    /// Legacy VTK 4.2 POLYDATA, ASCII (`.vtk`): lines or triangles; meshio reads it too.
+    /// Legacy VTK 4.2, ASCII (`.vtk`): an UNSTRUCTURED_GRID of lines or triangles, which
+    /// VTK, ParaView, meshio and atlasmesh read.
     Vtk,
     /// Binary PLY (`.ply`, 3D).
     Ply,
@@ -80,10 +81,11 @@ pub fn write_shape<const D: usize>(path: &Path, shape: &Shape<D>, format: ShapeF
     }
 }
 
-/// Legacy VTK 4.2 ASCII POLYDATA of a shape: its facets as LINES (2D) or POLYGONS (3D).
+/// Legacy VTK 4.2 ASCII of a shape: its facets as line (2D) or triangle (3D) cells of an
+/// UNSTRUCTURED_GRID (meshio reads no POLYDATA).
 fn vtk_polydata<const D: usize>(shape: &Shape<D>) -> String {
     let mut s = format!(
-        "# vtk DataFile Version 4.2\natlasmesh {}\nASCII\nDATASET POLYDATA\nPOINTS {} double\n",
+        "# vtk DataFile Version 4.2\natlasmesh {}\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS {} double\n",
         env!("CARGO_PKG_VERSION"),
         shape.points.len()
     );
@@ -91,9 +93,8 @@ fn vtk_polydata<const D: usize>(shape: &Shape<D>) -> String {
         let q = xyz(p);
         let _ = writeln!(s, "{:.17e} {:.17e} {:.17e}", q[0], q[1], q[2]);
     }
-    let key = if D == 2 { "LINES" } else { "POLYGONS" };
     let n = shape.facets.len();
-    let _ = writeln!(s, "{key} {n} {}", n * (D + 1));
+    let _ = writeln!(s, "CELLS {n} {}", n * (D + 1));
     for f in &shape.facets {
         let _ = write!(s, "{D}");
         for i in f {
@@ -101,5 +102,8 @@ fn vtk_polydata<const D: usize>(shape: &Shape<D>) -> String {
         }
         s.push('\n');
     }
+    let _ = writeln!(s, "CELL_TYPES {n}");
+    let t = if D == 2 { "3\n" } else { "5\n" };
+    s.push_str(&t.repeat(n));
     s
 }

@@ -31,10 +31,10 @@ pub struct RunParams {
     /// Sets defined on the mean mesh (added to those the atlas carries).
     #[serde(skip)]
     pub sets: Option<crate::mesh::sets::SetsConfig>,
-    /// A whole Abaqus/CalculiX deck around the atlas's mean mesh: every subject gets a copy
-    /// with its node coordinates (`NAME_deck.inp`).
+    /// A whole solver deck (Abaqus/CalculiX `.inp` or FEBio `.feb`) around the atlas's mean
+    /// mesh: every subject gets a copy with its node coordinates (`NAME_deck.inp`/`.feb`).
     #[serde(skip)]
-    pub deck: Option<std::sync::Arc<crate::formats::InpDeck>>,
+    pub deck: Option<std::sync::Arc<crate::formats::Deck>>,
     /// Repair of every morphed mesh (untangling and quality; `None`: off).
     pub repair: Option<crate::mesh::repair::RepairParams>,
     /// A fit whose two-way RMS distance to its subject (eq. 6 both ways) exceeds this share

@@ -20,21 +20,22 @@ pub fn apply_sets<const D: usize>(
 /// Checks that a deck's mesh is the atlas's mean mesh (same elements and node count).
 pub fn check_deck<const D: usize>(
     atlas: &Atlas<D>,
-    deck: &crate::formats::InpDeck,
+    deck: &crate::formats::Deck,
     path: &Path,
 ) -> Result<()> {
-    if deck.mesh.nodes.len() != atlas.mesh.nodes.len()
-        || deck.mesh.kind != atlas.mesh.kind
-        || deck.mesh.connectivity != atlas.mesh.connectivity
+    let deck = deck.mesh();
+    if deck.nodes.len() != atlas.mesh.nodes.len()
+        || deck.kind != atlas.mesh.kind
+        || deck.connectivity != atlas.mesh.connectivity
     {
         return Err(Error::parse(
             path,
             0,
             format!(
-                "the deck's mesh ({} nodes, {} {} elements) is not the atlas's mean mesh ({} nodes, {} {} elements); start the deck from `atlasmesh convert ATLAS mean.inp`",
-                deck.mesh.nodes.len(),
-                deck.mesh.num_elements(),
-                deck.mesh.kind.name(),
+                "the deck's mesh ({} nodes, {} {} elements) is not the atlas's mean mesh ({} nodes, {} {} elements); start the deck from `atlasmesh convert ATLAS mean.inp` (or `mean.feb`)",
+                deck.nodes.len(),
+                deck.num_elements(),
+                deck.kind.name(),
                 atlas.mesh.nodes.len(),
                 atlas.mesh.num_elements(),
                 atlas.mesh.kind.name()

@@ -196,7 +196,7 @@ pub fn write_subject<const D: usize>(
         files.push(mesh_file);
     }
     if let Some(deck) = &params.deck {
-        let deck_file = format!("{base}_deck.inp");
+        let deck_file = format!("{base}_deck.{}", deck.extension());
         write_atomic(
             &out.join(&deck_file),
             deck.with_nodes(&mesh.nodes)?.as_bytes(),

@@ -179,7 +179,10 @@ fn files_saved_by_pyvista_vtk_meshio_and_gmsh_read_as_written() {
 }
 
 /// A femur saved by PyVista at its defaults (binary, zlib-compressed VTP) is fitted exactly
-/// as the same femur in the data's PLY: the same mesh, node for node.
+/// as the same femur in the data's PLY: the same mesh, node for node. The fit also writes an
+/// FEBio model around the mean mesh (`--deck model.feb`), read back by febio-python with the
+/// subject's nodes and the model's material, and its fitted surface as VTK, PLY and STL, read
+/// back by meshio and atlasmesh.
 #[test]
 fn a_femur_saved_by_pyvista_fits_as_its_ply() {
     let Some(data) = crate::common::data_dir("a_femur_saved_by_pyvista_fits_as_its_ply") else {
@@ -213,6 +216,19 @@ fn a_femur_saved_by_pyvista_fits_as_its_ply() {
         String::from_utf8_lossy(&head[..400.min(head.len())]).contains("vtkZLibDataCompressor"),
         "PyVista's default VTP is compressed"
     );
+    // An FEBio model around the mean mesh: its .feb with a material, a domain and a step.
+    let mean = dir.join("mean.feb");
+    let o = crate::common::atlasmesh(&["convert", &atlas.display().to_string(), &mean.display().to_string()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let model = std::fs::read_to_string(&mean).unwrap().replace(
+        "  <Mesh>",
+        "  <Module type=\"solid\"/>\n  <Material>\n    <material id=\"1\" name=\"bone\" type=\"isotropic elastic\"><E>17000</E><v>0.3</v></material>\n  </Material>\n  <Mesh>",
+    ).replace(
+        "  </Mesh>",
+        "  </Mesh>\n  <MeshDomains>\n    <SolidDomain name=\"Part1\" mat=\"bone\"/>\n  </MeshDomains>\n  <Step>\n    <step id=\"1\" name=\"load\"><Control><analysis>STATIC</analysis></Control></step>\n  </Step>",
+    );
+    let deck = dir.join("model.feb");
+    std::fs::write(&deck, model).unwrap();
     let out = dir.join("fit");
     let o = crate::common::atlasmesh(&[
         "fit",
@@ -220,10 +236,52 @@ fn a_femur_saved_by_pyvista_fits_as_its_ply() {
         &atlas.display().to_string(),
         "--subjects",
         &subjects.display().to_string(),
+        "--deck",
+        &deck.display().to_string(),
+        "--surface-format",
+        "vtp,vtk,ply,stl",
         "--out",
         &out.display().to_string(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let base = out.join("S001_pyvista/S001_pyvista");
+    let check = r#"
+import sys, meshio, numpy as np
+from febio_python.feb import Feb
+base = sys.argv[1]
+mesh = meshio.read(base + "_mesh.vtu")
+feb = Feb(filepath=base + "_deck.feb")
+nodes = np.concatenate([n.coordinates for n in feb.get_nodes(dtype=np.float64)])
+assert nodes.shape == mesh.points.shape, (nodes.shape, mesh.points.shape)
+assert np.abs(nodes - mesh.points).max() < 1e-9 * np.abs(mesh.points).max(), "deck nodes"
+els = feb.get_elements()
+assert els[0].type == "hex8", els[0].type
+assert (np.asarray(els[0].connectivity) == mesh.cells[0].data).all(), "deck elements"
+assert [m.name for m in feb.get_materials()] == ["bone"]
+assert [d.mat for d in feb.get_mesh_domains()] == ["bone"]
+fit = meshio.read(base + "_fit.vtk")
+for ext in ["ply", "stl"]:
+    s = meshio.read(base + "_fit." + ext)
+    assert len(s.cells[0].data) == len(fit.cells[0].data), ext
+    assert np.abs(np.sort(s.points, 0) - np.sort(fit.points, 0)).max() < 1e-4 * np.abs(fit.points).max(), ext
+print(len(nodes), "nodes,", len(fit.cells[0].data), "triangles")
+"#;
+    let o = std::process::Command::new(&py)
+        .args(["-c", check])
+        .arg(&base)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "febio-python and meshio read the deck and surfaces: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let vtp = atlasmesh::formats::read_vtp(&base.with_file_name("S001_pyvista_fit.vtp")).unwrap();
+    for ext in ["ply", "vtk"] {
+        let s = atlasmesh::formats::read_surface(&base.with_file_name(format!("S001_pyvista_fit.{ext}"))).unwrap();
+        assert_eq!(s.points.len(), vtp.points.len(), "{ext}");
+    }
     let mesh = |name: &str| {
         atlasmesh::formats::read_vtu(&out.join(name).join(format!("{name}_mesh.vtu"))).unwrap()
     };

@@ -124,9 +124,11 @@ pub struct RunArgs {
     /// The scaled-Jacobian bound of the repair (default by element kind).
     #[arg(long, value_name = "SJ")]
     pub repair_bound: Option<f64>,
-    /// An Abaqus/CalculiX deck built around the atlas's mean mesh (`atlasmesh convert ATLAS
-    /// mean.inp`): every subject gets a copy with its node coordinates, NAME_deck.inp.
-    #[arg(long, value_name = "INP")]
+    /// A solver deck built around the atlas's mean mesh: Abaqus/CalculiX (`atlasmesh convert
+    /// ATLAS mean.inp`, then add the material and steps) or FEBio (`mean.feb`, then add
+    /// Material, MeshDomains and Step): every subject gets a copy with its node coordinates,
+    /// NAME_deck.inp or NAME_deck.feb.
+    #[arg(long, value_name = "INP|FEB")]
     pub deck: Option<PathBuf>,
     /// A subject whose fit stays farther from it than this share of its size (two-way RMS;
     /// or twice this for the 95th percentile of its points' distances) did not converge:
@@ -182,7 +184,7 @@ impl RunArgs {
             p.sets = Some(atlasmesh::mesh::SetsConfig::read(f)?);
         }
         if let Some(f) = &self.deck {
-            p.deck = Some(std::sync::Arc::new(atlasmesh::formats::read_inp(f)?));
+            p.deck = Some(std::sync::Arc::new(atlasmesh::formats::Deck::read(f)?));
         }
         p.morph.grid = self.grid;
         p.morph.alpha = self.alpha;

@@ -69,7 +69,11 @@ impl<'a> Table<'a> {
             .enumerate()
             .filter(|(_, l)| !l.trim().is_empty());
         let Some((_, header)) = lines.next() else {
-            return Err(Error::parse(path, 1, "empty file; a header line was expected"));
+            return Err(Error::parse(
+                path,
+                1,
+                "empty file; a header line was expected",
+            ));
         };
         let header: Vec<String> = header
             .trim_start_matches('\u{feff}')
@@ -83,7 +87,11 @@ impl<'a> Table<'a> {
                 return Err(Error::parse(
                     path,
                     i + 1,
-                    format!("{} fields, {} expected (as in the header)", f.len(), header.len()),
+                    format!(
+                        "{} fields, {} expected (as in the header)",
+                        f.len(),
+                        header.len()
+                    ),
                 ));
             }
             rows.push((i + 1, f));

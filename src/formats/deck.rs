@@ -76,9 +76,9 @@ pub struct FebDeck {
 fn numbers<T: std::str::FromStr>(path: &Path, s: &str, what: &str) -> Result<Vec<T>> {
     s.split(',')
         .map(|t| {
-            t.trim()
-                .parse()
-                .map_err(|_| Error::parse(path, 0, format!("{what}: {:?} is not a number", t.trim())))
+            t.trim().parse().map_err(|_| {
+                Error::parse(path, 0, format!("{what}: {:?} is not a number", t.trim()))
+            })
         })
         .collect()
 }
@@ -95,10 +95,12 @@ impl FebDeck {
         let mut node_id: Option<usize> = None;
         let mut root = None;
         loop {
-            match r
-                .read_event()
-                .map_err(|e| bad(format!("not well-formed XML near byte {} ({e})", r.error_position())))?
-            {
+            match r.read_event().map_err(|e| {
+                bad(format!(
+                    "not well-formed XML near byte {} ({e})",
+                    r.error_position()
+                ))
+            })? {
                 Event::Start(e) => {
                     let tag = e.local_name().as_ref().to_string();
                     let parent = stack.last().map(String::as_str);
@@ -111,7 +113,7 @@ impl FebDeck {
                             .ok()
                             .flatten()
                             .and_then(|a| a.value.trim().parse::<usize>().ok())
-                            .filter(|&i| i >= 1 && i <= super::MAX_COUNT)
+                            .filter(|i| (1..=super::MAX_COUNT).contains(i))
                             .ok_or_else(|| bad("a <node> without a valid id".into()))?;
                         node_id = Some(id);
                     }
@@ -134,9 +136,8 @@ impl FebDeck {
                     stack.push(tag);
                 }
                 Event::End(_) => {
-                    if stack.pop().as_deref() == Some("node") {
-                        node_id = None;
-                    }
+                    stack.pop();
+                    node_id = None;
                 }
                 Event::Text(t) => {
                     let parent = stack.get(stack.len().wrapping_sub(2)).map(String::as_str);
@@ -145,7 +146,9 @@ impl FebDeck {
                             let id = node_id.unwrap_or(0);
                             let v: Vec<f64> = numbers(path, &t, &format!("node {id}"))?;
                             if v.len() != 3 || v.iter().any(|c| !c.is_finite()) {
-                                return Err(bad(format!("node {id}: three finite coordinates expected")));
+                                return Err(bad(format!(
+                                    "node {id}: three finite coordinates expected"
+                                )));
                             }
                             if nodes.len() < id {
                                 nodes.resize(id, None);
@@ -158,7 +161,10 @@ impl FebDeck {
                             let k = kind.map_or(0, ElementKind::nodes);
                             let ids: Vec<usize> = numbers(path, &t, "an element")?;
                             if ids.len() != k {
-                                return Err(bad(format!("an element of {} nodes, {k} expected", ids.len())));
+                                return Err(bad(format!(
+                                    "an element of {} nodes, {k} expected",
+                                    ids.len()
+                                )));
                             }
                             connectivity.extend(ids);
                         }
@@ -175,7 +181,9 @@ impl FebDeck {
         let nodes: Vec<[f64; 3]> = nodes
             .into_iter()
             .enumerate()
-            .map(|(i, p)| p.ok_or_else(|| bad(format!("node ids skip {}: ids must run 1..N", i + 1))))
+            .map(|(i, p)| {
+                p.ok_or_else(|| bad(format!("node ids skip {}: ids must run 1..N", i + 1)))
+            })
             .collect::<Result<_>>()?;
         let kind = kind.ok_or_else(|| bad("no <Elements> in <Mesh>".into()))?;
         let connectivity = connectivity
@@ -230,18 +238,24 @@ impl FebDeck {
                     node_id = None;
                 }
                 Event::Text(_) => {
-                    if let Some(k) = node_id.and_then(|i| i.checked_sub(1)).filter(|&k| k < nodes.len()) {
+                    if let Some(k) = node_id
+                        .and_then(|i| i.checked_sub(1))
+                        .filter(|&k| k < nodes.len())
+                    {
                         let p = super::fe_mesh::xyz(&nodes[k]);
                         let t = format!("{:.17e},{:.17e},{:.17e}", p[0], p[1], p[2]);
-                        w.write_event(Event::Text(BytesText::new(&t))).map_err(|e| Error::Mesh(format!("the FEBio deck: {e}")))?;
+                        w.write_event(Event::Text(BytesText::new(&t)))
+                            .map_err(|e| Error::Mesh(format!("the FEBio deck: {e}")))?;
                         continue;
                     }
                 }
                 Event::Eof => break,
                 _ => {}
             }
-            w.write_event(ev).map_err(|e| Error::Mesh(format!("the FEBio deck: {e}")))?;
+            w.write_event(ev)
+                .map_err(|e| Error::Mesh(format!("the FEBio deck: {e}")))?;
         }
-        String::from_utf8(w.into_inner()).map_err(|_| Error::Mesh("the FEBio deck is not UTF-8".into()))
+        String::from_utf8(w.into_inner())
+            .map_err(|_| Error::Mesh("the FEBio deck is not UTF-8".into()))
     }
 }

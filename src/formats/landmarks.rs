@@ -157,11 +157,7 @@ pub fn parse_landmarks_csv<const D: usize>(
                     Error::parse(
                         path,
                         ln,
-                        format!(
-                            "'{}' is not a point index ({}-based)",
-                            f[c],
-                            base
-                        ),
+                        format!("'{}' is not a point index ({}-based)", f[c], base),
                     )
                 })?;
             Landmark::Index(i - base)

@@ -17,7 +17,11 @@ pub fn read_outlines(path: &Path, closed: bool) -> Result<Vec<Shape<2>>> {
 }
 
 /// [`read_outlines`] with the columns of a CSV file mapped by `columns`.
-pub fn read_outlines_with(path: &Path, closed: bool, columns: &CsvColumns) -> Result<Vec<Shape<2>>> {
+pub fn read_outlines_with(
+    path: &Path,
+    closed: bool,
+    columns: &CsvColumns,
+) -> Result<Vec<Shape<2>>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     parse_outlines_with(path, &bytes, closed, columns)
 }

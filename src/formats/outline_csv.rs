@@ -38,7 +38,11 @@ pub fn parse_long_csv_with(
 
 /// 3D point sets in correspondence from a long CSV (`shape`, `point`, `x`, `y`, `z`): shapes
 /// without facets, for what needs no surface.
-pub fn parse_point_sets_csv(path: &Path, text: &str, columns: &CsvColumns) -> Result<Vec<Shape<3>>> {
+pub fn parse_point_sets_csv(
+    path: &Path,
+    text: &str,
+    columns: &CsvColumns,
+) -> Result<Vec<Shape<3>>> {
     Ok(point_table::<3>(path, text, columns)?
         .into_iter()
         .map(|(name, points)| Shape {

@@ -74,7 +74,12 @@ fn csv_columns_are_found_by_name_and_mapped() {
     let cols: CsvColumns = "shape=Bone,point=Id,x=PX,y=PY".parse().unwrap();
     let s = parse_long_csv_with(p, t, true, &cols).unwrap();
     assert_eq!(s[0].points, vec![[1.0, 0.0], [0.0, 0.0], [0.0, 1.0]]);
-    assert!("colour=c".parse::<CsvColumns>().unwrap_err().contains("roles"));
+    assert!(
+        "colour=c"
+            .parse::<CsvColumns>()
+            .unwrap_err()
+            .contains("roles")
+    );
     let e = parse_long_csv_with(p, "shape,x,y\nA,0,0\n", true, &cols)
         .unwrap_err()
         .to_string();
@@ -95,7 +100,8 @@ fn landmark_csvs_say_their_index_base() {
     use crate::formats::landmarks::{Landmark, parse_landmarks_csv};
     let p = Path::new("lm.csv");
     let zero = parse_landmarks_csv::<2>(p, "shape,landmark,index\nA,0,4\nA,1,7\n").unwrap();
-    let one = parse_landmarks_csv::<2>(p, "landmark,shape,index1,note\n0,A,5,x\n1,A,8,y\n").unwrap();
+    let one =
+        parse_landmarks_csv::<2>(p, "landmark,shape,index1,note\n0,A,5,x\n1,A,8,y\n").unwrap();
     let idx = |m: &std::collections::BTreeMap<String, Vec<Landmark<2>>>| -> Vec<usize> {
         m["A"]
             .iter()

@@ -158,7 +158,11 @@ fn febio_deck_nodes_are_replaced_and_the_model_kept() {
     let deck = FebDeck::parse(path, &text).unwrap();
     assert_eq!(deck.mesh.nodes, m.nodes);
     assert_eq!(deck.mesh.connectivity, m.connectivity);
-    let moved: Vec<Point<3>> = m.nodes.iter().map(|p| [p[0] + 1.0, p[1], p[2] * 2.0]).collect();
+    let moved: Vec<Point<3>> = m
+        .nodes
+        .iter()
+        .map(|p| [p[0] + 1.0, p[1], p[2] * 2.0])
+        .collect();
     let out = Deck::Feb(deck).with_nodes(&moved).unwrap();
     let again = FebDeck::parse(path, &out).unwrap();
     assert_eq!(again.mesh.nodes, moved);

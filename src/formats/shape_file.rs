@@ -50,7 +50,11 @@ impl ShapeFormat {
 ///
 /// # Errors
 /// [`Error::Parameter`] for an outline in PLY or STL; I/O errors.
-pub fn write_shape<const D: usize>(path: &Path, shape: &Shape<D>, format: ShapeFormat) -> Result<()> {
+pub fn write_shape<const D: usize>(
+    path: &Path,
+    shape: &Shape<D>,
+    format: ShapeFormat,
+) -> Result<()> {
     if !format.holds(D) {
         return Err(Error::Parameter(format!(
             "{}: {} holds surfaces; write 2D outlines as vtp or vtk",

@@ -312,7 +312,7 @@ impl<'a> Document<'a> {
                 }
             }
         };
-        if bytes.len() % width != 0 {
+        if !bytes.len().is_multiple_of(width) {
             return Err(bad("its size is not a whole number of values".into()));
         }
         let be = self.big_endian;

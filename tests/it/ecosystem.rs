@@ -195,9 +195,7 @@ fn a_femur_saved_by_pyvista_fits_as_its_ply() {
     let atlas = dir.join("atlas.safetensors");
     let mut args: Vec<String> = vec!["build".into(), "--shapes".into()];
     args.extend((2..=16).map(|k| ply(k).display().to_string()));
-    args.extend(
-        ["--modes", "5", "--out", &atlas.display().to_string()].map(String::from),
-    );
+    args.extend(["--modes", "5", "--out", &atlas.display().to_string()].map(String::from));
     let o = crate::common::atlasmesh(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let subjects = dir.join("subjects");
@@ -205,7 +203,10 @@ fn a_femur_saved_by_pyvista_fits_as_its_ply() {
     std::fs::copy(ply(1), subjects.join("S001_Femur.ply")).unwrap();
     let vtp = subjects.join("S001_pyvista.vtp");
     let o = std::process::Command::new(&py)
-        .args(["-c", "import sys, pyvista; pyvista.read(sys.argv[1]).save(sys.argv[2])"])
+        .args([
+            "-c",
+            "import sys, pyvista; pyvista.read(sys.argv[1]).save(sys.argv[2])",
+        ])
         .arg(ply(1))
         .arg(&vtp)
         .output()
@@ -218,7 +219,11 @@ fn a_femur_saved_by_pyvista_fits_as_its_ply() {
     );
     // An FEBio model around the mean mesh: its .feb with a material, a domain and a step.
     let mean = dir.join("mean.feb");
-    let o = crate::common::atlasmesh(&["convert", &atlas.display().to_string(), &mean.display().to_string()]);
+    let o = crate::common::atlasmesh(&[
+        "convert",
+        &atlas.display().to_string(),
+        &mean.display().to_string(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let model = std::fs::read_to_string(&mean).unwrap().replace(
         "  <Mesh>",
@@ -279,7 +284,10 @@ print(len(nodes), "nodes,", len(fit.cells[0].data), "triangles")
     );
     let vtp = atlasmesh::formats::read_vtp(&base.with_file_name("S001_pyvista_fit.vtp")).unwrap();
     for ext in ["ply", "vtk"] {
-        let s = atlasmesh::formats::read_surface(&base.with_file_name(format!("S001_pyvista_fit.{ext}"))).unwrap();
+        let s = atlasmesh::formats::read_surface(
+            &base.with_file_name(format!("S001_pyvista_fit.{ext}")),
+        )
+        .unwrap();
         assert_eq!(s.points.len(), vtp.points.len(), "{ext}");
     }
     let mesh = |name: &str| {

@@ -177,7 +177,11 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
                 .and_then(|r| r.split_whitespace().next())
                 .and_then(|n| n.parse().ok())
                 .unwrap();
-            let sets = atlasmesh::formats::read_msh(&p).unwrap().sets.node_sets.len();
+            let sets = atlasmesh::formats::read_msh(&p)
+                .unwrap()
+                .sets
+                .node_sets
+                .len();
             assert_eq!(points, sets, "{}: point entities", p.display());
         }
     }

@@ -181,8 +181,8 @@ fn files_saved_by_pyvista_vtk_meshio_and_gmsh_read_as_written() {
 /// A femur saved by PyVista at its defaults (binary, zlib-compressed VTP) is fitted exactly
 /// as the same femur in the data's PLY: the same mesh, node for node. The fit also writes an
 /// FEBio model around the mean mesh (`--deck model.feb`), read back by febio-python with the
-/// subject's nodes and the model's material, and its fitted surface as VTK, PLY and STL, read
-/// back by meshio and atlasmesh.
+/// subject's nodes and the model's material; its mesh in every format and its fitted surface
+/// as VTP, VTK, PLY and STL, read back by meshio, VTK (PyVista) and atlasmesh.
 #[test]
 fn a_femur_saved_by_pyvista_fits_as_its_ply() {
     let Some(data) = crate::common::data_dir("a_femur_saved_by_pyvista_fits_as_its_ply") else {
@@ -243,6 +243,8 @@ fn a_femur_saved_by_pyvista_fits_as_its_ply() {
         &subjects.display().to_string(),
         "--deck",
         &deck.display().to_string(),
+        "--format",
+        "vtu,vtk,msh,inp,feb",
         "--surface-format",
         "vtp,vtk,ply,stl",
         "--out",
@@ -269,6 +271,15 @@ for ext in ["ply", "stl"]:
     s = meshio.read(base + "_fit." + ext)
     assert len(s.cells[0].data) == len(fit.cells[0].data), ext
     assert np.abs(np.sort(s.points, 0) - np.sort(fit.points, 0)).max() < 1e-4 * np.abs(fit.points).max(), ext
+# VTK (through PyVista's readers) reads every mesh and surface file VTK has a reader for.
+import pyvista
+for ext in ["vtu", "vtk"]:
+    g = pyvista.read(base + "_mesh." + ext)
+    assert g.n_points == len(mesh.points) and g.n_cells == len(mesh.cells[0].data), ext
+    assert np.abs(np.asarray(g.points) - mesh.points).max() < 1e-9 * np.abs(mesh.points).max(), ext
+for ext in ["vtp", "vtk", "ply", "stl"]:
+    s = pyvista.read(base + "_fit." + ext)
+    assert s.n_cells == len(fit.cells[0].data), (ext, s.n_cells)
 print(len(nodes), "nodes,", len(fit.cells[0].data), "triangles")
 "#;
     let o = std::process::Command::new(&py)

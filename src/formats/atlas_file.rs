@@ -274,7 +274,12 @@ impl<const D: usize> Atlas<D> {
         if all.iter().any(|x| !x.is_finite()) {
             return Err(bad("contains NaN or infinite values".into()));
         }
-        Ok(Atlas {
+        if es.len() != 1 {
+            return Err(bad(format!(
+                "tensor eigenvalues has shape {es:?}, [_] expected"
+            )));
+        }
+        let atlas = Atlas {
             mean,
             modes,
             eigenvalues: f64v(&eb),
@@ -289,8 +294,53 @@ impl<const D: usize> Atlas<D> {
             },
             params,
             training_shapes,
-        })
+        };
+        validate(&atlas).map_err(bad)?;
+        Ok(atlas)
     }
+}
+
+/// The invariants of an atlas that its tensors' shapes do not tell: a mean with facets,
+/// positive finite eigenvalues, a cumulative variance that rises within [0, 1], a mesh of
+/// this dimension's elements, none degenerate or inverted.
+fn validate<const D: usize>(a: &Atlas<D>) -> std::result::Result<(), String> {
+    if a.mean.len() < D + 1 || a.facets.is_empty() {
+        return Err(format!(
+            "the mean shape has {} points and {} facets",
+            a.mean.len(),
+            a.facets.len()
+        ));
+    }
+    if let Some(l) = a.eigenvalues.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
+        return Err(format!(
+            "an eigenvalue is {l}: the variances must be positive"
+        ));
+    }
+    let cv = &a.cumulative_variance;
+    if cv.is_empty()
+        || cv
+            .iter()
+            .any(|c| !c.is_finite() || *c < 0.0 || *c > 1.0 + 1e-9)
+        || cv.windows(2).any(|w| w[1] < w[0] - 1e-12)
+    {
+        return Err("the cumulative variance must rise within [0, 1]".into());
+    }
+    let kind = a.mesh.kind;
+    if kind.dimension() != D {
+        return Err(format!("a {D}D atlas with {} elements", kind.name()));
+    }
+    if a.mesh.num_elements() == 0 {
+        return Err("the mean mesh has no elements".into());
+    }
+    let q = crate::mesh::quality::summarize(&crate::mesh::quality::mesh_quality(&a.mesh));
+    if !(q.jacobian_min.is_finite() && q.jacobian_min > 0.0 && q.scaled_jacobian_min.is_finite()) {
+        return Err(format!(
+            "the mean mesh has {} inverted or degenerate element(s) (smallest corner Jacobian {:e})",
+            q.inverted_elements.max(1),
+            q.jacobian_min
+        ));
+    }
+    Ok(())
 }
 
 /// What an atlas file's metadata says, checked: the format and its version, the checksum of

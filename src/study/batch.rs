@@ -161,6 +161,27 @@ pub fn folder_name(name: &str) -> String {
     crate::study::file_name(name)
 }
 
+/// Checks that no two of `files` would share an output folder (their stems as
+/// [`folder_name`]s: `S 1.ply` and `S_1.ply` both make `S_1/`). Run it on the whole list
+/// before sharding, so that every shard of a batch agrees.
+///
+/// # Errors
+/// [`Error::Population`] naming the two files and their folder.
+pub fn check_folder_names(files: &[PathBuf]) -> Result<()> {
+    let mut folders: Vec<(String, &PathBuf)> =
+        files.iter().map(|f| (folder_name(&stem(f)), f)).collect();
+    folders.sort();
+    if let Some(w) = folders.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(Error::Population(format!(
+            "{} and {} would share the output folder {}/; rename one",
+            w[0].1.display(),
+            w[1].1.display(),
+            w[0].0
+        )));
+    }
+    Ok(())
+}
+
 /// The record of a complete subject in `out`, if there is one made from `input` (its CRC)
 /// with the same run (`run_crc`) and with every file it lists present.
 fn complete(out: &Path, folder: &str, input_crc: u32, run_crc: u32) -> Option<SubjectReport> {
@@ -189,18 +210,8 @@ pub fn fit_batch<const D: usize>(
     opts: &BatchOptions,
     progress: &dyn Progress,
 ) -> Result<Report> {
+    check_folder_names(files)?;
     crate::formats::create_dir(out)?;
-    // Two files with the same stem would share a folder.
-    let mut stems: Vec<(String, &PathBuf)> = files.iter().map(|f| (stem(f), f)).collect::<Vec<_>>();
-    stems.sort();
-    if let Some(w) = stems.windows(2).find(|w| w[0].0 == w[1].0) {
-        return Err(Error::Population(format!(
-            "two subjects named {}: {} and {}; rename one",
-            w[0].0,
-            w[0].1.display(),
-            w[1].1.display()
-        )));
-    }
     let run_crc = {
         let mut h = crc32fast::Hasher::new();
         h.update(&atlas_crc.to_le_bytes());
@@ -355,6 +366,7 @@ fn fit_file<const D: usize>(
     let several = shapes.len() > 1;
     let mut reports = Vec::new();
     let mut failed = Vec::new();
+    let mut folders = std::collections::HashSet::new();
     for mut shape in shapes {
         let subject = if several {
             format!("{name}.{}", shape.name)
@@ -362,6 +374,14 @@ fn fit_file<const D: usize>(
             name.clone()
         };
         let folder = folder_name(&subject);
+        if !folders.insert(folder.clone()) {
+            let e = Error::Population(format!(
+                "{}: another shape of this file already has the output folder {folder}/; rename one",
+                file.display()
+            ));
+            failed.push(fail(&subject, &e));
+            continue;
+        }
         if several
             && opts.resume
             && let Some(r) = complete(out, &folder, input_crc, run_crc)

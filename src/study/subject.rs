@@ -95,9 +95,10 @@ pub fn fit_subject<const D: usize>(
         per_element = q;
         repair = Some(r);
     }
+    let q = summarize(&per_element);
+    check_valid(subject, &mesh, &q, params)?;
     let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
     let delivered = delivered_distances(&mesh, subject, &index, params);
-    let q = summarize(&per_element);
     let dist = distribution(&mesh, &per_element);
     let mean_normals = atlas.mean_shape().vertex_normals();
     let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
@@ -164,6 +165,43 @@ pub fn fit_subject<const D: usize>(
         index,
         report,
     })
+}
+
+/// Refuses a morphed (and repaired) mesh no solver could use: no elements, a node with a NaN
+/// or infinite coordinate, or an inverted element (a corner Jacobian ≤ 0).
+fn check_valid<const D: usize>(
+    subject: &Shape<D>,
+    mesh: &crate::mesh::FeMesh<D>,
+    q: &crate::mesh::quality::QualitySummary,
+    params: &RunParams,
+) -> Result<()> {
+    let what = if mesh.num_elements() == 0 {
+        "has no elements".to_string()
+    } else if let Some(i) = mesh
+        .nodes
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite()))
+    {
+        format!("has a node with a NaN or infinite coordinate (node {i})")
+    } else if q.inverted_elements > 0 {
+        format!(
+            "has {} inverted element(s) (smallest corner Jacobian {:.3e}){}",
+            q.inverted_elements,
+            q.jacobian_min,
+            if params.repair.is_some() {
+                " the repair could not untangle"
+            } else {
+                ", and --repair is off"
+            }
+        )
+    } else {
+        return Ok(());
+    };
+    Err(Error::Mesh(format!(
+        "{}: the morphed mesh {what}; it is not written (check the subject's surface for stray \
+         vertices or parts the atlas does not model)",
+        subject.name
+    )))
 }
 
 /// A fit farther from its subject than this share of the diagonal (two-way RMS) is compared
@@ -333,4 +371,47 @@ fn check_misfit<const D: usize>(
 /// Whether `value <= bound` (false when either is NaN).
 fn within(value: f64, bound: f64) -> bool {
     value <= bound
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{ElementKind, FeMesh};
+
+    /// A mesh with an inverted element, a non-finite node or no element is refused, naming
+    /// the subject and what is wrong; a valid one passes.
+    #[test]
+    fn meshes_no_solver_could_use_are_refused() {
+        let subject = Shape::<2>::polyline("s", vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], true);
+        let square = FeMesh::<2> {
+            nodes: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            kind: ElementKind::Quad4,
+            connectivity: vec![0, 1, 2, 3],
+            sets: Default::default(),
+        };
+        let check = |m: &FeMesh<2>| {
+            let q = crate::mesh::quality::summarize(&crate::mesh::quality::mesh_quality(m));
+            check_valid(&subject, m, &q, &RunParams::default())
+        };
+        assert!(check(&square).is_ok());
+        let mut inverted = square.clone();
+        inverted.connectivity = vec![0, 3, 2, 1];
+        let e = check(&inverted).unwrap_err().to_string();
+        assert!(
+            e.contains("s:") && e.contains("1 inverted") && e.contains("not written"),
+            "{e}"
+        );
+        let mut nan = square.clone();
+        nan.nodes[2][0] = f64::NAN;
+        let e = check(&nan).unwrap_err().to_string();
+        assert!(e.contains("NaN or infinite"), "{e}");
+        let mut empty = square;
+        empty.connectivity.clear();
+        assert!(
+            check(&empty)
+                .unwrap_err()
+                .to_string()
+                .contains("no elements")
+        );
+    }
 }

@@ -233,8 +233,12 @@ pub fn write_subject<const D: usize>(
     Ok(report)
 }
 
+/// A subject's name as a safe file or folder name: ASCII letters, digits, `-`, `_` and `.`
+/// kept, anything else (separators, spaces, controls) `_`; never empty, never starting with
+/// a dot (so never `.`, `..` or a hidden name).
 pub(crate) fn file_name(name: &str) -> String {
-    name.chars()
+    let mut s: String = name
+        .chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
                 c
@@ -242,5 +246,9 @@ pub(crate) fn file_name(name: &str) -> String {
                 '_'
             }
         })
-        .collect()
+        .collect();
+    if s.starts_with('.') || s.is_empty() {
+        s.insert(0, '_');
+    }
+    s
 }

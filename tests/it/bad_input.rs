@@ -14,7 +14,7 @@ fn s(p: &Path) -> String {
 }
 
 /// Asserts a clean failure: `code`, every word of `words` in the message, no panic.
-fn fails(o: &Output, code: i32, words: &[&str]) {
+pub(crate) fn fails(o: &Output, code: i32, words: &[&str]) {
     let err = String::from_utf8_lossy(&o.stderr);
     eprintln!("exit {:?}: {}", o.status.code(), err.trim());
     assert_eq!(o.status.code(), Some(code), "exit code; stderr: {err}");
@@ -25,7 +25,7 @@ fn fails(o: &Output, code: i32, words: &[&str]) {
 }
 
 /// Files under `dir` whose names do not start with a dot.
-fn files_in(dir: &Path) -> Vec<PathBuf> {
+pub(crate) fn files_in(dir: &Path) -> Vec<PathBuf> {
     let mut v = Vec::new();
     if let Ok(r) = std::fs::read_dir(dir) {
         for e in r.flatten() {
@@ -355,7 +355,7 @@ fn identical_shapes() {
 }
 
 /// An atlas of the demo's 2D outlines, built through the CLI.
-fn atlas_2d(d: &Path) -> PathBuf {
+pub(crate) fn atlas_2d(d: &Path) -> PathBuf {
     let pop = atlasmesh::study::demo_population(12, 120, 5);
     let mut csv = String::from("shape,point,x,y\n");
     for sh in &pop {

@@ -12,6 +12,7 @@ mod ecosystem;
 mod femur;
 mod fuzz_regressions;
 mod hands;
+mod hostile;
 mod html;
 mod register;
 mod repair;

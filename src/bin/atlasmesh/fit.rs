@@ -48,6 +48,7 @@ pub struct FitArgs {
 /// Runs `atlasmesh fit`.
 pub fn run(a: FitArgs, term: &Terminal) -> anyhow::Result<()> {
     let files = batch::subject_files(&a.subject)?;
+    batch::check_folder_names(&files)?;
     let shard = a.shard.as_deref().map(batch::parse_shard).transpose()?;
     // A subject of the other dimension than the atlas is named as such.
     let other = |p: &Path, it: &str, dim: usize| {

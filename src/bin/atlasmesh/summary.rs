@@ -7,13 +7,22 @@ use std::path::Path;
 pub fn print_summary(r: &Report, out: &Path) {
     let s = &r.summary;
     if let Some(m) = &r.mean_mesh {
+        // (A saved atlas does not know the shapes' unit: then the size is a share only.)
+        let size = if m.element_size.is_finite() {
+            format!(
+                "{:.3} in the shapes' unit ({:.2} % of the largest extent)",
+                m.element_size,
+                100.0 * m.element_size_share
+            )
+        } else {
+            format!(
+                "{:.2} % of the largest extent",
+                100.0 * m.element_size_share
+            )
+        };
         println!(
-            "mean mesh: {} {} elements of size {:.3} in the shapes' unit ({:.2} % of the largest extent), smallest scaled Jacobian {:.3}",
-            m.elements,
-            m.element_kind,
-            m.element_size,
-            100.0 * m.element_size_share,
-            m.scaled_jacobian_min
+            "mean mesh: {} {} elements of size {size}, smallest scaled Jacobian {:.3}",
+            m.elements, m.element_kind, m.scaled_jacobian_min
         );
     }
     println!(
@@ -88,9 +97,14 @@ pub struct BatchFailed {
 
 impl std::fmt::Display for BatchFailed {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let rest = if self.failed >= self.total {
+            "no subject was written"
+        } else {
+            "the others were written"
+        };
         write!(
             f,
-            "{} of {} subjects failed (see `failed` in report.json); the others were written",
+            "{} of {} subjects failed (see `failed` in report.json); {rest}",
             self.failed, self.total
         )
     }

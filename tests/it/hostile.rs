@@ -1,0 +1,141 @@
+//! Hostile and broken input through the command line with its default options (plots on):
+//! names that would write outside `--out` or share a folder, meshes no solver could use.
+
+use crate::bad_input::{atlas_2d, fails, files_in};
+use crate::common::{self, atlasmesh};
+use std::path::Path;
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// The outline of an ellipse, as text.
+fn ellipse(a: f64, b: f64) -> String {
+    (0..120)
+        .map(|i| {
+            let t = i as f64 / 120.0 * std::f64::consts::TAU;
+            format!("{} {}\n", a * t.cos(), b * t.sin())
+        })
+        .collect()
+}
+
+/// Subjects named `..`, `.` (files `...txt`, `..txt`) write into folders of their own inside
+/// `--out`, and touch nothing beside it; two files whose names make one folder (`S 1`,
+/// `S_1`) are refused before anything is written.
+#[test]
+fn subject_names_stay_inside_out_and_apart() {
+    let d = common::temp_dir("hostile-names");
+    let atlas = atlas_2d(&d);
+    let subjects = d.join("subjects");
+    std::fs::create_dir_all(&subjects).unwrap();
+    for f in ["...txt", "..txt", "plain.txt"] {
+        std::fs::write(subjects.join(f), ellipse(1.0, 0.6)).unwrap();
+    }
+    // What a run must not touch: a file of the same name beside --out.
+    std::fs::write(d.join("subject.json"), "keep").unwrap();
+    let out = d.join("fit");
+    let o = atlasmesh(&[
+        "fit",
+        "--atlas",
+        &s(&atlas),
+        "--subjects",
+        &s(&subjects),
+        "--out",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(d.join("subject.json")).unwrap(),
+        "keep"
+    );
+    let r: atlasmesh::report::Report =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r.subjects.len(), 3);
+    for sub in &r.subjects {
+        for f in &sub.files {
+            let p = out.join(f);
+            assert!(p.is_file(), "{f} written");
+            let canon = p.canonicalize().unwrap();
+            assert!(
+                canon.starts_with(out.canonicalize().unwrap()),
+                "{f} inside --out"
+            );
+            assert!(
+                !f.starts_with('.') && !f.contains("/."),
+                "{f}: no hidden or relative name"
+            );
+        }
+    }
+    // Two names, one folder.
+    let clash = d.join("clash");
+    std::fs::create_dir_all(&clash).unwrap();
+    for f in ["S 1.txt", "S_1.txt"] {
+        std::fs::write(clash.join(f), ellipse(1.0, 0.6)).unwrap();
+    }
+    let out2 = d.join("fit2");
+    let o = atlasmesh(&[
+        "fit",
+        "--atlas",
+        &s(&atlas),
+        "--subjects",
+        &s(&clash),
+        "--out",
+        &s(&out2),
+    ]);
+    fails(&o, 2, &["S 1.txt", "S_1.txt", "S_1/", "rename one"]);
+    assert!(files_in(&out2).is_empty(), "{:?}", files_in(&out2));
+}
+
+/// Atlas files with a valid checksum but contents no model has (written through the
+/// library, so the checksum is right) are refused when read: exit 2, the file and the problem
+/// named, nothing written. Among them an atlas whose mesh nodes overflow when morphed
+/// (×1e300), which used to give all-NaN meshes counted as successes.
+#[test]
+fn inconsistent_atlases_are_refused_when_read() {
+    let d = common::temp_dir("hostile-atlas");
+    let good = atlas_2d(&d);
+    let subject = d.join("ellipse.txt");
+    std::fs::write(&subject, ellipse(1.0, 0.6)).unwrap();
+    type Edit = fn(&mut atlasmesh::model::Atlas<2>);
+    let cases: [(&str, Edit, &str); 5] = [
+        (
+            "overflow",
+            |a| a.mesh.nodes.iter_mut().flatten().for_each(|c| *c *= 1e300),
+            "degenerate",
+        ),
+        (
+            "negative-eigenvalue",
+            |a| a.eigenvalues[0] = -1.0,
+            "eigenvalue",
+        ),
+        ("nan-eigenvalue", |a| a.eigenvalues[1] = f64::NAN, "NaN"),
+        (
+            "no-variance",
+            |a| a.cumulative_variance.clear(),
+            "cumulative variance",
+        ),
+        (
+            "no-elements",
+            |a| a.mesh.connectivity.clear(),
+            "no elements",
+        ),
+    ];
+    for (name, edit, word) in cases {
+        let mut atlas = atlasmesh::model::Atlas::<2>::load(&good).unwrap();
+        edit(&mut atlas);
+        let bad = d.join(format!("{name}.safetensors"));
+        atlas.save(&bad).unwrap();
+        let out = d.join(format!("fit-{name}"));
+        let o = atlasmesh(&[
+            "fit",
+            "--atlas",
+            &s(&bad),
+            "--subject",
+            &s(&subject),
+            "--out",
+            &s(&out),
+        ]);
+        fails(&o, 2, &[&format!("{name}.safetensors"), word]);
+        assert!(files_in(&out).is_empty(), "{name}: {:?}", files_in(&out));
+    }
+}

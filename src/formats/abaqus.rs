@@ -44,7 +44,7 @@ pub(crate) fn keyword_params(line: &str) -> (String, HashMap<String, String>) {
 /// Reads an Abaqus/CalculiX input file: `*NODE`, `*ELEMENT`, `*NSET`, `*ELSET`, `*SURFACE`;
 /// other keywords (materials, steps, ...) are skipped here and kept in `text`.
 pub fn read_inp(path: &Path) -> Result<InpDeck> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::formats::read_input_text(path)?;
     parse_inp(path, &text)
 }
 

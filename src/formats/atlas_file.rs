@@ -43,12 +43,13 @@ pub fn atlas_dimension(path: &Path) -> Result<usize> {
         path: path.to_path_buf(),
         message: m,
     };
+    let size = crate::formats::input::regular_file(path)?.len();
     let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut len = [0u8; 8];
     f.read_exact(&mut len)
         .map_err(|_| bad("not a safetensors file (too short)".into()))?;
     let n = u64::from_le_bytes(len);
-    if n > 100_000_000 {
+    if n > 100_000_000 || n > size {
         return Err(bad(format!("a header of {n} bytes: not an atlas")));
     }
     let mut header = vec![0u8; n as usize];
@@ -175,7 +176,7 @@ impl<const D: usize> Atlas<D> {
     /// Loads an atlas written by [`Atlas::save`], checking format, version, dimension and
     /// shapes of every tensor.
     pub fn load(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::formats::read_input(path)?;
         Self::from_bytes(path, &bytes)
     }
 

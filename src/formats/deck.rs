@@ -29,7 +29,7 @@ impl Deck {
         {
             Some("inp") => Ok(Deck::Inp(super::read_inp(path)?)),
             Some("feb") => {
-                let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+                let text = crate::formats::read_input_text(path)?;
                 Ok(Deck::Feb(FebDeck::parse(path, &text)?))
             }
             _ => Err(Error::parse(

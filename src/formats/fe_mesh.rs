@@ -21,7 +21,7 @@ pub fn read_fe_mesh<const D: usize>(path: &Path) -> Result<FeMesh<D>> {
 pub fn read_fe_mesh_raw(path: &Path) -> Result<FeMesh<3>> {
     // An unknown format is named as such before the file is read.
     mesh_extension(path)?;
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_fe_mesh_raw(path, &bytes)
 }
 

@@ -15,7 +15,7 @@ pub(crate) type MshElement = (usize, u32, Vec<i64>, Vec<i64>, i64);
 /// says). The elements of the highest dimension form the mesh; physical groups become sets
 /// (see the module doc).
 pub fn read_msh(path: &Path) -> Result<FeMesh<3>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_msh(path, &bytes)
 }
 

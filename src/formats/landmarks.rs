@@ -20,7 +20,7 @@ pub enum Landmark<const D: usize> {
 
 /// Reads the landmarks of one shape from a Scalismo JSON or `.pts` file, in file order.
 pub fn read_landmarks<const D: usize>(path: &Path) -> Result<Vec<Landmark<D>>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::formats::read_input_text(path)?;
     parse_landmarks::<D>(path, &text)
 }
 
@@ -113,7 +113,7 @@ pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<La
 pub fn read_landmarks_csv<const D: usize>(
     path: &Path,
 ) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::formats::read_input_text(path)?;
     parse_landmarks_csv::<D>(path, &text)
 }
 

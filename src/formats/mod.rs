@@ -19,6 +19,7 @@
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
 //! | `sets_file` | the sets file (TOML) |
 //! | `atlas_file` | the atlas file (safetensors) |
+//! | `input` | input files: regular files only, of bounded size |
 //! | `atomic` | output folders and atomic writes |
 
 pub mod abaqus;
@@ -30,6 +31,7 @@ pub mod fe_mesh;
 pub mod febio;
 pub mod gmsh;
 mod gmsh_binary;
+pub mod input;
 pub mod landmarks;
 pub mod obj;
 pub mod outline;
@@ -55,6 +57,7 @@ pub use fe_mesh::{
     MeshFormat, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh,
 };
 pub use gmsh::{parse_msh, read_msh};
+pub use input::{read_input, read_input_text};
 pub use outline::{parse_outlines, parse_outlines_with, read_outlines, read_outlines_with};
 pub use outline_csv::{parse_long_csv, parse_long_csv_with, parse_point_sets_csv, read_long_csv};
 pub use outline_text::{parse_text_outlines, read_text_outlines};

@@ -22,7 +22,7 @@ pub fn read_outlines_with(
     closed: bool,
     columns: &CsvColumns,
 ) -> Result<Vec<Shape<2>>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_outlines_with(path, &bytes, closed, columns)
 }
 
@@ -91,7 +91,7 @@ pub(crate) fn check_finite(path: &Path, s: &Shape<2>) -> Result<()> {
 }
 
 pub(crate) fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     text_of(path, &bytes).map(str::to_owned)
 }
 

@@ -12,7 +12,7 @@ use std::path::Path;
 /// legacy `.vtk` POLYDATA with polygons or triangle strips, `.vtp` as VTK writes it).
 /// The surface is checked and oriented by [`prepare_surface`].
 pub fn read_surface(path: &Path) -> Result<Shape<3>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_surface(path, &bytes)
 }
 

@@ -408,7 +408,7 @@ fn parse_legacy(path: &Path, bytes: &[u8]) -> Result<Legacy> {
 /// triangles; vertices and attributes read past). An UNSTRUCTURED_GRID of vertices, lines,
 /// triangles, polygons and quadrilaterals (as meshio writes surfaces) is read as polydata.
 pub fn read_vtk_polydata(path: &Path) -> Result<VtkPolyData> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_vtk_polydata(path, &bytes)
 }
 
@@ -450,7 +450,7 @@ pub fn parse_vtk_polydata(path: &Path, bytes: &[u8]) -> Result<VtkPolyData> {
 /// the chain of segments; every point must have at most two neighbours and the segments must
 /// form one chain or one loop.
 pub fn read_vtk_outline(path: &Path) -> Result<Shape<2>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_vtk_outline(path, &bytes)
 }
 
@@ -462,7 +462,7 @@ pub fn parse_vtk_outline(path: &Path, bytes: &[u8]) -> Result<Shape<2>> {
 /// Reads a legacy VTK UNSTRUCTURED_GRID mesh (ASCII or binary, 4.2 or 5.1): the cells of the
 /// highest dimension, of one kind, with `set_NAME` scalars as sets.
 pub fn read_vtk_unstructured(path: &Path) -> Result<FeMesh<3>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_vtk_unstructured(path, &bytes)
 }
 

@@ -85,7 +85,7 @@ fn data(doc: &Document, piece: &Piece, tag: &str, prefix: &str) -> Result<DataAr
 /// LZ4 or not (see [`super::vtk_xml_read`]). Triangle strips become triangles; vertices are
 /// dropped; several pieces are joined.
 pub fn read_vtp(path: &Path) -> Result<VtkPolyData> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_vtp(path, &bytes)
 }
 
@@ -127,7 +127,7 @@ pub fn parse_vtp(path: &Path, bytes: &[u8]) -> Result<VtkPolyData> {
 /// order), lower-dimensional cells dropped. Point and cell data `set_NAME` (0/1, as
 /// [`crate::formats::write_vtu`] writes them) are read back as node and element sets.
 pub fn read_vtu(path: &Path) -> Result<FeMesh<3>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     parse_vtu(path, &bytes)
 }
 

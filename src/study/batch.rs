@@ -103,7 +103,7 @@ pub fn subject_files(specs: &[PathBuf]) -> Result<Vec<PathBuf>> {
             in_dir.sort();
             files.extend(in_dir);
         } else if ext(spec) == "list" {
-            let text = std::fs::read_to_string(spec).map_err(|e| Error::io(spec, e))?;
+            let text = crate::formats::read_input_text(spec)?;
             let base = spec.parent().unwrap_or(Path::new("."));
             files.extend(
                 text.lines()
@@ -152,7 +152,7 @@ pub fn shard(files: &[PathBuf], i: usize, n: usize) -> Vec<PathBuf> {
 
 /// CRC-32 of a file's bytes.
 pub fn file_crc32(path: &Path) -> Result<u32> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::formats::read_input(path)?;
     Ok(crc32fast::hash(&bytes))
 }
 
@@ -430,7 +430,7 @@ fn fit_file<const D: usize>(
 pub fn merge_reports(paths: &[PathBuf]) -> Result<Report> {
     let mut merged: Option<Report> = None;
     for p in paths {
-        let text = std::fs::read(p).map_err(|e| Error::io(p, e))?;
+        let text = crate::formats::read_input(p)?;
         let r: Report = serde_json::from_slice(&text)
             .map_err(|e| Error::parse(p, e.line(), format!("not an atlasmesh report: {e}")))?;
         match &mut merged {

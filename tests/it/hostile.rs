@@ -139,3 +139,74 @@ fn inconsistent_atlases_are_refused_when_read() {
         assert!(files_in(&out).is_empty(), "{name}: {:?}", files_in(&out));
     }
 }
+
+/// Inputs that are not regular files (a link to `/dev/zero`, a FIFO) are refused before they
+/// are read (no endless read, no hang), and a file beyond the input limit is refused with the
+/// limit and how to raise it.
+#[test]
+fn devices_fifos_and_oversized_inputs_are_refused() {
+    let d = common::temp_dir("hostile-files");
+    let atlas = atlas_2d(&d);
+    let zero = d.join("zero.txt");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let fifo = d.join("fifo.txt");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    for (p, name) in [(&zero, "zero"), (&fifo, "fifo")] {
+        let out = d.join(format!("fit-{name}"));
+        let o = atlasmesh(&[
+            "fit",
+            "--atlas",
+            &s(&atlas),
+            "--subject",
+            &s(p),
+            "--out",
+            &s(&out),
+        ]);
+        fails(&o, 6, &[&format!("{name}.txt"), "not a regular file"]);
+        assert!(
+            files_in(&out)
+                .iter()
+                .all(|f| !f.to_string_lossy().contains("_mesh"))
+        );
+    }
+    let big = d.join("big.txt");
+    std::fs::write(&big, ellipse(1.0, 0.6).repeat(30)).unwrap();
+    let out = d.join("fit-big");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args([
+            "fit",
+            "--atlas",
+            &s(&atlas),
+            "--subject",
+            &s(&big),
+            "--out",
+            &s(&out),
+        ])
+        .env("ATLASMESH_MAX_INPUT_BYTES", "60000")
+        .output()
+        .unwrap();
+    fails(
+        &o,
+        6,
+        &[
+            "big.txt",
+            "input limit of 60000 bytes",
+            "ATLASMESH_MAX_INPUT_BYTES",
+        ],
+    );
+    // A folder given as an atlas.
+    let o = atlasmesh(&[
+        "fit",
+        "--atlas",
+        &s(&d),
+        "--subject",
+        &s(&big),
+        "--out",
+        &s(&out),
+    ]);
+    fails(&o, 2, &["not a regular file"]);
+}

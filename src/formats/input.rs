@@ -1,0 +1,85 @@
+//! Input files read whole, safely: regular files only (a device such as `/dev/zero`, a FIFO
+//! or a folder is refused before it is opened, so nothing reads forever or hangs), and at
+//! most [`max_input_bytes`] (2 GiB unless `ATLASMESH_MAX_INPUT_BYTES` says otherwise).
+
+use crate::error::{Error, Result};
+use std::io::Read as _;
+use std::path::Path;
+
+/// The default largest input file, in bytes.
+pub const DEFAULT_MAX_INPUT_BYTES: u64 = 2 << 30;
+
+/// The largest input file read, in bytes: `ATLASMESH_MAX_INPUT_BYTES` when set to a number,
+/// else [`DEFAULT_MAX_INPUT_BYTES`].
+pub fn max_input_bytes() -> u64 {
+    std::env::var("ATLASMESH_MAX_INPUT_BYTES")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(DEFAULT_MAX_INPUT_BYTES)
+}
+
+/// The bytes of the input file `path`.
+///
+/// # Errors
+/// [`Error::Parse`] for a file that is not regular or is larger than [`max_input_bytes`];
+/// [`Error::Io`] when it cannot be read.
+pub fn read_input(path: &Path) -> Result<Vec<u8>> {
+    let meta = regular_file(path)?;
+    let cap = max_input_bytes();
+    let too_big = |n: u64| {
+        Error::parse(
+            path,
+            0,
+            format!(
+                "{n} bytes or more, beyond the input limit of {cap} bytes (set ATLASMESH_MAX_INPUT_BYTES to raise it)"
+            ),
+        )
+    };
+    if meta.len() > cap {
+        return Err(too_big(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(cap + 1).read_to_end(&mut bytes))
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > cap {
+        return Err(too_big(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// The metadata of `path` (links followed), which must name a regular file.
+///
+/// # Errors
+/// [`Error::Parse`] for a folder, a device, a FIFO or a socket; [`Error::Io`] when it does
+/// not exist.
+pub fn regular_file(path: &Path) -> Result<std::fs::Metadata> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "a folder"
+        } else {
+            "a device, FIFO or socket"
+        };
+        return Err(Error::parse(
+            path,
+            0,
+            format!("not a regular file ({what}); give a file"),
+        ));
+    }
+    Ok(meta)
+}
+
+/// The text of the input file `path` (as [`read_input`]; invalid UTF-8 is an I/O error of
+/// kind `InvalidData`, as `std::fs::read_to_string` gives it).
+pub fn read_input_text(path: &Path) -> Result<String> {
+    String::from_utf8(read_input(path)?).map_err(|_| {
+        Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "stream did not contain valid UTF-8",
+            ),
+        )
+    })
+}

@@ -7,7 +7,7 @@ set -uo pipefail
 cd "$(dirname "$0")"
 SECONDS_PER_TARGET=${1:-600}
 shift || true
-TARGETS=${*:-ply stl obj vtk vtp vtu inp msh csv text landmarks sets atlas vtk_xml_encoded vtk51 msh_binary}
+TARGETS=${*:-ply stl obj vtk vtp vtu inp msh csv text landmarks sets atlas vtk_xml_encoded vtk51 msh_binary atlas_structure}
 export RUSTC_BOOTSTRAP=1
 cargo fuzz build -O >/dev/null 2>&1 || cargo fuzz build -O
 run() {

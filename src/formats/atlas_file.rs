@@ -74,6 +74,11 @@ impl<const D: usize> Atlas<D> {
     /// (JSON: node sets, element sets, surfaces of the mean mesh),
     /// `training_shapes`. Written to a temporary name, then renamed.
     pub fn save(&self, path: &Path) -> Result<()> {
+        crate::formats::write_atomic(path, &self.to_bytes()?)
+    }
+
+    /// The atlas file's bytes, as [`Atlas::save`] writes them (checksum included).
+    pub fn to_bytes(&self) -> Result<Vec<u8>> {
         use safetensors::{Dtype, tensor::TensorView};
         let f64s = |v: Vec<f64>| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
         let i64s = |v: Vec<usize>| -> Vec<u8> {
@@ -168,9 +173,8 @@ impl<const D: usize> Atlas<D> {
             .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
         let crc = atlas_checksum(data_section(&first).unwrap_or_default(), &meta);
         meta.insert("checksum_crc32".to_string(), format!("{crc:08x}"));
-        let bytes = safetensors::serialize(views, Some(meta))
-            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
-        crate::formats::write_atomic(path, &bytes)
+        safetensors::serialize(views, Some(meta))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))
     }
 
     /// Loads an atlas written by [`Atlas::save`], checking format, version, dimension and

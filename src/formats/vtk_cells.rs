@@ -64,6 +64,20 @@ pub(crate) fn split_cells(
     Ok(cells)
 }
 
+/// VTK cell type numbers as read (values outside 0..=255 become 255, a type VTK does not
+/// define).
+pub(crate) fn cell_types(v: Vec<f64>) -> Vec<u8> {
+    v.into_iter()
+        .map(|t| {
+            if (0.0..=255.0).contains(&t) {
+                t as u8
+            } else {
+                255
+            }
+        })
+        .collect()
+}
+
 /// `v` as an index below `n`.
 pub(crate) fn index(path: &Path, v: f64, n: usize, what: &str) -> Result<usize> {
     if v >= 0.0 && v.fract() == 0.0 && v < n as f64 {

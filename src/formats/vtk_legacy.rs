@@ -6,7 +6,9 @@
 
 use super::atomic::MAX_COUNT;
 use super::fe_mesh::xyz;
-use super::vtk_cells::{DataArrays, VtkPolyData, mesh_from_cells, outline_from_polydata};
+use super::vtk_cells::{
+    DataArrays, VtkPolyData, cell_types, mesh_from_cells, outline_from_polydata,
+};
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use crate::mesh::quality::ElementQuality;
@@ -287,17 +289,7 @@ fn parse_legacy(path: &Path, bytes: &[u8]) -> Result<Legacy> {
             }
             "CELL_TYPES" => {
                 let n = count(&c, &f, 1, "count")?;
-                out.types = c
-                    .values(n, "int", "CELL_TYPES")?
-                    .into_iter()
-                    .map(|t| {
-                        if (0.0..=255.0).contains(&t) {
-                            t as u8
-                        } else {
-                            255
-                        }
-                    })
-                    .collect();
+                out.types = cell_types(c.values(n, "int", "CELL_TYPES")?);
             }
             "POINT_DATA" | "CELL_DATA" => {
                 target = Some((key == "POINT_DATA", count(&c, &f, 1, "count")?));

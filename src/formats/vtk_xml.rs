@@ -1,7 +1,7 @@
 //! VTK XML: VTP (polydata: outlines and surfaces) and VTU (unstructured grids: FE meshes with
 //! their sets and quality) read and written.
 
-use super::vtk_cells::{DataArrays, VtkPolyData, mesh_from_cells, split_cells};
+use super::vtk_cells::{DataArrays, VtkPolyData, cell_types, mesh_from_cells, split_cells};
 use super::vtk_xml_read::{Document, Piece};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
@@ -82,7 +82,7 @@ fn data(doc: &Document, piece: &Piece, tag: &str, prefix: &str) -> Result<DataAr
 
 /// Reads the points, polygons and lines of a VTK XML PolyData file (`.vtp`) as VTK, ParaView,
 /// PyVista and meshio write it: ASCII, base64 or appended raw data, compressed with zlib or
-/// LZ4 or not (see [`super::vtk_xml_read`]). Triangle strips become triangles; vertices are
+/// LZ4 or not (see docs/formats.md). Triangle strips become triangles; vertices are
 /// dropped; several pieces are joined.
 pub fn read_vtp(path: &Path) -> Result<VtkPolyData> {
     let bytes = crate::formats::read_input(path)?;
@@ -154,16 +154,7 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
     };
     let nodes = points(&doc, piece)?;
     let cells = cells(&doc, piece, "Cells", nodes.len())?;
-    let types: Vec<u8> = array(&doc, piece, "Cells", Some("types"))?
-        .into_iter()
-        .map(|t| {
-            if (0.0..=255.0).contains(&t) {
-                t as u8
-            } else {
-                255
-            }
-        })
-        .collect();
+    let types = cell_types(array(&doc, piece, "Cells", Some("types"))?);
     let point_data = data(&doc, piece, "PointData", "set_")?;
     let cell_data = data(&doc, piece, "CellData", "set_")?;
     mesh_from_cells(path, nodes, &cells, &types, &point_data, &cell_data)

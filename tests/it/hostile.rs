@@ -210,3 +210,36 @@ fn devices_fifos_and_oversized_inputs_are_refused() {
     ]);
     fails(&o, 2, &["not a regular file"]);
 }
+
+/// Parameters out of their ranges are refused before any work, naming the option and the
+/// range: `--grid 60` (9 GB), `--grid 1000`, `--resample 1e8`, `--repair-bound 2` and `NaN`,
+/// `--jobs 100000`, `--alpha 0`.
+#[test]
+fn parameters_out_of_range_are_refused() {
+    let d = common::temp_dir("hostile-params");
+    let shapes = d.join("s.txt");
+    std::fs::write(&shapes, ellipse(1.0, 0.6)).unwrap();
+    let out = d.join("out");
+    for (flag, value, words) in [
+        ("--grid", "60", "from 4 to 32"),
+        ("--grid", "1000", "from 4 to 32"),
+        ("--resample", "100000000", "from 3 to 1000000"),
+        ("--repair-bound", "2", "between 0 and 1"),
+        ("--repair-bound", "NaN", "between 0 and 1"),
+        ("--jobs", "100000", "from 0 to 1024"),
+        ("--alpha", "0", "finite positive"),
+        ("--starts", "0", "from 1 to 64"),
+    ] {
+        let o = atlasmesh(&[
+            "loo",
+            "--shapes",
+            &s(&shapes),
+            flag,
+            value,
+            "--out",
+            &s(&out),
+        ]);
+        fails(&o, 2, &[flag, words]);
+        assert!(files_in(&out).is_empty(), "{flag} {value}");
+    }
+}

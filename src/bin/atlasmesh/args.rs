@@ -23,7 +23,7 @@ pub struct PopArgs {
     pub register: bool,
     /// FFD control points of the registration along the shape's longest axis (default: 20
     /// in 2D as the paper, 16 in 3D).
-    #[arg(long, value_name = "N", requires = "register")]
+    #[arg(long, value_name = "N", requires = "register", value_parser = count::<4, 32>)]
     pub register_grid: Option<usize>,
     /// The registration's template: a shape of --shapes by name, or a shape file outside the
     /// population (a reference surface, used only as the template). Default: the shape
@@ -53,10 +53,10 @@ pub struct PopArgs {
     #[arg(long, value_name = "MAP")]
     pub columns: Option<atlasmesh::formats::CsvColumns>,
     /// Resample every outline to N points along a smooth curve through its points.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = count::<3, 1_000_000>)]
     pub resample: Option<usize>,
     /// Keep M modes.
-    #[arg(long, value_name = "M", conflicts_with = "variance")]
+    #[arg(long, value_name = "M", conflicts_with = "variance", value_parser = count::<1, 10_000>)]
     pub modes: Option<usize>,
     /// Keep the fewest modes explaining this share of the variance (default 0.985).
     #[arg(long, value_name = "P")]
@@ -71,17 +71,17 @@ pub struct PopArgs {
 
 #[derive(Args)]
 pub struct RunArgs {
-    /// FFD control points per axis for the morph (paper: 20).
-    #[arg(long, default_value_t = 20)]
+    /// FFD control points per axis for the morph (paper: 20; 4 to 32).
+    #[arg(long, default_value_t = 20, value_parser = count::<4, 32>)]
     pub grid: usize,
     /// FFD smoothing weight of the morph (paper: 50).
-    #[arg(long, default_value_t = 50.0)]
+    #[arg(long, default_value_t = 50.0, value_parser = positive)]
     pub alpha: f64,
     /// Use only the one-way (instance to subject) closest points in the fit, as the paper.
     #[arg(long)]
     pub one_way: bool,
     /// Starting rotations tried by the pre-alignment.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = count::<1, 64>)]
     pub starts: usize,
     /// Subjects may miss parts (paper, fig. 21-22): fit only the subject's points to the
     /// model, and morph with the model points that have a partner on the subject.
@@ -121,8 +121,8 @@ pub struct RunArgs {
     /// bound (hexahedra 0.2, quadrilaterals 0.3): on or off.
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub repair: String,
-    /// The scaled-Jacobian bound of the repair (default by element kind).
-    #[arg(long, value_name = "SJ")]
+    /// The scaled-Jacobian bound of the repair, in (0, 1) (default by element kind).
+    #[arg(long, value_name = "SJ", value_parser = open_share)]
     pub repair_bound: Option<f64>,
     /// A solver deck built around the atlas's mean mesh: Abaqus/CalculiX (`atlasmesh convert
     /// ATLAS mean.inp`, then add the material and steps) or FEBio (`mean.feb`, then add
@@ -234,4 +234,31 @@ pub fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
         (None, None) => ModeSelection::Variance(0.985),
     };
     p.element_size = pop.element_size;
+}
+
+/// A count within `LO..=HI`, for clap.
+pub fn count<const LO: usize, const HI: usize>(s: &str) -> Result<usize, String> {
+    s.trim()
+        .parse::<usize>()
+        .ok()
+        .filter(|n| (LO..=HI).contains(n))
+        .ok_or_else(|| format!("{s:?}: a whole number from {LO} to {HI} expected"))
+}
+
+/// A finite positive number, for clap.
+fn positive(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && *x > 0.0)
+        .ok_or_else(|| format!("{s:?}: a finite positive number expected"))
+}
+
+/// A number strictly between 0 and 1, for clap.
+fn open_share(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|x| *x > 0.0 && *x < 1.0)
+        .ok_or_else(|| format!("{s:?}: a number between 0 and 1 (exclusive) expected"))
 }

@@ -33,7 +33,7 @@ pub struct FitArgs {
     #[arg(long)]
     out: PathBuf,
     /// Worker threads (0 = all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = crate::args::count::<0, 1024>)]
     jobs: usize,
     /// Only the I-th of N parts of the subject list (sorted by path, subject k to part
     /// k mod N), e.g. `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`; join the

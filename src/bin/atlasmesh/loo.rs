@@ -20,7 +20,7 @@ pub struct LooArgs {
     #[arg(long)]
     out: PathBuf,
     /// Worker threads (0 = all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = crate::args::count::<0, 1024>)]
     jobs: usize,
 }
 

@@ -20,7 +20,7 @@ pub struct RegisterArgs {
     #[arg(long)]
     open: bool,
     /// FFD control points along the template's longest axis (default: 20 in 2D, 16 in 3D).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = crate::args::count::<4, 32>)]
     grid: Option<usize>,
     /// Output folder.
     #[arg(long)]

@@ -230,6 +230,28 @@ fn cell_name(t: u8) -> String {
 /// Named point or cell data arrays (one value per point or cell).
 pub(crate) type DataArrays = Vec<(String, Vec<f64>)>;
 
+/// The arrays `set_NAME` of `data` as (NAME, values), each checked to hold `n` values.
+fn set_arrays<'a>(
+    path: &Path,
+    data: &'a DataArrays,
+    n: usize,
+) -> Result<Vec<(&'a str, &'a [f64])>> {
+    data.iter()
+        .filter_map(|(name, v)| name.strip_prefix("set_").map(|set| (name, set, v)))
+        .map(|(name, set, v)| {
+            if v.len() == n {
+                Ok((set, v.as_slice()))
+            } else {
+                Err(Error::parse(
+                    path,
+                    0,
+                    format!("{name} has {} values, {n} expected", v.len()),
+                ))
+            }
+        })
+        .collect()
+}
+
 /// The FE mesh of an unstructured grid: the cells of the highest dimension, which must be of
 /// one kind atlasmesh meshes with (triangles, quadrilaterals, tetrahedra, hexahedra, and their
 /// quadratic forms, in VTK's node order); lower-dimensional cells (vertices, lines, boundary
@@ -303,36 +325,18 @@ pub(crate) fn mesh_from_cells(
         connectivity.extend_from_slice(&cells[c]);
     }
     let mut sets = MeshSets::default();
-    for (name, v) in point_data {
-        if let Some(set) = name.strip_prefix("set_") {
-            if v.len() != nodes.len() {
-                return Err(Error::parse(
-                    path,
-                    0,
-                    format!("{name} has {} values, {} expected", v.len(), nodes.len()),
-                ));
-            }
-            let members = (0..v.len()).filter(|&i| v[i] != 0.0).collect();
-            sets.node_sets.insert(set.to_string(), members);
-        }
+    for (set, v) in set_arrays(path, point_data, nodes.len())? {
+        let members = (0..v.len()).filter(|&i| v[i] != 0.0).collect();
+        sets.node_sets.insert(set.to_string(), members);
     }
-    for (name, v) in cell_data {
-        if let Some(set) = name.strip_prefix("set_") {
-            if v.len() != cells.len() {
-                return Err(Error::parse(
-                    path,
-                    0,
-                    format!("{name} has {} values, {} expected", v.len(), cells.len()),
-                ));
-            }
-            let members = kept
-                .iter()
-                .enumerate()
-                .filter(|&(_, &c)| v[c] != 0.0)
-                .map(|(e, _)| e)
-                .collect();
-            sets.element_sets.insert(set.to_string(), members);
-        }
+    for (set, v) in set_arrays(path, cell_data, cells.len())? {
+        let members = kept
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| v[c] != 0.0)
+            .map(|(e, _)| e)
+            .collect();
+        sets.element_sets.insert(set.to_string(), members);
     }
     check_mesh(path, &nodes, kind, &connectivity, &sets)?;
     Ok(FeMesh {

@@ -29,12 +29,14 @@ pub fn read_fe_mesh_raw(path: &Path) -> Result<FeMesh<3>> {
 /// only names the file in messages (no file is read).
 pub fn parse_fe_mesh_raw(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
     let text = || super::outline::utf8(path, bytes);
-    match mesh_extension(path)? {
-        "inp" => Ok(parse_inp(path, text()?)?.mesh),
-        "msh" => parse_msh(path, bytes),
-        "vtu" => super::vtk_xml::parse_vtu(path, bytes),
-        _ => parse_vtk_unstructured(path, bytes),
-    }
+    let m = match mesh_extension(path)? {
+        "inp" => parse_inp(path, text()?)?.mesh,
+        "msh" => parse_msh(path, bytes)?,
+        "vtu" => super::vtk_xml::parse_vtu(path, bytes)?,
+        _ => parse_vtk_unstructured(path, bytes)?,
+    };
+    check_mesh(path, &m.nodes, m.kind, &m.connectivity, &m.sets)?;
+    Ok(m)
 }
 
 /// The FE mesh format of `path`, by its extension: `inp`, `msh`, `vtu` or `vtk`.
@@ -101,12 +103,11 @@ pub(crate) fn check_mesh<const D: usize>(
     if conn.is_empty() {
         return Err(Error::parse(path, 0, "the mesh has no elements"));
     }
-    if let Some(i) = nodes.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
-        return Err(Error::parse(
-            path,
-            0,
-            format!("node {} has a NaN or infinite coordinate", i + 1),
-        ));
+    super::check_points(path, nodes.len(), 1)?;
+    if let Some((i, m)) = (nodes.iter().enumerate())
+        .find_map(|(i, p)| crate::geometry::coordinate_problem(p).map(|m| (i, m)))
+    {
+        return Err(Error::parse(path, 0, format!("node {} {m}", i + 1)));
     }
     sets.check(kind, nodes.len(), conn.len() / kind.nodes())
         .map_err(|m| Error::parse(path, 0, m))
@@ -183,6 +184,11 @@ pub fn write_mesh<const D: usize>(
             mesh.kind.name()
         )));
     }
+    // The sets' names and members, checked before any byte is written (a name is never
+    // escaped: one that could break a format is refused).
+    mesh.sets
+        .check(mesh.kind, mesh.nodes.len(), mesh.num_elements())
+        .map_err(|m| Error::Mesh(format!("{}: {m}", path.display())))?;
     let text = match format {
         MeshFormat::Vtu => return super::write_vtu_with_quality(path, mesh, reference, quality),
         MeshFormat::Vtk => vtk(mesh, reference, quality),

@@ -1,6 +1,9 @@
 //! Input files read whole, safely: regular files only (a device such as `/dev/zero`, a FIFO
-//! or a folder is refused before it is opened, so nothing reads forever or hangs), and at
-//! most [`max_input_bytes`] (2 GiB unless `ATLASMESH_MAX_INPUT_BYTES` says otherwise).
+//! or a folder is refused before it is opened, so nothing reads forever or hangs), at most
+//! [`max_input_bytes`] (2 GiB unless `ATLASMESH_MAX_INPUT_BYTES` says otherwise), and shapes
+//! and meshes of at most [`max_points`] points (4 million unless `ATLASMESH_MAX_POINTS` says
+//! otherwise), refused as soon as a header or the parse tells, so that the memory a refused
+//! input takes stays bounded.
 
 use crate::error::{Error, Result};
 use std::io::Read as _;
@@ -16,6 +19,40 @@ pub fn max_input_bytes() -> u64 {
         .ok()
         .and_then(|v| v.trim().parse().ok())
         .unwrap_or(DEFAULT_MAX_INPUT_BYTES)
+}
+
+/// The default largest number of points (vertices, nodes) of an input shape or mesh.
+pub const DEFAULT_MAX_POINTS: usize = 4_000_000;
+
+/// The largest number of points of an input shape or mesh: `ATLASMESH_MAX_POINTS` when set
+/// to a number, else [`DEFAULT_MAX_POINTS`]. A fit takes about 1 kB of memory per point of
+/// its subject, so the default keeps a fit under about 4 GB.
+pub fn max_points() -> usize {
+    std::env::var("ATLASMESH_MAX_POINTS")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(DEFAULT_MAX_POINTS)
+}
+
+/// [`Error::Parse`] of `path` when `count` points (or, for `per_point` > 1, items of which
+/// each point has about `per_point`) exceed [`max_points`].
+pub(crate) fn check_points(path: &Path, count: usize, per_point: usize) -> Result<()> {
+    let cap = max_points();
+    if count / per_point.max(1) > cap {
+        let what = if per_point > 1 {
+            format!("{count} triangles (about {} points)", count / per_point)
+        } else {
+            format!("{count} points")
+        };
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "{what}, beyond the limit of {cap} points (set ATLASMESH_MAX_POINTS to raise it; a fit takes about 1 kB per point), or decimate the surface"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The bytes of the input file `path`.

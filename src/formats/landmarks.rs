@@ -18,14 +18,19 @@ pub enum Landmark<const D: usize> {
     Index(usize),
 }
 
-/// Reads the landmarks of one shape from a Scalismo JSON or `.pts` file, in file order.
-pub fn read_landmarks<const D: usize>(path: &Path) -> Result<Vec<Landmark<D>>> {
+/// A landmark with its id (Scalismo's `id`, the CSV's `landmark` column, or the line's rank
+/// from 1 in a `.pts` file). Landmarks of different shapes are paired by id.
+pub type NamedLandmark<const D: usize> = (String, Landmark<D>);
+
+/// Reads the landmarks of one shape from a Scalismo JSON or `.pts` file, ordered by id
+/// ([`by_id`]).
+pub fn read_landmarks<const D: usize>(path: &Path) -> Result<Vec<NamedLandmark<D>>> {
     let text = crate::formats::read_input_text(path)?;
     parse_landmarks::<D>(path, &text)
 }
 
 /// [`read_landmarks`] of a file's text (`path` only names the file in messages): no file is read.
-pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<Landmark<D>>> {
+pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<NamedLandmark<D>>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
@@ -36,10 +41,23 @@ pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<La
         let items = v
             .as_array()
             .ok_or_else(|| Error::parse(path, 1, "expected a list of landmarks"))?;
-        items
+        let v = items
             .iter()
             .enumerate()
             .map(|(k, it)| {
+                // Scalismo names every landmark; a file without ids is paired by rank.
+                let id = match it.get("id") {
+                    None => (k + 1).to_string(),
+                    Some(serde_json::Value::String(s)) => s.clone(),
+                    Some(serde_json::Value::Number(n)) => n.to_string(),
+                    Some(_) => {
+                        return Err(Error::parse(
+                            path,
+                            0,
+                            format!("landmark {k}: 'id' is neither text nor a number"),
+                        ));
+                    }
+                };
                 let c = it
                     .get("coordinates")
                     .and_then(|c| c.as_array())
@@ -66,9 +84,10 @@ pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<La
                         )
                     })?;
                 }
-                Ok(Landmark::At(p))
+                Ok((id, Landmark::At(p)))
             })
-            .collect()
+            .collect::<Result<Vec<_>>>()?;
+        by_id(path, v)
     } else {
         let mut out = Vec::new();
         for (i, l) in text.lines().enumerate() {
@@ -100,19 +119,43 @@ pub fn parse_landmarks<const D: usize>(path: &Path, text: &str) -> Result<Vec<La
                         Error::parse(path, i + 1, format!("'{}' is not a finite number", t[d]))
                     })?;
             }
-            out.push(Landmark::At(p));
+            out.push(((out.len() + 1).to_string(), Landmark::At(p)));
         }
-        Ok(out)
+        by_id(path, out)
     }
+}
+
+/// `landmarks` ordered by id, numeric ids in numeric order first, then the others in text
+/// order (a total order, so the sort is well defined); a duplicated id is an error.
+pub fn by_id<const D: usize>(
+    path: &Path,
+    mut landmarks: Vec<NamedLandmark<D>>,
+) -> Result<Vec<NamedLandmark<D>>> {
+    landmarks.sort_by_cached_key(|(id, _)| match id.parse::<i64>() {
+        Ok(x) => (0u8, x, id.clone()),
+        Err(_) => (1u8, 0, id.clone()),
+    });
+    if let Some(w) = landmarks.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "landmark id {:?} is given twice; each landmark needs its own id",
+                w[0].0
+            ),
+        ));
+    }
+    Ok(landmarks)
 }
 
 /// Reads a population's landmarks from CSV, columns by name (others ignored): `shape`,
 /// `landmark` (or `point`, `id`), then either coordinates `x`, `y`[, `z`] or a point index,
 /// `index` (0-based) or `index1` (1-based, as R and Momocs number). Per shape name, the
-/// landmarks ordered by their `landmark` column.
+/// landmarks ordered by their `landmark` column ([`by_id`]; an id twice in a shape is an
+/// error).
 pub fn read_landmarks_csv<const D: usize>(
     path: &Path,
-) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
+) -> Result<BTreeMap<String, Vec<NamedLandmark<D>>>> {
     let text = crate::formats::read_input_text(path)?;
     parse_landmarks_csv::<D>(path, &text)
 }
@@ -121,7 +164,7 @@ pub fn read_landmarks_csv<const D: usize>(
 pub fn parse_landmarks_csv<const D: usize>(
     path: &Path,
     text: &str,
-) -> Result<BTreeMap<String, Vec<Landmark<D>>>> {
+) -> Result<BTreeMap<String, Vec<NamedLandmark<D>>>> {
     let expected = "shape,landmark and x,y[,z], index (0-based) or index1 (1-based)";
     let t = super::csv_table::Table::parse(path, text, &Default::default())?;
     let shape = t.required(path, "shape", expected)?;
@@ -182,19 +225,9 @@ pub fn parse_landmarks_csv<const D: usize>(
             .or_default()
             .push((f[id].to_string(), lm));
     }
-    Ok(rows
-        .into_iter()
-        .map(|(k, mut v)| {
-            // Numeric ids in numeric order, then the others in text order: a total order
-            // (comparing numbers with numbers and text with text pair by pair is not one, and
-            // the sort panics on such an order; found by fuzzing).
-            v.sort_by_cached_key(|(id, _)| match id.parse::<i64>() {
-                Ok(x) => (0u8, x, id.clone()),
-                Err(_) => (1u8, 0, id.clone()),
-            });
-            (k, v.into_iter().map(|x| x.1).collect())
-        })
-        .collect())
+    rows.into_iter()
+        .map(|(k, v)| by_id(path, v).map(|v| (k, v)))
+        .collect()
 }
 
 /// The farthest a landmark given by coordinates may lie from its shape's nearest point, as a
@@ -206,7 +239,7 @@ pub const MAX_LANDMARK_OFFSET: f64 = 0.1;
 /// names the file in errors.
 pub fn attach<const D: usize>(
     shape: &mut Shape<D>,
-    landmarks: &[Landmark<D>],
+    landmarks: &[NamedLandmark<D>],
     source: &Path,
 ) -> Result<()> {
     let n = shape.points.len();
@@ -214,7 +247,6 @@ pub fn attach<const D: usize>(
     let diagonal = dist2(lo, hi).sqrt();
     shape.landmarks = landmarks
         .iter()
-        .enumerate()
         .map(|(k, l)| match *l {
             Landmark::Index(i) if i < n => Ok(i),
             Landmark::Index(i) => Err(Error::parse(
@@ -250,6 +282,21 @@ pub fn attach<const D: usize>(
             }
         })
         .collect::<Result<Vec<_>>>()?;
+    // Two landmarks on one point give the landmark term (and the pre-alignment) no direction.
+    for (a, &i) in shape.landmarks.iter().enumerate() {
+        if let Some(b) = shape.landmarks[a + 1..].iter().position(|&j| j == i) {
+            return Err(Error::parse(
+                source,
+                0,
+                format!(
+                    "landmarks {} and {} of {} fall on the same point ({i}); give distinct points",
+                    landmarks[a].0,
+                    landmarks[a + 1 + b].0,
+                    shape.name
+                ),
+            ));
+        }
+    }
     Ok(())
 }
 
@@ -269,20 +316,36 @@ mod tests {
         .unwrap();
         assert_eq!(
             read_landmarks::<2>(&j).unwrap(),
-            vec![Landmark::At([1.0, 2.0]), Landmark::At([3.0, -1.0])]
+            vec![
+                ("b".to_string(), Landmark::At([3.0, -1.0])),
+                ("tip".to_string(), Landmark::At([1.0, 2.0]))
+            ]
         );
+        let dup = r#"[{"id":"a","coordinates":[1,2]},{"id":"a","coordinates":[3,4]}]"#;
+        let e = parse_landmarks::<2>(&j, dup).unwrap_err().to_string();
+        assert!(e.contains("\"a\" is given twice"), "{e}");
         let p = dir.join("a.pts");
         std::fs::write(&p, "version: 1\nn_points: 2\n{\n1 2\n3 -1\n}\n").unwrap();
         assert_eq!(read_landmarks::<2>(&p).unwrap().len(), 2);
         let c = dir.join("l.csv");
         std::fs::write(&c, "shape,landmark,index\ns1,1,7\ns1,0,3\ns2,0,4\n").unwrap();
         let m = read_landmarks_csv::<2>(&c).unwrap();
-        assert_eq!(m["s1"], vec![Landmark::Index(3), Landmark::Index(7)]);
+        let values = |v: &[NamedLandmark<2>]| v.iter().map(|x| x.1).collect::<Vec<_>>();
+        assert_eq!(
+            values(&m["s1"]),
+            vec![Landmark::Index(3), Landmark::Index(7)]
+        );
         let mut s = Shape::polyline("s1", vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], true);
         let e = attach(&mut s, &m["s1"], &c).unwrap_err().to_string();
         assert!(e.contains("out of range") && e.contains("l.csv"), "{e}");
-        attach(&mut s, &[Landmark::At([0.9, 0.9])], &c).unwrap();
+        attach(&mut s, &[("a".into(), Landmark::At([0.9, 0.9]))], &c).unwrap();
         assert_eq!(s.landmarks, vec![2]);
+        let two = [
+            ("a".into(), Landmark::Index(1)),
+            ("b".into(), Landmark::At([1.0, 0.1])),
+        ];
+        let e = attach(&mut s, &two, &c).unwrap_err().to_string();
+        assert!(e.contains("a and b of s1 fall on the same point"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -50,14 +50,15 @@ mod vtk_xml_read;
 pub use abaqus::{InpDeck, parse_inp, read_inp};
 pub use atlas_file::{ATLAS_FORMAT_VERSION, atlas_dimension};
 pub(crate) use atomic::MAX_COUNT;
-pub use atomic::{create_dir, write_atomic};
+pub use atomic::{create_dir, lock_dir, write_atomic};
 pub use csv_table::CsvColumns;
 pub use deck::{Deck, FebDeck};
 pub use fe_mesh::{
     MeshFormat, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh,
 };
 pub use gmsh::{parse_msh, read_msh};
-pub use input::{read_input, read_input_text};
+pub(crate) use input::check_points;
+pub use input::{DEFAULT_MAX_POINTS, max_points, read_input, read_input_text};
 pub use outline::{parse_outlines, parse_outlines_with, read_outlines, read_outlines_with};
 pub use outline_csv::{parse_long_csv, parse_long_csv_with, parse_point_sets_csv, read_long_csv};
 pub use outline_text::{parse_text_outlines, read_text_outlines};

@@ -62,18 +62,14 @@ pub fn parse_outlines_with(
 }
 
 pub(crate) fn check_finite(path: &Path, s: &Shape<2>) -> Result<()> {
-    if let Some(i) = s
-        .points
-        .iter()
-        .position(|p| p.iter().any(|c| !c.is_finite()))
+    super::check_points(path, s.points.len(), 1)?;
+    if let Some((i, m)) = (s.points.iter().enumerate())
+        .find_map(|(i, p)| crate::geometry::coordinate_problem(p).map(|m| (i, m)))
     {
         return Err(Error::parse(
             path,
             0,
-            format!(
-                "shape {}: point {i} has a NaN or infinite coordinate",
-                s.name
-            ),
+            format!("shape {}: point {i} {m}", s.name),
         ));
     }
     if s.points.len() < 3 {

@@ -102,10 +102,11 @@ fn landmark_csvs_say_their_index_base() {
     let zero = parse_landmarks_csv::<2>(p, "shape,landmark,index\nA,0,4\nA,1,7\n").unwrap();
     let one =
         parse_landmarks_csv::<2>(p, "landmark,shape,index1,note\n0,A,5,x\n1,A,8,y\n").unwrap();
-    let idx = |m: &std::collections::BTreeMap<String, Vec<Landmark<2>>>| -> Vec<usize> {
+    type Named = crate::formats::landmarks::NamedLandmark<2>;
+    let idx = |m: &std::collections::BTreeMap<String, Vec<Named>>| -> Vec<usize> {
         m["A"]
             .iter()
-            .map(|l| match l {
+            .map(|(_, l)| match l {
                 Landmark::Index(i) => *i,
                 Landmark::At(_) => usize::MAX,
             })

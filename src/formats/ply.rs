@@ -71,6 +71,14 @@ pub(crate) enum Property {
     List(String, Scalar, Scalar),
 }
 
+impl Property {
+    fn name(&self) -> &str {
+        match self {
+            Property::Scalar(n, _) | Property::List(n, _, _) => n,
+        }
+    }
+}
+
 pub(crate) struct Element {
     name: String,
     count: usize,
@@ -118,8 +126,15 @@ pub(crate) fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                         format!("element count {count} is implausibly large"),
                     ));
                 }
+                let name = t.get(1).unwrap_or(&"").to_string();
+                if elements.iter().any(|e| e.name == name) {
+                    return Err(err(i + 1, format!("element {name:?} is declared twice")));
+                }
+                if name == "vertex" {
+                    super::check_points(path, count, 1)?;
+                }
                 elements.push(Element {
-                    name: t.get(1).unwrap_or(&"").to_string(),
+                    name,
                     count,
                     props: Vec::new(),
                 });
@@ -129,6 +144,15 @@ pub(crate) fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                     .last_mut()
                     .ok_or_else(|| err(i + 1, "property before any element".into()))?;
                 let bad = || err(i + 1, format!("bad property line '{l}'"));
+                let name = t.get(if t.get(1) == Some(&"list") { 4 } else { 2 });
+                if let Some(n) = name
+                    && el.props.iter().any(|p| p.name() == *n)
+                {
+                    return Err(err(
+                        i + 1,
+                        format!("property {n:?} of element {} is declared twice", el.name),
+                    ));
+                }
                 if t.get(1) == Some(&"list") {
                     let c = t.get(2).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
                     let v = t.get(3).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;

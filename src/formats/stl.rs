@@ -18,6 +18,8 @@ pub(crate) fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Parsed> {
     };
     if binary {
         let n = (bytes.len() - 84) / 50;
+        // A closed triangle surface has about two triangles per vertex.
+        super::check_points(path, n, 2)?;
         for t in 0..n {
             let base = 84 + 50 * t + 12;
             for c in 0..3 {
@@ -49,6 +51,9 @@ pub(crate) fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Parsed> {
             let t: Vec<&str> = l.split_whitespace().collect();
             if t.first() == Some(&"vertex") {
                 corners.push(xyz_after_keyword(path, i + 1, l, &t)?);
+                if corners.len() % 3_000_000 == 0 {
+                    super::check_points(path, corners.len() / 3, 2)?;
+                }
             }
         }
         if !corners.len().is_multiple_of(3) {

@@ -54,6 +54,7 @@ pub fn parse_surface(path: &Path, bytes: &[u8]) -> Result<Shape<3>> {
             ));
         }
     };
+    super::check_points(path, points.len(), 1)?;
     let mut facets = Vec::with_capacity(polys.len());
     for (k, poly) in polys.iter().enumerate() {
         if poly.len() < 3 {

@@ -3,6 +3,23 @@
 /// A point (or vector) in `D` dimensions.
 pub type Point<const D: usize> = [f64; D];
 
+/// The largest coordinate magnitude read: areas, volumes and Jacobians are products of up to
+/// three coordinate differences, which stay finite in f64 below it (1e100³ = 1e300).
+pub const MAX_COORDINATE: f64 = 1e100;
+
+/// What is wrong with a point's coordinates, if anything: a NaN or infinite one, or one
+/// beyond [`MAX_COORDINATE`] (the message says to rescale).
+pub fn coordinate_problem(p: &[f64]) -> Option<String> {
+    if p.iter().any(|c| !c.is_finite()) {
+        return Some("has a NaN or infinite coordinate".into());
+    }
+    p.iter().find(|c| c.abs() > MAX_COORDINATE).map(|c| {
+        format!(
+            "has the coordinate {c:e}, beyond ±{MAX_COORDINATE:e}: areas and Jacobians would overflow; rescale the file"
+        )
+    })
+}
+
 /// Axis-aligned bounding box `(min, max)` of a non-empty point list.
 pub fn bounding_box<const D: usize>(points: &[Point<D>]) -> (Point<D>, Point<D>) {
     let mut lo = [f64::INFINITY; D];

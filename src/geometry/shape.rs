@@ -62,15 +62,10 @@ impl<const D: usize> Shape<D> {
                 ),
             ));
         }
-        if let Some(i) = self
-            .points
-            .iter()
-            .position(|p| p.iter().any(|c| !c.is_finite()))
+        if let Some((i, m)) = (self.points.iter().enumerate())
+            .find_map(|(i, p)| super::point::coordinate_problem(p).map(|m| (i, m)))
         {
-            return Err(Error::shape(
-                &self.name,
-                format!("point {i} has a coordinate that is NaN or infinite"),
-            ));
+            return Err(Error::shape(&self.name, format!("point {i} {m}")));
         }
         if let Some(f) = self
             .facets

@@ -43,9 +43,17 @@ impl MeshSets {
         self.node_sets.is_empty() && self.element_sets.is_empty() && self.surfaces.is_empty()
     }
 
-    /// Checks every member against a mesh of `nodes` nodes and `elements` elements of
-    /// `kind`; the message names the set and the member.
+    /// Checks every name by [`set_name_problem`] and every member against a mesh of `nodes`
+    /// nodes and `elements` elements of `kind`; the message names the set and the member.
     pub fn check(&self, kind: ElementKind, nodes: usize, elements: usize) -> Result<(), String> {
+        let names = (self.node_sets.keys().map(|n| ("node set", n)))
+            .chain(self.element_sets.keys().map(|n| ("element set", n)))
+            .chain(self.surfaces.keys().map(|n| ("surface", n)));
+        for (what, name) in names {
+            if let Some(m) = set_name_problem(name) {
+                return Err(format!("{what} {name:?}: {m}"));
+            }
+        }
         for (name, s) in &self.node_sets {
             if let Some(n) = s.iter().find(|&&n| n >= nodes) {
                 return Err(format!(
@@ -76,6 +84,28 @@ impl MeshSets {
         }
         Ok(())
     }
+}
+
+/// The longest set name (Abaqus's and CalculiX's limit).
+pub const MAX_SET_NAME: usize = 80;
+
+/// What is wrong with a set name, if anything. One rule for every format read and written
+/// (the sets file, the atlas, `.inp`, `.msh`, `.vtu`, `.vtk`, `.feb`): 1 to [`MAX_SET_NAME`]
+/// ASCII letters, digits, `_` and `-`, starting with a letter or `_`. Such a name is the same
+/// token in an Abaqus keyword line, a Gmsh string, a VTK array name and an FEBio attribute, so
+/// no name can break a file or inject a line into it.
+pub fn set_name_problem(name: &str) -> Option<String> {
+    const RULE: &str = "a set name is 1 to 80 letters, digits, _ or -, starting with a letter or _";
+    let first_ok = name
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_');
+    if !first_ok || name.len() > MAX_SET_NAME {
+        return Some(RULE.to_string());
+    }
+    name.chars()
+        .find(|&c| !(c.is_ascii_alphanumeric() || c == '_' || c == '-'))
+        .map(|c| format!("{c:?} is not allowed ({RULE})"))
 }
 
 /// A quadrilateral mesh.

@@ -32,7 +32,7 @@ pub use boundary::{BoundaryFace, boundary_faces, boundary_surface};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};
-pub use fe_mesh::{FeMesh, HexMesh, MeshSets, QuadMesh};
+pub use fe_mesh::{FeMesh, HexMesh, MAX_SET_NAME, MeshSets, QuadMesh, set_name_problem};
 pub use hex_mesh::{HexMeshParams, hex_mesh};
 pub use mean_mesh::{MEAN_MESH_COVERAGE, MEAN_MESH_EDGE_RATIO_MAX, mesh_mean_shape};
 pub use morph::{Correspondence, MAX_STIFFENINGS, Morph, Morpher, STIFFEN_FACTOR};

@@ -97,7 +97,7 @@ pub fn quad_mesh(outline: &Shape<2>, params: &QuadMeshParams) -> Result<FeMesh<2
         ConstrainedDelaunayTriangulation::<Point2<f64>>::try_bulk_load_cdt(verts, edges, |_| {
             conflicts += 1
         })
-        .map_err(|e| Error::Mesh(format!("{}: triangulation failed: {e:?}", outline.name)))?;
+        .map_err(|e| Error::Mesh(format!("{}: triangulation failed: {e}", outline.name)))?;
     if conflicts > 0 || cdt.num_vertices() != poly.len() {
         return Err(Error::Mesh(format!(
             "{}: the outline intersects itself (or touches itself) at the element size {q}; fix the outline or use a smaller element size",

@@ -114,6 +114,25 @@ pub struct Facing {
     pub angle: f64,
 }
 
+impl SetSpec {
+    /// Every number the selectors hold (bounds, fractions, radius, direction, angle).
+    fn numbers(&self) -> impl Iterator<Item = f64> + '_ {
+        let b = self
+            .bbox
+            .iter()
+            .flat_map(|b| b.min.iter().chain(&b.max).copied());
+        let h = self
+            .half_space
+            .iter()
+            .flat_map(|h| h.below.into_iter().chain(h.above));
+        let f = self
+            .facing
+            .iter()
+            .flat_map(|f| f.direction.iter().copied().chain([f.angle]));
+        b.chain(h).chain(self.radius).chain(f)
+    }
+}
+
 impl SetsConfig {
     /// Parses and checks the text of a sets file (`path` only names the file in messages;
     /// [`SetsConfig::read`] reads the file).
@@ -128,21 +147,33 @@ impl SetsConfig {
         c.source = path.to_path_buf();
         let mut names = std::collections::HashSet::new();
         for (kind, s) in c.all() {
-            if s.name.is_empty() || s.name.chars().any(|ch| ch.is_whitespace() || ch == ',') {
-                return Err(Error::parse(
-                    path,
-                    0,
-                    format!(
-                        "{kind} {:?}: a name without spaces or commas is needed",
-                        s.name
-                    ),
-                ));
+            if let Some(m) = super::set_name_problem(&s.name) {
+                return Err(Error::parse(path, 0, format!("{kind} {:?}: {m}", s.name)));
             }
             if !names.insert((kind, s.name.to_ascii_uppercase())) {
                 return Err(Error::parse(
                     path,
                     0,
                     format!("{kind} {} is defined twice", s.name),
+                ));
+            }
+            if let Some(v) = s.numbers().find(|v| !v.is_finite()) {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    format!("{kind} {}: {v} is not a finite number", s.name),
+                ));
+            }
+            if s.radius.is_some_and(|r| r <= 0.0)
+                || s.facing.as_ref().is_some_and(|f| f.angle < 0.0)
+            {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    format!(
+                        "{kind} {}: radius must be positive and angle not negative",
+                        s.name
+                    ),
                 ));
             }
             let selectors = [

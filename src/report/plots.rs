@@ -93,8 +93,8 @@ fn chart_frame<'a, 'b, DB: DrawingBackend>(
     b
 }
 
-fn perr<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> Error + '_ {
-    move |e| Error::io(path, std::io::Error::other(format!("plot: {e:?}")))
+fn perr<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::io(path, std::io::Error::other(format!("plot: {e}")))
 }
 
 /// Plots the cumulative variance share against the number of modes (fig. 5).

@@ -77,8 +77,10 @@ pub struct SubjectRecord {
 
 /// The subject files named by `specs`: a folder gives every shape file in it (by extension:
 /// `.ply .stl .obj .vtk .vtp .csv .txt .xy`), sorted by name; a `.list` file gives the paths
-/// on its lines (relative to the list's folder; blank lines and `#` comments skipped); any
-/// other file is itself a subject.
+/// on its lines (relative to the list's folder; blank lines and `#` comments skipped; a
+/// `.list` there is an error); any other file is itself a subject. In a folder, anything with
+/// a shape extension but a folder is a subject, so a broken link or a FIFO fails with its
+/// reason instead of being skipped.
 pub fn subject_files(specs: &[PathBuf]) -> Result<Vec<PathBuf>> {
     const SHAPES: [&str; 8] = ["ply", "stl", "obj", "vtk", "vtp", "csv", "txt", "xy"];
     let ext = |p: &Path| {
@@ -92,7 +94,9 @@ pub fn subject_files(specs: &[PathBuf]) -> Result<Vec<PathBuf>> {
             let mut in_dir: Vec<PathBuf> = std::fs::read_dir(spec)
                 .map_err(|e| Error::io(spec, e))?
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file() && SHAPES.contains(&ext(p).as_str()))
+                // Anything but a folder: a link that loops or leads nowhere, a FIFO, is a
+                // subject that fails with its reason, never skipped without a word.
+                .filter(|p| !p.is_dir() && SHAPES.contains(&ext(p).as_str()))
                 .collect();
             if in_dir.is_empty() {
                 return Err(Error::Population(format!(
@@ -105,12 +109,23 @@ pub fn subject_files(specs: &[PathBuf]) -> Result<Vec<PathBuf>> {
         } else if ext(spec) == "list" {
             let text = crate::formats::read_input_text(spec)?;
             let base = spec.parent().unwrap_or(Path::new("."));
-            files.extend(
-                text.lines()
-                    .map(str::trim)
-                    .filter(|l| !l.is_empty() && !l.starts_with('#'))
-                    .map(|l| base.join(l)),
-            );
+            for (n, l) in text.lines().enumerate() {
+                let l = l.trim();
+                if l.is_empty() || l.starts_with('#') {
+                    continue;
+                }
+                let p = base.join(l);
+                if ext(&p) == "list" {
+                    return Err(Error::parse(
+                        spec,
+                        n + 1,
+                        format!(
+                            "{l}: a list inside a list is not read; name the subject files (or a folder of them)"
+                        ),
+                    ));
+                }
+                files.push(p);
+            }
         } else {
             files.push(spec.clone());
         }
@@ -212,6 +227,8 @@ pub fn fit_batch<const D: usize>(
 ) -> Result<Report> {
     check_folder_names(files)?;
     crate::formats::create_dir(out)?;
+    let _lock = crate::formats::lock_dir(out)?;
+    check_report_shard(out, opts.shard.as_deref())?;
     let run_crc = {
         let mut h = crc32fast::Hasher::new();
         h.update(&atlas_crc.to_le_bytes());
@@ -257,6 +274,7 @@ pub fn fit_shapes<const D: usize>(
     progress: &dyn Progress,
 ) -> Result<Report> {
     crate::formats::create_dir(out)?;
+    let _lock = crate::formats::lock_dir(out)?;
     let fitter = Fitter::new(atlas);
     let morpher = atlas.morpher(&params.morph)?;
     let label = "fit";
@@ -306,6 +324,32 @@ fn finish_batch<const D: usize>(
             ..Default::default()
         },
     )
+}
+
+/// Refuses to run a batch into a folder whose `report.json` is another shard's (or of a run
+/// without shards, or with shards when this one has none): the report would be replaced.
+fn check_report_shard(out: &Path, shard: Option<&str>) -> Result<()> {
+    let path = out.join("report.json");
+    let Ok(bytes) = std::fs::read(&path) else {
+        return Ok(());
+    };
+    let before: Option<String> = serde_json::from_slice::<serde_json::Value>(&bytes)
+        .ok()
+        .and_then(|v| v.get("shard").and_then(|s| s.as_str().map(str::to_string)));
+    if before.as_deref() == shard {
+        return Ok(());
+    }
+    let label = |s: Option<&str>| {
+        s.map_or("a run without --shard".to_string(), |s| {
+            format!("shard {s}")
+        })
+    };
+    Err(Error::Parameter(format!(
+        "{}: is the report of {}; {} would replace it: give each shard its own --out (e.g. OUT/shard-1) and join them with merge-reports",
+        path.display(),
+        label(before.as_deref()),
+        label(shard)
+    )))
 }
 
 fn stem(p: &Path) -> String {

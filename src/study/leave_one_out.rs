@@ -90,6 +90,7 @@ pub fn leave_one_out_of<const D: usize>(
         )));
     }
     create_dir(out)?;
+    let _lock = crate::formats::lock_dir(out)?;
     // The full atlas, for the variance figures and to check the population once.
     let step = "atlas of all shapes (GPA, PCA, mesh of the mean)";
     progress.step_started(step);

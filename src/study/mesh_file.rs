@@ -107,7 +107,8 @@ fn convert<const D: usize>(
 
 /// Repairs the mesh in `mesh` (untangling, then raising scaled Jacobians below the bound):
 /// boundary nodes slide on the outline or surface in `surface` when given, else stay. Writes
-/// the repaired mesh to `out` (format from the extension) and returns what the repair did.
+/// the repaired mesh to `out` (format from the extension) and returns what the repair did; a
+/// mesh with an element still inverted is an [`Error::Mesh`] and is not written.
 pub fn repair_mesh_file(
     mesh: &Path,
     surface: Option<&Path>,
@@ -151,6 +152,16 @@ fn repair<const D: usize>(
     progress.step_started(step);
     let (r, q) = repair_with_quality(&mut m, index.as_ref(), params, &before)?;
     progress.step_finished(step);
+    if r.inverted_after > 0 {
+        return Err(Error::Mesh(format!(
+            "{}: {} element(s) still inverted after the repair ({} before; min scaled Jacobian {:.3} -> {:.3}); no mesh written",
+            out.display(),
+            r.inverted_after,
+            r.inverted_before,
+            r.scaled_jacobian_min_before,
+            r.scaled_jacobian_min,
+        )));
+    }
     write_mesh(out, &m, None, &q)?;
     Ok(r)
 }

@@ -61,12 +61,15 @@ pub fn attach_landmarks<const D: usize>(shapes: &mut [Shape<D>], files: &[PathBu
                 format!("landmarks for shape '{name}', which is not in the population"),
             ));
         }
+        let mut ids = Vec::new();
         for s in shapes.iter_mut() {
             let l = map.get(&s.name).ok_or_else(|| {
                 Error::parse(&files[0], 0, format!("no landmarks for shape '{}'", s.name))
             })?;
             attach(s, l, &files[0])?;
+            ids.push(l.iter().map(|x| x.0.clone()).collect());
         }
+        same_ids(shapes, &ids, &[files[0].clone()])?;
     } else {
         if files.len() != shapes.len() {
             return Err(Error::Population(format!(
@@ -75,29 +78,53 @@ pub fn attach_landmarks<const D: usize>(shapes: &mut [Shape<D>], files: &[PathBu
                 shapes.len()
             )));
         }
+        let mut ids = Vec::new();
         for (s, f) in shapes.iter_mut().zip(files) {
             let l = read_landmarks::<D>(f)?;
             attach(s, &l, f)?;
+            ids.push(l.into_iter().map(|x| x.0).collect());
         }
-    }
-    let n0 = shapes[0].landmarks.len();
-    if let Some((s, f)) = shapes
-        .iter()
-        .zip(files.iter().cycle())
-        .find(|(s, _)| s.landmarks.len() != n0)
-    {
-        return Err(Error::parse(
-            f,
-            0,
-            format!(
-                "shape '{}' has {} landmarks but '{}' has {n0}; every shape needs the same landmarks",
-                s.name,
-                s.landmarks.len(),
-                shapes[0].name
-            ),
-        ));
+        same_ids(shapes, &ids, files)?;
     }
     Ok(())
+}
+
+/// Landmarks are paired by id: every shape must have the ids of the first (each shape's
+/// landmarks are in id order, so equal lists pair them one to one).
+fn same_ids<const D: usize>(
+    shapes: &[Shape<D>],
+    ids: &[Vec<String>],
+    files: &[PathBuf],
+) -> Result<()> {
+    let Some(first) = ids.first() else {
+        return Ok(());
+    };
+    let Some(k) = ids.iter().position(|v| v != first) else {
+        return Ok(());
+    };
+    let (n0, n) = (first.len(), ids[k].len());
+    let list = |v: &[String]| {
+        let mut s = v.iter().take(8).cloned().collect::<Vec<_>>().join(", ");
+        if v.len() > 8 {
+            s.push_str(", ...");
+        }
+        s
+    };
+    let message = if n != n0 {
+        format!(
+            "shape '{}' has {n} landmarks but '{}' has {n0}; every shape needs the same landmarks",
+            shapes[k].name, shapes[0].name
+        )
+    } else {
+        format!(
+            "shape '{}' has the landmarks [{}] but '{}' has [{}]; landmarks are paired by id, every shape needs the same ids",
+            shapes[k].name,
+            list(&ids[k]),
+            shapes[0].name,
+            list(first)
+        )
+    };
+    Err(Error::parse(&files[k % files.len()], 0, message))
 }
 
 /// A floating component under this share of a surface's area (an outline's length) is

@@ -25,17 +25,30 @@ pub fn print_summary(r: &Report, out: &Path) {
             m.elements, m.element_kind, m.scaled_jacobian_min
         );
     }
-    println!(
-        "{} subjects: {} succeeded, {} meshes valid; median fit {:.1} ms; delivered meshes: median RMS distance {:.3} ({:.4} of the diagonal), median 95th percentile {:.3}; median normal correlation {:.3}",
-        s.subjects,
-        s.succeeded,
-        s.meshes_valid,
-        s.median_fit_seconds * 1e3,
-        s.median_mesh_rms_distance,
-        s.median_mesh_rms_distance_relative,
-        s.median_mesh_p95_distance,
-        s.median_normal_correlation
-    );
+    if r.subjects.is_empty() {
+        // No fitted subject: no medians to print (they would read NaN).
+        println!(
+            "{} subjects: none fitted{}",
+            s.subjects,
+            if s.subjects == 0 {
+                " (nothing to do: an empty list or shard)"
+            } else {
+                ""
+            }
+        );
+    } else {
+        println!(
+            "{} subjects: {} succeeded, {} meshes valid; median fit {:.1} ms; delivered meshes: median RMS distance {:.3} ({:.4} of the diagonal), median 95th percentile {:.3}; median normal correlation {:.3}",
+            s.subjects,
+            s.succeeded,
+            s.meshes_valid,
+            s.median_fit_seconds * 1e3,
+            s.median_mesh_rms_distance,
+            s.median_mesh_rms_distance_relative,
+            s.median_mesh_p95_distance,
+            s.median_normal_correlation
+        );
+    }
     let unsuccessful = s.subjects.saturating_sub(s.succeeded + s.failed);
     if unsuccessful > 0 || s.failed > 0 {
         println!(

@@ -306,7 +306,8 @@ impl<const D: usize> Atlas<D> {
 }
 
 /// The invariants of an atlas that its tensors' shapes do not tell: a mean with facets,
-/// positive finite eigenvalues, a cumulative variance that rises within [0, 1], a mesh of
+/// positive finite eigenvalues in falling order, at most as many as the cumulative variance
+/// has modes, a cumulative variance that rises within [0, 1], a mesh of
 /// this dimension's elements, none degenerate or inverted.
 fn validate<const D: usize>(a: &Atlas<D>) -> std::result::Result<(), String> {
     if a.mean.len() < D + 1 || a.facets.is_empty() {
@@ -321,7 +322,17 @@ fn validate<const D: usize>(a: &Atlas<D>) -> std::result::Result<(), String> {
             "an eigenvalue is {l}: the variances must be positive"
         ));
     }
+    if a.eigenvalues.windows(2).any(|w| w[1] > w[0]) {
+        return Err("the eigenvalues must not rise (PCA orders the modes by variance)".into());
+    }
     let cv = &a.cumulative_variance;
+    if cv.len() < a.eigenvalues.len() {
+        return Err(format!(
+            "{} eigenvalues but a cumulative variance of {} modes",
+            a.eigenvalues.len(),
+            cv.len()
+        ));
+    }
     if cv.is_empty()
         || cv
             .iter()

@@ -97,7 +97,7 @@ fn inconsistent_atlases_are_refused_when_read() {
     let subject = d.join("ellipse.txt");
     std::fs::write(&subject, ellipse(1.0, 0.6)).unwrap();
     type Edit = fn(&mut atlasmesh::model::Atlas<2>);
-    let cases: [(&str, Edit, &str); 5] = [
+    let cases: [(&str, Edit, &str); 10] = [
         (
             "overflow",
             |a| a.mesh.nodes.iter_mut().flatten().for_each(|c| *c *= 1e300),
@@ -118,6 +118,24 @@ fn inconsistent_atlases_are_refused_when_read() {
             "no-elements",
             |a| a.mesh.connectivity.clear(),
             "no elements",
+        ),
+        (
+            "rising-eigenvalues",
+            |a| a.eigenvalues.reverse(),
+            "must not rise",
+        ),
+        ("no-mean", |a| a.mean.clear(), "out of range"),
+        ("no-facets", |a| a.facets.clear(), "facets"),
+        (
+            "all-inverted",
+            |a| a.mesh.connectivity.chunks_mut(4).for_each(|e| e.reverse()),
+            "inverted",
+        ),
+        // The quadrilaterals' nodes read as triangles (another kind of this dimension).
+        (
+            "tri-kind",
+            |a| a.mesh.kind = atlasmesh::mesh::ElementKind::Tri3,
+            "degenerate",
         ),
     ];
     for (name, edit, word) in cases {

@@ -13,6 +13,8 @@ mod femur;
 mod fuzz_regressions;
 mod hands;
 mod hostile;
+mod hostile_inputs;
+mod hostile_outputs;
 mod html;
 mod register;
 mod repair;

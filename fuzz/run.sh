@@ -1,22 +1,35 @@
 #!/bin/bash
 # Runs every fuzz target for SECONDS (default 600) from its seed corpus, two at a time.
 # Crashes, hangs (10 s) and allocations above 2 GiB stop a target and are written to
-# fuzz/artifacts/TARGET/. Needs cargo-fuzz (`cargo install cargo-fuzz`); on a stable
-# toolchain RUSTC_BOOTSTRAP=1 lets it use the nightly flags it needs.
+# fuzz/artifacts/TARGET/. With cargo-fuzz (`cargo install cargo-fuzz`) the targets are built
+# by it (RUSTC_BOOTSTRAP=1 lets a stable toolchain use the nightly flags it needs); without
+# it, by plain cargo with libFuzzer's coverage instrumentation (sancov) and debug assertions.
 set -uo pipefail
 cd "$(dirname "$0")"
 SECONDS_PER_TARGET=${1:-600}
 shift || true
 TARGETS=${*:-ply stl obj vtk vtp vtu inp msh csv text landmarks sets atlas vtk_xml_encoded vtk51 msh_binary atlas_structure}
 export RUSTC_BOOTSTRAP=1
-cargo fuzz build -O >/dev/null 2>&1 || cargo fuzz build -O
+if cargo fuzz --version >/dev/null 2>&1; then
+    cargo fuzz build -O >/dev/null 2>&1 || cargo fuzz build -O
+    fuzz() { cargo fuzz run -O "$1" "$2" "$3" -- "${@:4}"; }
+else
+    triple="$(rustc -vV | sed -n 's/^host: //p')"
+    RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 \
+-Cllvm-args=-sanitizer-coverage-inline-8bit-counters -Cllvm-args=-sanitizer-coverage-pc-table \
+-Cllvm-args=-sanitizer-coverage-trace-compares -Cdebug-assertions -Coverflow-checks --cfg fuzzing" \
+        cargo build --release --target "$triple" --target-dir target-cov || exit 1
+    fuzz() { local t=$1; shift; "target-cov/$triple/release/$t" "$@"; }
+    echo "built without cargo-fuzz: target-cov/$triple/release/"
+fi
 run() {
     local t=$1
-    mkdir -p "corpus/$t"
-    cargo fuzz run -O "$t" "corpus/$t" "seeds/$t" -- \
+    mkdir -p "corpus/$t" "artifacts/$t"
+    fuzz "$t" "corpus/$t" "seeds/$t" \
         -max_total_time="$SECONDS_PER_TARGET" -timeout=10 -rss_limit_mb=2048 \
-        -malloc_limit_mb=2048 -max_len=65536 -print_final_stats=1 >"log-$t.txt" 2>&1
-    echo "$t: exit $? $(grep -E '^stat::number_of_executed_units' "log-$t.txt" | awk '{print $2}') runs"
+        -malloc_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+        -artifact_prefix="artifacts/$t/" >"log-$t.txt" 2>&1
+    echo "$t: exit $? $(grep -E '^stat::number_of_executed_units' "log-$t.txt" | awk '{print $2}') runs, peak RSS $(grep -E '^stat::peak_rss_mb' "log-$t.txt" | awk '{print $2}') MB"
 }
 set -- $TARGETS
 while [ $# -gt 0 ]; do

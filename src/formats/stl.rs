@@ -51,7 +51,7 @@ pub(crate) fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Parsed> {
             let t: Vec<&str> = l.split_whitespace().collect();
             if t.first() == Some(&"vertex") {
                 corners.push(xyz_after_keyword(path, i + 1, l, &t)?);
-                if corners.len() % 3_000_000 == 0 {
+                if corners.len().is_multiple_of(3_000_000) {
                     super::check_points(path, corners.len() / 3, 2)?;
                 }
             }

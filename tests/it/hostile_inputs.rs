@@ -357,3 +357,22 @@ fn refused_inputs_stay_under_1_gib() {
     fails(&o, 2, &["absurd.ply", "implausibly large"]);
     assert!(!built.exists());
 }
+
+/// A broken legacy VTK file is named broken, with the line and what is missing, whatever it
+/// was meant to hold (it used to be reported as "a 2D outline").
+#[test]
+fn a_broken_vtk_is_named_for_what_is_wrong() {
+    let d = common::temp_dir("hostile-vtk");
+    let atlas = atlas_2d(&d);
+    let f = d.join("broken.vtk");
+    std::fs::write(
+        &f,
+        "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0\n",
+    )
+    .unwrap();
+    let out = d.join("fit");
+    let o = fit(&atlas, &f, &out, &[]);
+    fails(&o, 6, &["broken.vtk:6", "truncated", "POINTS"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("outline"), "{err}");
+}

@@ -242,19 +242,7 @@ impl<const D: usize> Atlas<D> {
     #[track_caller]
     pub fn instance(&self, w: &[f64]) -> Vec<Point<D>> {
         assert_eq!(w.len(), self.num_modes(), "instance: one weight per mode");
-        let mut out = self.mean.clone();
-        for (k, &wk) in w.iter().enumerate() {
-            if wk == 0.0 {
-                continue;
-            }
-            let col = self.modes.col(k);
-            for (i, p) in out.iter_mut().enumerate() {
-                for d in 0..D {
-                    p[d] += wk * col[i * D + d];
-                }
-            }
-        }
-        out
+        super::shape_model::combine(&self.mean, &self.modes, w)
     }
 
     /// `Psi^T (x - S_bar)`: the weights of the projection of `x` (reference frame, `N` points

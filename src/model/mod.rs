@@ -11,16 +11,19 @@
 //! | `procrustes` | similarity fits and GPA (section 2.2, eq. 3) |
 //! | `pca` | eigenmodes and variances of the aligned shapes (section 2.3) |
 //! | `atlas` | [`Atlas`]: build, `mean_shape`, `instance` (eq. 4), `coefficients` |
+//! | `shape_model` | the model's vocabulary: `mean`, `project`, `truncate`, `sample`, `marginal`, `posterior` |
 //!
 //! The atlas file (save, load) is in [`crate::formats::atlas_file`].
 
 mod atlas;
 mod pca;
 mod procrustes;
+mod shape_model;
 
 pub use atlas::{Atlas, AtlasParams, ModeSelection};
 pub use pca::{Pca, pca};
 pub use procrustes::{Gpa, align_to_mean, fit_similarity, generalized_procrustes};
+pub use shape_model::{MarginalModel, PosteriorModel};
 
 #[cfg(test)]
 pub(crate) mod tests;

@@ -1,5 +1,7 @@
 use super::*;
 use crate::geometry::Shape;
+use faer::Mat;
+use faer::linalg::solvers::Solve;
 
 pub(crate) fn ellipses(n: usize) -> Vec<Shape<2>> {
     (0..n)
@@ -70,4 +72,176 @@ fn atlas_survives_a_save_load_round_trip() {
     std::fs::write(&p, b"garbage").unwrap();
     assert!(Atlas::<2>::load(&p).is_err());
     std::fs::remove_dir_all(&dir).ok();
+}
+
+fn three_mode_atlas() -> Atlas<2> {
+    Atlas::build(
+        &ellipses(10),
+        &AtlasParams {
+            modes: ModeSelection::Count(3),
+            element_size: 0.05,
+            smoothing_passes: 2,
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn project_and_truncate() {
+    let atlas = three_mode_atlas();
+    let shapes = ellipses(10);
+    let gpa = generalized_procrustes(&shapes.iter().map(|s| s.points.clone()).collect::<Vec<_>>())
+        .unwrap();
+    // A shape of the span projects onto itself; the projection of any shape is the instance
+    // of its coefficients, and projecting twice changes nothing.
+    let w = [0.3, -0.2, 0.1];
+    let w: Vec<f64> = (0..3).map(|k| w[k] * atlas.eigenvalues[k].sqrt()).collect();
+    let x = atlas.instance(&w);
+    let p = atlas.project(&x);
+    assert!(
+        x.iter()
+            .zip(&p)
+            .all(|(a, b)| crate::geometry::dist2(*a, *b) < 1e-24)
+    );
+    let y = align_to_mean(&shapes[3].points, &gpa.mean);
+    let py = atlas.project(&y);
+    assert_eq!(py, atlas.instance(&atlas.coefficients(&y)));
+    let ppy = atlas.project(&py);
+    assert!(
+        py.iter()
+            .zip(&ppy)
+            .all(|(a, b)| crate::geometry::dist2(*a, *b) < 1e-24)
+    );
+    // Truncation keeps the first modes.
+    let t = atlas.truncate(2).unwrap();
+    assert_eq!(t.num_modes(), 2);
+    assert_eq!(t.eigenvalues, atlas.eigenvalues[..2]);
+    assert_eq!(
+        t.instance(&w[..2]),
+        atlas.instance(&[w[0], w[1], 0.0])
+    );
+    assert!(atlas.truncate(0).is_err() && atlas.truncate(4).is_err());
+    assert_eq!(atlas.mean(), &atlas.mean[..]);
+}
+
+#[test]
+fn samples_follow_the_prior_and_its_bound() {
+    use rand::SeedableRng;
+    let atlas = three_mode_atlas();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let n = 4000;
+    let draws: Vec<Vec<f64>> = (0..n)
+        .map(|_| atlas.sample_weights(&mut rng, None).unwrap())
+        .collect();
+    for k in 0..3 {
+        let var = draws.iter().map(|w| w[k] * w[k]).sum::<f64>() / n as f64;
+        let ratio = var / atlas.eigenvalues[k];
+        // The variance of a sample variance of n normal draws is 2/n: 5 standard errors.
+        assert!(
+            (ratio - 1.0).abs() < 5.0 * (2.0 / n as f64).sqrt(),
+            "mode {k}: {ratio}"
+        );
+    }
+    for _ in 0..500 {
+        let w = atlas.sample_weights(&mut rng, Some(1.0)).unwrap();
+        for k in 0..3 {
+            assert!(w[k].abs() <= atlas.eigenvalues[k].sqrt() * (1.0 + 1e-12));
+        }
+    }
+    let mut again = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    assert_eq!(
+        atlas.sample(&mut again, None).unwrap(),
+        atlas.instance(&draws[0])
+    );
+    assert!(atlas.sample_weights(&mut rng, Some(f64::NAN)).is_err());
+    assert!(atlas.sample_weights(&mut rng, Some(0.1)).is_err());
+}
+
+/// The posterior of the weights against the Gaussian-process form of the same conditioning
+/// in point space: `mu + K_{.I} (K_II + sigma2 I)^-1 (y - mu_I)` with `K = Psi Lambda Psi^T`,
+/// and the covariance `K - K_{.I} (K_II + sigma2 I)^-1 K_{I.}`.
+#[test]
+fn the_posterior_is_the_gaussian_conditioning() {
+    let atlas = three_mode_atlas();
+    let n = atlas.mean.len();
+    let m = atlas.num_modes();
+    let nd = 2 * n;
+    let k = {
+        let l = Mat::from_fn(m, m, |a, b| if a == b { atlas.eigenvalues[a] } else { 0.0 });
+        &atlas.modes * &l * atlas.modes.transpose()
+    };
+    // A shape of the model, observed at 4 points with some noise added.
+    let w = [0.5, -0.4, 0.3];
+    let w: Vec<f64> = (0..m).map(|i| w[i] * atlas.eigenvalues[i].sqrt()).collect();
+    let truth = atlas.instance(&w);
+    let idx = [3usize, 21, 40, 66];
+    let observed: Vec<(usize, [f64; 2])> = idx
+        .iter()
+        .enumerate()
+        .map(|(j, &i)| (i, [truth[i][0] + 1e-3 * j as f64, truth[i][1] - 5e-4]))
+        .collect();
+    let sigma2 = 1e-4;
+    let post = atlas.posterior(&observed, sigma2).unwrap();
+    // Point-space form.
+    let rows: Vec<usize> = idx.iter().flat_map(|&i| [2 * i, 2 * i + 1]).collect();
+    let r = rows.len();
+    let kii = Mat::from_fn(r, r, |a, b| {
+        k[(rows[a], rows[b])] + if a == b { sigma2 } else { 0.0 }
+    });
+    let kxi = Mat::from_fn(nd, r, |a, b| k[(a, rows[b])]);
+    let resid = Mat::from_fn(r, 1, |a, _| {
+        let (i, d) = (idx[a / 2], a % 2);
+        observed[a / 2].1[d] - atlas.mean[i][d]
+    });
+    let llt = kii.llt(faer::Side::Lower).unwrap();
+    let mean = &kxi * llt.solve(&resid);
+    let cov = &k - &kxi * llt.solve(kxi.transpose());
+    for i in 0..n {
+        for d in 0..2 {
+            let gp = atlas.mean[i][d] + mean[(2 * i + d, 0)];
+            assert!(
+                (gp - post.mean[i][d]).abs() < 1e-9,
+                "point {i}: {gp} vs {}",
+                post.mean[i][d]
+            );
+        }
+        let sd = (cov[(2 * i, 2 * i)] + cov[(2 * i + 1, 2 * i + 1)])
+            .max(0.0)
+            .sqrt();
+        assert!(
+            (sd - post.point_sd[i]).abs() < 1e-7,
+            "point {i}: sd {sd} vs {}",
+            post.point_sd[i]
+        );
+    }
+    // The observed points are pulled to the observations; the spread is smallest there.
+    for (i, p) in &observed {
+        assert!(crate::geometry::dist2(post.mean[*i], *p).sqrt() < 0.02);
+    }
+    // With no observation: the prior.
+    let prior = atlas.posterior(&[], sigma2).unwrap();
+    assert!(prior.weights.iter().all(|w| *w == 0.0));
+    let mg = atlas.marginal(&[5]).unwrap();
+    let c = mg.covariance(0);
+    assert!((prior.point_sd[5] - (c[0][0] + c[1][1]).sqrt()).abs() < 1e-12);
+    // Bad input.
+    assert!(atlas.posterior(&observed, 0.0).is_err());
+    assert!(atlas.posterior(&[(n, [0.0, 0.0])], sigma2).is_err());
+    assert!(
+        atlas
+            .posterior(&[(1, [0.0, 0.0]), (1, [0.0, 0.0])], sigma2)
+            .is_err()
+    );
+    assert!(atlas.posterior(&[(1, [f64::NAN, 0.0])], sigma2).is_err());
+}
+
+#[test]
+fn the_marginal_keeps_the_rows_of_its_points() {
+    let atlas = three_mode_atlas();
+    let w = [0.2, 0.1, -0.3];
+    let mg = atlas.marginal(&[7, 2, 50]).unwrap();
+    let full = atlas.instance(&w);
+    assert_eq!(mg.instance(&w), vec![full[7], full[2], full[50]]);
+    assert!(atlas.marginal(&[]).is_err());
+    assert!(atlas.marginal(&[atlas.mean.len()]).is_err());
 }

@@ -83,6 +83,8 @@ pub fn shape_model_measures<const D: usize>(
             "the shapes are identical after alignment: no variance to model".into(),
         ));
     }
+    // (A population may have fewer modes than shapes less one: PCA drops the round-off ones.)
+    let mm = mm.min(full.eigenvalues.len());
     let mut out = ShapeModelMeasures {
         modes: (1..=mm).collect(),
         specificity_samples: samples,
@@ -111,6 +113,11 @@ pub fn shape_model_measures<const D: usize>(
             let mut recon = g.mean.clone();
             let mut e = Vec::with_capacity(mm);
             for m in 0..mm {
+                // A left-out model with fewer modes: the reconstruction stays.
+                if m >= p.modes.ncols() {
+                    e.push(mean_distance(&recon, &x));
+                    continue;
+                }
                 let col = p.modes.col(m);
                 let w: f64 = x
                     .iter()

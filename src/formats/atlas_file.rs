@@ -2,15 +2,84 @@
 //! a format version and a checksum.
 
 use crate::error::{Error, Result};
-use crate::geometry::Point;
+use crate::geometry::{Point, Similarity};
 use crate::mesh::{ElementKind, FeMesh};
 use crate::model::{Atlas, AtlasParams};
 use faer::Mat;
 use std::collections::HashMap;
 use std::path::Path;
 
-/// Version of the atlas file format written by this build.
-pub const ATLAS_FORMAT_VERSION: &str = "2";
+/// Version of the atlas file format written by this build (3: the data frame, see
+/// [`Atlas::data_frame`]).
+pub const ATLAS_FORMAT_VERSION: &str = "3";
+
+/// The earlier versions this build still reads (2: without the data frame).
+pub const ATLAS_FORMAT_VERSIONS_READ: [&str; 2] = ["2", "3"];
+
+/// The data frame as stored in the metadata (`data_frame`, JSON).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct DataFrame {
+    /// Scale from the reference frame to the data's unit.
+    scale: f64,
+    /// Rotation, row-major.
+    rotation: Vec<Vec<f64>>,
+    /// Translation, in the data's unit.
+    translation: Vec<f64>,
+}
+
+impl DataFrame {
+    fn of<const D: usize>(t: &Similarity<D>) -> Self {
+        DataFrame {
+            scale: t.s,
+            rotation: t.r.iter().map(|r| r.to_vec()).collect(),
+            translation: t.t.to_vec(),
+        }
+    }
+
+    /// The similarity, checked: a finite positive scale, a rotation (orthonormal, det +1 to
+    /// 1e-9), a finite translation, all of dimension `D`.
+    fn similarity<const D: usize>(&self) -> std::result::Result<Similarity<D>, String> {
+        let bad = || {
+            "data_frame: a scale > 0, a DxD rotation and a translation of D finite numbers are expected".to_string()
+        };
+        if !(self.scale.is_finite() && self.scale > 0.0)
+            || self.rotation.len() != D
+            || self.rotation.iter().any(|r| r.len() != D)
+            || self.translation.len() != D
+        {
+            return Err(bad());
+        }
+        let r: [[f64; D]; D] =
+            std::array::from_fn(|i| std::array::from_fn(|j| self.rotation[i][j]));
+        let t: Point<D> = std::array::from_fn(|d| self.translation[d]);
+        if r.iter().flatten().chain(&t).any(|x| !x.is_finite()) {
+            return Err(bad());
+        }
+        for i in 0..D {
+            for j in 0..D {
+                let dot: f64 = (0..D).map(|k| r[i][k] * r[j][k]).sum();
+                if (dot - if i == j { 1.0 } else { 0.0 }).abs() > 1e-9 {
+                    return Err("data_frame: the rotation is not orthonormal".into());
+                }
+            }
+        }
+        let det = if D == 2 {
+            r[0][0] * r[1][1] - r[0][1] * r[1][0]
+        } else {
+            r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1])
+                - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+                + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0])
+        };
+        if (det - 1.0).abs() > 1e-9 {
+            return Err("data_frame: the rotation is a reflection".into());
+        }
+        Ok(Similarity {
+            s: self.scale,
+            r,
+            t,
+        })
+    }
+}
 
 /// The data section of a safetensors file (after the 8-byte header length and the header).
 pub(crate) fn data_section(bytes: &[u8]) -> Option<&[u8]> {
@@ -146,10 +215,13 @@ impl<const D: usize> Atlas<D> {
         }
         let mut meta = HashMap::new();
         meta.insert("format".to_string(), "atlasmesh-atlas".to_string());
-        meta.insert(
-            "format_version".to_string(),
-            ATLAS_FORMAT_VERSION.to_string(),
-        );
+        // An atlas without its data frame is one of version 2 (read from such a file).
+        let version = if self.data_frame.is_some() {
+            ATLAS_FORMAT_VERSION
+        } else {
+            "2"
+        };
+        meta.insert("format_version".to_string(), version.to_string());
         meta.insert("dimension".to_string(), D.to_string());
         meta.insert(
             "element_kind".to_string(),
@@ -167,6 +239,12 @@ impl<const D: usize> Atlas<D> {
             "mesh_sets".to_string(),
             serde_json::to_string(&self.mesh.sets).unwrap_or_default(),
         );
+        if let Some(t) = &self.data_frame {
+            meta.insert(
+                "data_frame".to_string(),
+                serde_json::to_string(&DataFrame::of(t)).unwrap_or_default(),
+            );
+        }
         // The checksum covers the tensors' bytes and the other metadata: serialize once to
         // learn the data section, then again with the checksum in the header.
         let first = safetensors::serialize(views.clone(), Some(meta.clone()))
@@ -196,7 +274,8 @@ impl<const D: usize> Atlas<D> {
             params,
             sets,
             training_shapes,
-        } = AtlasMetadata::of::<D>(path, bytes)?;
+            data_frame,
+        } = AtlasMetadata::<D>::of(path, bytes)?;
         let st = SafeTensors::deserialize(bytes).map_err(|e| bad(format!("{e}")))?;
         let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
             let t = st
@@ -299,6 +378,7 @@ impl<const D: usize> Atlas<D> {
             },
             params,
             training_shapes,
+            data_frame,
         };
         validate(&atlas).map_err(bad)?;
         Ok(atlas)
@@ -361,16 +441,17 @@ fn validate<const D: usize>(a: &Atlas<D>) -> std::result::Result<(), String> {
 
 /// What an atlas file's metadata says, checked: the format and its version, the checksum of
 /// the whole file, the dimension, the element kind, the parameters, the mesh sets.
-struct AtlasMetadata {
+struct AtlasMetadata<const D: usize> {
     kind: ElementKind,
     params: AtlasParams,
     sets: crate::mesh::MeshSets,
     training_shapes: usize,
+    data_frame: Option<Similarity<D>>,
 }
 
-impl AtlasMetadata {
+impl<const D: usize> AtlasMetadata<D> {
     /// The metadata of the atlas file `bytes` (named `path`), for an atlas of dimension `D`.
-    fn of<const D: usize>(path: &Path, bytes: &[u8]) -> Result<Self> {
+    fn of(path: &Path, bytes: &[u8]) -> Result<Self> {
         use safetensors::SafeTensors;
         let bad = |m: String| Error::Atlas {
             path: path.to_path_buf(),
@@ -385,9 +466,10 @@ impl AtlasMetadata {
             ));
         }
         let version = meta.get("format_version").cloned().unwrap_or_default();
-        if version != ATLAS_FORMAT_VERSION {
+        if !ATLAS_FORMAT_VERSIONS_READ.contains(&version.as_str()) {
             return Err(bad(format!(
-                "format version {version:?}, this build reads version {ATLAS_FORMAT_VERSION}; rebuild the atlas"
+                "format version {version:?}, this build reads versions {}; rebuild the atlas",
+                ATLAS_FORMAT_VERSIONS_READ.join(" and ")
             )));
         }
         let stored = meta.get("checksum_crc32").cloned().unwrap_or_default();
@@ -424,11 +506,22 @@ impl AtlasMetadata {
             .get("training_shapes")
             .and_then(|s| s.parse().ok())
             .unwrap_or(0);
+        let data_frame = match meta.get("data_frame") {
+            None if version == "2" => None,
+            None => return Err(bad("no data_frame in a version 3 atlas".into())),
+            Some(j) => Some(
+                serde_json::from_str::<DataFrame>(j)
+                    .map_err(|e| bad(format!("malformed data_frame metadata: {e}")))?
+                    .similarity::<D>()
+                    .map_err(bad)?,
+            ),
+        };
         Ok(AtlasMetadata {
             kind,
             params,
             sets,
             training_shapes,
+            data_frame,
         })
     }
 }

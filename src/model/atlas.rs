@@ -3,7 +3,7 @@
 
 use super::{generalized_procrustes, pca};
 use crate::error::{Error, Result};
-use crate::geometry::{Point, Shape, bounding_box, scale};
+use crate::geometry::{Point, Shape, Similarity, bounding_box, scale};
 use crate::mesh::FeMesh;
 use crate::mesh::mesh_mean_shape;
 use faer::Mat;
@@ -40,6 +40,43 @@ impl Default for AtlasParams {
     }
 }
 
+/// The similarity from the reference frame (the mean `mean`) to the population's mean frame
+/// and size: the scale is the shapes' mean centroid size over the mean's (the scale GPA
+/// removed); the rotation maps the mean onto the average of its similarity fits `T_i(mean)`
+/// onto every shape (Umeyama; the rotation closest to the average rotation), the translation
+/// the mean's centroid onto their average centroid. Units of the shapes.
+fn data_frame<const D: usize>(mean: &[Point<D>], shapes: &[Shape<D>]) -> Similarity<D> {
+    let fits: Vec<Similarity<D>> = shapes
+        .iter()
+        .map(|s| crate::model::fit_similarity(mean, &s.points, None))
+        .collect();
+    let n = fits.len() as f64;
+    let size = |p: &[Point<D>]| {
+        let c = crate::geometry::centroid(p);
+        p.iter()
+            .map(|q| crate::geometry::dist2(*q, c))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let scale = shapes.iter().map(|s| size(&s.points)).sum::<f64>() / n / size(mean);
+    let mut average = vec![[0.0; D]; mean.len()];
+    for t in &fits {
+        for (a, p) in average.iter_mut().zip(mean) {
+            let q = t.apply(p);
+            for d in 0..D {
+                a[d] += q[d] / n;
+            }
+        }
+    }
+    let r = crate::model::fit_similarity(mean, &average, None).r;
+    Similarity::centred(
+        scale,
+        r,
+        &crate::geometry::centroid(mean),
+        &crate::geometry::centroid(&average),
+    )
+}
+
 /// A statistical atlas in `D` dimensions.
 #[derive(Clone, Debug)]
 pub struct Atlas<const D: usize> {
@@ -61,6 +98,10 @@ pub struct Atlas<const D: usize> {
     pub params: AtlasParams,
     /// Number of training shapes.
     pub training_shapes: usize,
+    /// The similarity from the reference frame to the training population's mean frame and
+    /// size (the data's unit, e.g. mm): [`Atlas::to_data_frame`]. `None` for atlases written
+    /// before atlases stored it (format version 2), whose shapes stay in the reference frame.
+    pub data_frame: Option<Similarity<D>>,
 }
 
 impl<const D: usize> Atlas<D> {
@@ -204,6 +245,7 @@ impl<const D: usize> Atlas<D> {
             landmarks: Vec::new(),
         };
         let mesh = mesher(&mean_shape)?;
+        let frame = data_frame(&mean, shapes);
         Ok(Atlas {
             mean,
             modes: p.modes.subcols(0, m).to_owned(),
@@ -214,7 +256,17 @@ impl<const D: usize> Atlas<D> {
             mesh,
             params: *params,
             training_shapes: shapes.len(),
+            data_frame: Some(frame),
         })
+    }
+
+    /// `points` (reference frame) in the data's frame and unit (the training population's
+    /// mean pose and size) when the atlas knows it ([`Atlas::data_frame`]), else as given.
+    pub fn to_data_frame(&self, points: &[Point<D>]) -> Vec<Point<D>> {
+        match &self.data_frame {
+            Some(t) => points.iter().map(|p| t.apply(p)).collect(),
+            None => points.to_vec(),
+        }
     }
 
     /// The morph of the mean mesh by the mean shape's points (eq. 9), factorized once for

@@ -116,10 +116,7 @@ fn project_and_truncate() {
     let t = atlas.truncate(2).unwrap();
     assert_eq!(t.num_modes(), 2);
     assert_eq!(t.eigenvalues, atlas.eigenvalues[..2]);
-    assert_eq!(
-        t.instance(&w[..2]),
-        atlas.instance(&[w[0], w[1], 0.0])
-    );
+    assert_eq!(t.instance(&w[..2]), atlas.instance(&[w[0], w[1], 0.0]));
     assert!(atlas.truncate(0).is_err() && atlas.truncate(4).is_err());
     assert_eq!(atlas.mean(), &atlas.mean[..]);
 }
@@ -244,4 +241,68 @@ fn the_marginal_keeps_the_rows_of_its_points() {
     assert_eq!(mg.instance(&w), vec![full[7], full[2], full[50]]);
     assert!(atlas.marginal(&[]).is_err());
     assert!(atlas.marginal(&[atlas.mean.len()]).is_err());
+}
+
+/// The atlas knows the data's frame and unit: the mean carried by its data frame lies on the
+/// average of the shapes (which share one pose here), at their size; the frame survives a
+/// save and load, and an atlas without it is one of format version 2.
+#[test]
+fn the_atlas_knows_the_data_frame() {
+    let t = crate::geometry::Similarity::<2>::centred(
+        25.0,
+        crate::geometry::Similarity::<2>::planar_rotation(0.4).r,
+        &[0.0, 0.0],
+        &[120.0, -40.0],
+    );
+    let shapes: Vec<Shape<2>> = ellipses(8)
+        .into_iter()
+        .map(|mut s| {
+            s.points = s.points.iter().map(|p| t.apply(p)).collect();
+            s
+        })
+        .collect();
+    let atlas = Atlas::build(
+        &shapes,
+        &AtlasParams {
+            modes: ModeSelection::Count(2),
+            element_size: 0.05,
+            smoothing_passes: 2,
+        },
+    )
+    .unwrap();
+    let frame = atlas.data_frame.unwrap();
+    let mean = atlas.to_data_frame(&atlas.mean);
+    let n = shapes.len() as f64;
+    let average: Vec<[f64; 2]> = (0..mean.len())
+        .map(|i| {
+            let s = shapes.iter().fold([0.0; 2], |a, s| {
+                [a[0] + s.points[i][0], a[1] + s.points[i][1]]
+            });
+            [s[0] / n, s[1] / n]
+        })
+        .collect();
+    // The shapes differ by about 20 % in size: the mean lies within 2 % of their extent
+    // (about 50 units) of their average.
+    for (a, b) in mean.iter().zip(&average) {
+        assert!(
+            crate::geometry::dist2(*a, *b).sqrt() < 1.0,
+            "{a:?} vs {b:?}"
+        );
+    }
+    // The reference mean has a largest side of 1: the data's extent is about 2 × 25 × 1.1.
+    assert!(frame.s > 40.0 && frame.s < 70.0, "{}", frame.s);
+    let dir = std::env::temp_dir().join(format!("atlasmesh-frame-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("a.safetensors");
+    atlas.save(&p).unwrap();
+    let back = Atlas::<2>::load(&p).unwrap();
+    assert_eq!(back.data_frame, atlas.data_frame);
+    let mut old = atlas.clone();
+    old.data_frame = None;
+    let bytes = old.to_bytes().unwrap();
+    assert!(bytes.windows(20).any(|w| w == b"\"format_version\":\"2\""));
+    let back = Atlas::<2>::from_bytes(&p, &bytes).unwrap();
+    assert_eq!(back.data_frame, None);
+    assert_eq!(back.to_data_frame(&back.mean), back.mean);
+    std::fs::remove_dir_all(&dir).ok();
 }

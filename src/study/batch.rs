@@ -316,7 +316,11 @@ fn finish_batch<const D: usize>(
         atlas,
         subjects,
         params,
-        Some(mean_mesh_report(atlas, f64::NAN)),
+        // (An atlas of format version 2 does not know the data's unit: a share only.)
+        Some(mean_mesh_report(
+            atlas,
+            atlas.data_frame.map_or(f64::NAN, |t| t.s),
+        )),
         BatchFacts {
             failed,
             shard,

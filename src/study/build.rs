@@ -91,15 +91,20 @@ pub fn build_with_meshes<const D: usize>(
         create_dir(dir)?;
     }
     atlas.save(atlas_path)?;
+    // The mean mesh and shape beside it in the data's frame and unit.
     let stem = atlas_path.with_extension("");
     write_vtu(
         &PathBuf::from(format!("{}_mean_mesh.vtu", stem.display())),
-        &atlas.mesh,
+        &atlas
+            .mesh
+            .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes)),
         None,
     )?;
+    let mut mean = atlas.mean_shape();
+    mean.points = atlas.to_data_frame(&mean.points);
     write_vtp(
         &PathBuf::from(format!("{}_mean.vtp", stem.display())),
-        &atlas.mean_shape(),
+        &mean,
     )?;
     Ok(atlas)
 }

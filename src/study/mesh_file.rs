@@ -4,7 +4,7 @@
 use super::Progress;
 use crate::error::{Error, Result};
 use crate::formats::{read_fe_mesh_raw, read_outlines, read_surface, to_dimension, write_mesh};
-use crate::geometry::{ClosestPointIndex, Point, Shape};
+use crate::geometry::{ClosestPointIndex, Point, Shape, Similarity};
 use crate::mesh::quality::{QualityDistribution, distribution, mesh_quality};
 use crate::mesh::{FeMesh, RepairParams, RepairReport, SetsConfig, repair_with_quality};
 use crate::model::Atlas;
@@ -47,33 +47,36 @@ pub fn mesh_file_quality(path: &Path) -> Result<QualityDistribution> {
     })
 }
 
-/// Converts the mesh in `input` (or, for an atlas file, its mean mesh in the reference
-/// frame, with the atlas's landmarks for the sets) to `output` (format from the extension):
-/// made quadratic first with `quadratic` (hex8 to hex20, tet4 to tet10), with the sets of
-/// `sets` evaluated on the (quadratic) mesh added.
+/// Converts the mesh in `input` (or, for an atlas file, its mean mesh in the data's frame and
+/// unit, [`Atlas::data_frame`], or in the reference frame for an atlas of format version 2;
+/// the atlas's landmarks for the sets) to `output` (format from the extension): made
+/// quadratic first with `quadratic` (hex8 to hex20, tet4 to tet10), with the sets of `sets`
+/// evaluated on the (quadratic) mesh, in the reference frame, added.
 pub fn convert_mesh_file(
     input: &Path,
     output: &Path,
     sets: Option<&SetsConfig>,
     quadratic: bool,
 ) -> Result<()> {
-    fn mean_mesh<const D: usize>(path: &Path) -> Result<(FeMesh<D>, Vec<Point<D>>)> {
+    fn mean_mesh<const D: usize>(
+        path: &Path,
+    ) -> Result<(FeMesh<D>, Vec<Point<D>>, Option<Similarity<D>>)> {
         let a = Atlas::<D>::load(path)?;
         let l = a.landmarks.iter().map(|&i| a.mean[i]).collect();
-        Ok((a.mesh, l))
+        Ok((a.mesh, l, a.data_frame))
     }
     if is_atlas_file(input) {
         if crate::formats::atlas_dimension(input)? == 2 {
-            let (m, l) = mean_mesh::<2>(input)?;
-            convert(m, &l, output, sets, quadratic)
+            let (m, l, f) = mean_mesh::<2>(input)?;
+            convert(m, &l, output, sets, quadratic, f.as_ref())
         } else {
-            let (m, l) = mean_mesh::<3>(input)?;
-            convert(m, &l, output, sets, quadratic)
+            let (m, l, f) = mean_mesh::<3>(input)?;
+            convert(m, &l, output, sets, quadratic, f.as_ref())
         }
     } else {
         match read_any_mesh(input)? {
-            AnyMesh::Two(m) => convert(m, &[], output, sets, quadratic),
-            AnyMesh::Three(m) => convert(m, &[], output, sets, quadratic),
+            AnyMesh::Two(m) => convert(m, &[], output, sets, quadratic, None),
+            AnyMesh::Three(m) => convert(m, &[], output, sets, quadratic, None),
         }
     }
 }
@@ -85,6 +88,7 @@ fn convert<const D: usize>(
     output: &Path,
     sets: Option<&SetsConfig>,
     quadratic: bool,
+    frame: Option<&Similarity<D>>,
 ) -> Result<()> {
     if quadratic {
         mesh = match mesh.to_quadratic() {
@@ -100,6 +104,11 @@ fn convert<const D: usize>(
     }
     if let Some(c) = sets {
         mesh.sets.merge(c.evaluate(&mesh, landmarks)?);
+    }
+    // Sets are evaluated in the reference frame (the sets file's axes), then the mesh is
+    // carried to the data's frame and unit.
+    if let Some(t) = frame {
+        mesh.nodes = mesh.nodes.iter().map(|p| t.apply(p)).collect();
     }
     let q = mesh_quality(&mesh);
     write_mesh(output, &mesh, None, &q)

@@ -41,19 +41,42 @@ pub fn load_outlines_raw(paths: &[PathBuf], opts: &PopulationOptions) -> Result<
     Ok(shapes)
 }
 
+/// How [`attach_landmarks`] paired the landmarks of a population.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LandmarkPairing {
+    /// The ids of the landmarks given to every shape, in their order ([`by_id`]).
+    ///
+    /// [`by_id`]: crate::formats::landmarks::by_id
+    pub ids: Vec<String>,
+    /// `(shape, warning)`: a shape's ids that are not in every shape, and not used.
+    pub warnings: Vec<(String, String)>,
+}
+
 /// Gives every shape its landmarks from `files`: one CSV for the whole population (rows by
 /// shape name), or one Scalismo JSON / `.pts` file per shape, in the shapes' order.
-pub fn attach_landmarks<const D: usize>(shapes: &mut [Shape<D>], files: &[PathBuf]) -> Result<()> {
-    use crate::formats::landmarks::{attach, read_landmarks, read_landmarks_csv};
+/// Landmarks are paired between shapes by id, not by their order in the files: the ids that
+/// every shape has are used (in id order); an id missing from some shape (a typo in one
+/// file, say) is not used, with a warning naming the shapes that have it.
+///
+/// # Errors
+/// A file that cannot be read or parsed (an id given twice among them); no id common to
+/// every shape while some have landmarks; a landmark out of range or far from its shape; two
+/// landmarks on one point.
+pub fn attach_landmarks<const D: usize>(
+    shapes: &mut [Shape<D>],
+    files: &[PathBuf],
+) -> Result<LandmarkPairing> {
+    use crate::formats::landmarks::{read_landmarks, read_landmarks_csv};
     if files.is_empty() {
-        return Ok(());
+        return Ok(LandmarkPairing::default());
     }
     let csv = files.len() == 1
         && files[0]
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let mut lists = Vec::with_capacity(shapes.len());
     if csv {
-        let map = read_landmarks_csv::<D>(&files[0])?;
+        let mut map = read_landmarks_csv::<D>(&files[0])?;
         if let Some(name) = map.keys().find(|k| !shapes.iter().any(|s| &s.name == *k)) {
             return Err(Error::parse(
                 &files[0],
@@ -61,15 +84,12 @@ pub fn attach_landmarks<const D: usize>(shapes: &mut [Shape<D>], files: &[PathBu
                 format!("landmarks for shape '{name}', which is not in the population"),
             ));
         }
-        let mut ids = Vec::new();
-        for s in shapes.iter_mut() {
-            let l = map.get(&s.name).ok_or_else(|| {
+        for s in shapes.iter() {
+            let l = map.remove(&s.name).ok_or_else(|| {
                 Error::parse(&files[0], 0, format!("no landmarks for shape '{}'", s.name))
             })?;
-            attach(s, l, &files[0])?;
-            ids.push(l.iter().map(|x| x.0.clone()).collect());
+            lists.push((l, files[0].clone()));
         }
-        same_ids(shapes, &ids, &[files[0].clone()])?;
     } else {
         if files.len() != shapes.len() {
             return Err(Error::Population(format!(
@@ -78,53 +98,104 @@ pub fn attach_landmarks<const D: usize>(shapes: &mut [Shape<D>], files: &[PathBu
                 shapes.len()
             )));
         }
-        let mut ids = Vec::new();
-        for (s, f) in shapes.iter_mut().zip(files) {
-            let l = read_landmarks::<D>(f)?;
-            attach(s, &l, f)?;
-            ids.push(l.into_iter().map(|x| x.0).collect());
+        for f in files {
+            lists.push((read_landmarks::<D>(f)?, f.clone()));
         }
-        same_ids(shapes, &ids, files)?;
     }
-    Ok(())
+    pair_by_id(shapes, lists)
 }
 
-/// Landmarks are paired by id: every shape must have the ids of the first (each shape's
-/// landmarks are in id order, so equal lists pair them one to one).
-fn same_ids<const D: usize>(
-    shapes: &[Shape<D>],
-    ids: &[Vec<String>],
-    files: &[PathBuf],
-) -> Result<()> {
-    let Some(first) = ids.first() else {
-        return Ok(());
-    };
-    let Some(k) = ids.iter().position(|v| v != first) else {
-        return Ok(());
-    };
-    let (n0, n) = (first.len(), ids[k].len());
-    let list = |v: &[String]| {
-        let mut s = v.iter().take(8).cloned().collect::<Vec<_>>().join(", ");
-        if v.len() > 8 {
-            s.push_str(", ...");
+/// Attaches the landmarks of each shape's list (`(landmarks, file)`, in id order) that every
+/// list has: see [`attach_landmarks`].
+fn pair_by_id<const D: usize>(
+    shapes: &mut [Shape<D>],
+    lists: Vec<(Vec<crate::formats::landmarks::NamedLandmark<D>>, PathBuf)>,
+) -> Result<LandmarkPairing> {
+    use crate::formats::landmarks::attach;
+    let has =
+        |l: &[crate::formats::landmarks::NamedLandmark<D>], id: &str| l.iter().any(|x| x.0 == id);
+    let ids: Vec<String> = lists[0]
+        .0
+        .iter()
+        .map(|x| x.0.clone())
+        .filter(|id| lists.iter().all(|(l, _)| has(l, id)))
+        .collect();
+    if ids.is_empty() && lists.iter().any(|(l, _)| !l.is_empty()) {
+        let (k, (l, f)) = (lists.iter().enumerate())
+            .find(|(_, (l, _))| !l.is_empty())
+            .unwrap_or((0, &lists[0]));
+        let other = if k == 0 { 1.min(lists.len() - 1) } else { 0 };
+        return Err(Error::parse(
+            f,
+            0,
+            format!(
+                "no landmark id is in every shape ('{}' has [{}], '{}' has [{}]); landmarks are paired by id",
+                shapes[k].name,
+                id_list(l.iter().map(|x| &x.0)),
+                shapes[other].name,
+                id_list(lists[other].0.iter().map(|x| &x.0)),
+            ),
+        ));
+    }
+    let mut warnings = Vec::new();
+    for ((l, f), s) in lists.into_iter().zip(shapes.iter_mut()) {
+        let (kept, dropped): (Vec<_>, Vec<_>) = l.into_iter().partition(|x| ids.contains(&x.0));
+        if !dropped.is_empty() {
+            warnings.push((
+                s.name.clone(),
+                format!(
+                    "landmark(s) [{}] of {} are not in every shape and are not used (landmarks are paired by id)",
+                    id_list(dropped.iter().map(|x| &x.0)),
+                    f.display()
+                ),
+            ));
         }
-        s
-    };
-    let message = if n != n0 {
-        format!(
-            "shape '{}' has {n} landmarks but '{}' has {n0}; every shape needs the same landmarks",
-            shapes[k].name, shapes[0].name
-        )
-    } else {
-        format!(
-            "shape '{}' has the landmarks [{}] but '{}' has [{}]; landmarks are paired by id, every shape needs the same ids",
-            shapes[k].name,
-            list(&ids[k]),
-            shapes[0].name,
-            list(first)
-        )
-    };
-    Err(Error::parse(&files[k % files.len()], 0, message))
+        attach(s, &kept, &f)?;
+    }
+    Ok(LandmarkPairing { ids, warnings })
+}
+
+/// Gives `shape` (a registration template outside the population) the landmarks of `file`
+/// whose ids are `ids` (a population's [`LandmarkPairing::ids`]), in that order.
+///
+/// # Errors
+/// The file's errors; an id of `ids` the file lacks.
+pub fn attach_landmarks_paired<const D: usize>(
+    shape: &mut Shape<D>,
+    file: &Path,
+    ids: &[String],
+) -> Result<Vec<String>> {
+    let mut l = crate::formats::landmarks::read_landmarks::<D>(file)?;
+    if let Some(id) = ids.iter().find(|id| !l.iter().any(|x| &x.0 == *id)) {
+        return Err(Error::parse(
+            file,
+            0,
+            format!("the template has no landmark '{id}', which every shape of the population has"),
+        ));
+    }
+    let unused: Vec<String> = l
+        .iter()
+        .filter(|x| !ids.contains(&x.0))
+        .map(|x| x.0.clone())
+        .collect();
+    l.retain(|x| ids.contains(&x.0));
+    crate::formats::landmarks::attach(shape, &l, file)?;
+    Ok(unused)
+}
+
+/// The first ids of a list, for messages.
+fn id_list<'a>(ids: impl Iterator<Item = &'a String>) -> String {
+    let v: Vec<&String> = ids.collect();
+    let mut s = v
+        .iter()
+        .take(8)
+        .map(|x| x.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
+    if v.len() > 8 {
+        s.push_str(", ...");
+    }
+    s
 }
 
 /// A floating component under this share of a surface's area (an outline's length) is

@@ -351,10 +351,22 @@ fn bad_landmarks_and_unalignable_targets_are_clear_errors() {
             }
         }),
     );
+    // Landmarks are paired by id: a shape without landmark 1 leaves it unused by every
+    // shape, with a warning naming the shapes and the file (the others are still used).
+    let o = build(&["--landmarks", &counts]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let facts = std::fs::read_to_string(d.join("atlas.inputs.json")).unwrap();
+    assert!(
+        facts.contains("landmark(s) [1] of") && facts.contains("counts.csv"),
+        "{facts}"
+    );
+    std::fs::remove_file(&out).ok();
+    // No landmark in common.
+    let none = write(&d, "none.csv", &rows(&|k| format!("s{k},{k},0\n")));
     assert_clean_error(
-        &build(&["--landmarks", &counts]),
-        "counts.csv",
-        "same landmarks",
+        &build(&["--landmarks", &none]),
+        "none.csv",
+        "no landmark id is in every shape",
     );
     let range = write(
         &d,
@@ -554,4 +566,65 @@ fn an_atlas_of_more_shapes_than_coordinates() {
     );
     assert!(a.eigenvalues.iter().all(|&l| l > 0.0));
     std::fs::remove_dir_all(&d).ok();
+}
+
+/// `convert ATLAS` writes the mean mesh in the data's unit and pose: its extent is the
+/// population's (not the reference frame's largest side of 1), and it lies where the shapes
+/// lie; an atlas of format version 2 (no data frame) still converts, in the reference frame.
+#[test]
+fn convert_gives_the_mean_mesh_in_the_data_unit() {
+    let d = common::temp_dir("cli-convert-unit");
+    let atlas = crate::bad_input::atlas_2d(&d);
+    let pop = atlasmesh::study::demo_population(12, 120, 5);
+    let extent = |pts: &[[f64; 2]]| {
+        let (lo, hi) = atlasmesh::geometry::bounding_box(pts);
+        (
+            (hi[0] - lo[0]).max(hi[1] - lo[1]),
+            [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0],
+        )
+    };
+    let sizes: Vec<f64> = pop.iter().map(|s| extent(&s.points).0).collect();
+    let size = sizes.iter().sum::<f64>() / sizes.len() as f64;
+    let centre = pop
+        .iter()
+        .map(|s| extent(&s.points).1)
+        .fold([0.0; 2], |a, c| {
+            [
+                a[0] + c[0] / pop.len() as f64,
+                a[1] + c[1] / pop.len() as f64,
+            ]
+        });
+    let out = d.join("mean.vtu");
+    let o = atlasmesh(&[
+        "convert",
+        &atlas.display().to_string(),
+        &out.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: atlasmesh::mesh::FeMesh<2> = atlasmesh::formats::read_fe_mesh(&out).unwrap();
+    let (e, c) = extent(&m.nodes);
+    assert!(
+        (e / size - 1.0).abs() < 0.05,
+        "mean mesh extent {e}, the shapes' {size}"
+    );
+    assert!(
+        atlasmesh::geometry::dist2(c, centre).sqrt() < 0.05 * size,
+        "centre {c:?}, the shapes' {centre:?}"
+    );
+    // An atlas of format version 2.
+    let mut a = atlasmesh::model::Atlas::<2>::load(&atlas).unwrap();
+    a.data_frame = None;
+    let old = d.join("v2.safetensors");
+    a.save(&old).unwrap();
+    let out2 = d.join("mean2.vtu");
+    let o = atlasmesh(&[
+        "convert",
+        &old.display().to_string(),
+        &out2.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m2: atlasmesh::mesh::FeMesh<2> = atlasmesh::formats::read_fe_mesh(&out2).unwrap();
+    for (p, q) in m2.nodes.iter().zip(&a.mesh.nodes) {
+        assert!(atlasmesh::geometry::dist2(*p, *q).sqrt() < 1e-9);
+    }
 }

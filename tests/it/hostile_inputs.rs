@@ -119,8 +119,9 @@ fn overflowing_coordinates_are_refused() {
 }
 
 /// Landmarks are paired by id, not by their order in the files: a shape whose Scalismo file
-/// lists the ids in another order gets the same landmarks; duplicated ids, or ids that differ
-/// between shapes, are refused (duplicates once collapsed the template to a point, exit 0).
+/// lists the ids in another order gets the same landmarks; an id not in every shape is not
+/// used (a warning); duplicated ids, no id in common and two landmarks on one point are
+/// refused (duplicates once collapsed the template to a point, exit 0).
 #[test]
 fn landmarks_are_paired_by_id() {
     let d = common::temp_dir("hostile-landmarks");
@@ -166,7 +167,9 @@ fn landmarks_are_paired_by_id() {
                 .remove(0)
         })
         .collect();
-    atlasmesh::study::attach_landmarks(&mut read, &files).unwrap();
+    let pairing = atlasmesh::study::attach_landmarks(&mut read, &files).unwrap();
+    assert_eq!(pairing.ids, ["front", "side", "tip"]);
+    assert!(pairing.warnings.is_empty());
     for sh in &read {
         assert_eq!(sh.landmarks, read[0].landmarks, "{}", sh.name);
     }
@@ -191,13 +194,48 @@ fn landmarks_are_paired_by_id() {
         &["s3.json", "\"front\" is given twice"],
     );
     assert!(files_in(&d.join("dup")).is_empty());
-    // Another set of ids.
+    // An id that is not in every shape (a typo in one file, as in a real hand dataset): the
+    // common ids are used, with a warning in the report naming the others.
     std::fs::write(
         &files[3],
         json(&[("front", p[0]), ("back", p[15]), ("tip", p[30])]),
     )
     .unwrap();
-    fails(&run(&files, "ids"), 2, &["s3.json", "paired by id", "back"]);
+    let o = run(&files, "ids");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: atlasmesh::report::Report =
+        serde_json::from_slice(&std::fs::read(d.join("ids/report.json")).unwrap()).unwrap();
+    let warned = |name: &str, id: &str| {
+        r.inputs.iter().any(|i| {
+            i.name == name
+                && i.warnings.iter().any(|w| {
+                    w.contains(&format!("landmark(s) [{id}]")) && w.contains("not in every shape")
+                })
+        })
+    };
+    assert!(
+        warned("s3", "back") && warned("s0", "side"),
+        "{:?}",
+        r.inputs
+    );
+    let mut read: Vec<atlasmesh::geometry::Shape<2>> = shapes
+        .iter()
+        .map(|f| {
+            atlasmesh::formats::read_outlines(f, true)
+                .unwrap()
+                .remove(0)
+        })
+        .collect();
+    let pairing = atlasmesh::study::attach_landmarks(&mut read, &files).unwrap();
+    assert_eq!(pairing.ids, ["front", "tip"]);
+    assert!(read.iter().all(|s| s.landmarks == [0, 30]));
+    // No id in common.
+    std::fs::write(&files[3], json(&[("a", p[0]), ("b", p[15]), ("c", p[30])])).unwrap();
+    fails(
+        &run(&files, "none"),
+        2,
+        &["no landmark id is in every shape", "paired by id"],
+    );
     // Two landmarks on one point.
     std::fs::write(
         &files[3],

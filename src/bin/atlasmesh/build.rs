@@ -39,8 +39,9 @@ fn build<const D: usize>(a: &BuildArgs, pop: Population<D>, term: &Terminal) -> 
         mut inputs,
         params,
         meshes,
+        landmark_ids,
     } = pop;
-    let (shapes, template) = corresponded(&a.pop, &shapes, &mut inputs, 0, term)?;
+    let (shapes, template) = corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, 0, term)?;
     let meshes = meshes.as_deref();
     let params = &params;
     let step = "atlas (GPA, PCA, mesh of the mean)";

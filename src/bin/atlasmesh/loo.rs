@@ -42,8 +42,10 @@ fn loo<const D: usize>(a: &LooArgs, pop: Population<D>, term: &Terminal) -> anyh
         mut inputs,
         params,
         meshes,
+        landmark_ids,
     } = pop;
-    let (corresponded, template) = corresponded(&a.pop, &shapes, &mut inputs, a.jobs, term)?;
+    let (corresponded, template) =
+        corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, a.jobs, term)?;
     Ok(study::leave_one_out_of(
         &corresponded,
         &shapes,

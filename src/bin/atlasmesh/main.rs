@@ -51,7 +51,7 @@ enum Command {
     /// 0.5, quadrilaterals 0.3, simplices 0.2). Exits with 4 when an element is inverted.
     Quality(quality::QualityArgs),
     /// Converts an FE mesh between .inp, .msh, .vtu, .vtk and .feb, with its sets; an atlas
-    /// file (.safetensors) as input gives its mean mesh (reference frame).
+    /// file (.safetensors) as input gives its mean mesh (in the data's frame and unit).
     Convert(convert::ConvertArgs),
     /// Repairs an FE mesh: untangles inverted elements and raises scaled Jacobians below the
     /// bound by moving nodes; boundary nodes on SURFACE slide on it, other boundary nodes stay.

@@ -22,6 +22,8 @@ pub struct Population<const D: usize> {
     pub params: RunParams,
     /// `--template-mesh`, read.
     pub meshes: Option<Vec<FeMesh<D>>>,
+    /// The landmark ids every shape has (in their order), for `--template-landmarks`.
+    pub landmark_ids: Vec<String>,
 }
 
 /// Drops the floating islands of `shapes` (or refuses them with `--refuse-islands`), with a
@@ -29,9 +31,15 @@ pub struct Population<const D: usize> {
 fn clean<const D: usize>(
     pop: &PopArgs,
     shapes: &mut [Shape<D>],
+    pairing: &study::LandmarkPairing,
     term: &Terminal,
 ) -> anyhow::Result<Vec<InputReport>> {
-    let inputs = study::clean_shapes(shapes, study::ISLAND_SHARE);
+    let mut inputs = study::clean_shapes(shapes, study::ISLAND_SHARE);
+    for (name, w) in &pairing.warnings {
+        if let Some(i) = inputs.iter_mut().find(|i| &i.name == name) {
+            i.warnings.push(w.clone());
+        }
+    }
     for i in &inputs {
         if pop.refuse_islands && i.dropped_components > 0 {
             return Err(atlasmesh::Error::shape(
@@ -62,8 +70,8 @@ pub fn surfaces_and_params(
     let mut params = run.params_for(3)?;
     apply_pop(&mut params, pop);
     let mut shapes = study::load_surfaces(&pop.shapes)?;
-    study::attach_landmarks(&mut shapes, &pop.landmarks)?;
-    let inputs = clean(pop, &mut shapes, term)?;
+    let pairing = study::attach_landmarks(&mut shapes, &pop.landmarks)?;
+    let inputs = clean(pop, &mut shapes, &pairing, term)?;
     let meshes = if pop.template_mesh.is_empty() {
         None
     } else {
@@ -74,6 +82,7 @@ pub fn surfaces_and_params(
         inputs,
         params,
         meshes,
+        landmark_ids: pairing.ids,
     })
 }
 
@@ -102,18 +111,23 @@ pub fn outlines_and_params(
     } else {
         study::load_population(&pop.shapes, &opts)?
     };
-    study::attach_landmarks(&mut shapes, &pop.landmarks)?;
-    let inputs = clean(pop, &mut shapes, term)?;
+    let pairing = study::attach_landmarks(&mut shapes, &pop.landmarks)?;
+    let inputs = clean(pop, &mut shapes, &pairing, term)?;
     Ok(Population {
         shapes,
         inputs,
         params,
         meshes: None,
+        landmark_ids: pairing.ids,
     })
 }
 
 /// The `--template` file, read in the population's dimension with its `--template-landmarks`.
-fn template_file<const D: usize>(pop: &PopArgs, path: &Path) -> anyhow::Result<Shape<D>> {
+fn template_file<const D: usize>(
+    pop: &PopArgs,
+    path: &Path,
+    landmark_ids: &[String],
+) -> anyhow::Result<Shape<D>> {
     let files = [path.to_path_buf()];
     /// A shape read in dimension `E` (which is `D`) as a `Shape<D>`.
     fn in_dimension<const E: usize, const D: usize>(s: Shape<E>) -> Shape<D> {
@@ -139,7 +153,15 @@ fn template_file<const D: usize>(pop: &PopArgs, path: &Path) -> anyhow::Result<S
         in_dimension(study::load_outlines_raw(&files, &opts)?.remove(0))
     };
     if let Some(l) = &pop.template_landmarks {
-        study::attach_landmarks(std::slice::from_mut(&mut t), std::slice::from_ref(l))?;
+        // Paired with the population's landmarks by id.
+        let unused = study::attach_landmarks_paired(&mut t, l, landmark_ids)?;
+        if !unused.is_empty() {
+            eprintln!(
+                "warning: template landmark(s) [{}] of {} are not in every shape and are not used",
+                unused.join(", "),
+                l.display()
+            );
+        }
     }
     Ok(t)
 }
@@ -150,6 +172,7 @@ fn template_file<const D: usize>(pop: &PopArgs, path: &Path) -> anyhow::Result<S
 pub fn corresponded<const D: usize>(
     pop: &PopArgs,
     shapes: &[Shape<D>],
+    landmark_ids: &[String],
     inputs: &mut [InputReport],
     jobs: usize,
     term: &Terminal,
@@ -160,7 +183,7 @@ pub fn corresponded<const D: usize>(
     }
     let external: Option<Shape<D>> = match &pop.template {
         Some(t) if !shapes.iter().any(|s| &s.name == t) && Path::new(t).exists() => {
-            Some(template_file(pop, Path::new(t))?)
+            Some(template_file(pop, Path::new(t), landmark_ids)?)
         }
         _ => None,
     };

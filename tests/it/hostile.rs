@@ -3,20 +3,11 @@
 
 use crate::bad_input::{atlas_2d, fails, files_in};
 use crate::common::{self, atlasmesh};
+use crate::hostile_outputs::ellipse;
 use std::path::Path;
 
 fn s(p: &Path) -> String {
     p.display().to_string()
-}
-
-/// The outline of an ellipse, as text.
-fn ellipse(a: f64, b: f64) -> String {
-    (0..120)
-        .map(|i| {
-            let t = i as f64 / 120.0 * std::f64::consts::TAU;
-            format!("{} {}\n", a * t.cos(), b * t.sin())
-        })
-        .collect()
 }
 
 /// Subjects named `..`, `.` (files `...txt`, `..txt`) write into folders of their own inside

@@ -159,15 +159,20 @@ fn landmarks_are_paired_by_id() {
         std::fs::write(&lf, l).unwrap();
         files.push(lf);
     }
-    let mut read: Vec<atlasmesh::geometry::Shape<2>> = shapes
-        .iter()
-        .map(|f| {
-            atlasmesh::formats::read_outlines(f, true)
-                .unwrap()
-                .remove(0)
-        })
-        .collect();
-    let pairing = atlasmesh::study::attach_landmarks(&mut read, &files).unwrap();
+    // The shapes as read, with the landmarks of `files`, and how they were paired.
+    let paired = |files: &[PathBuf]| {
+        let mut read: Vec<atlasmesh::geometry::Shape<2>> = shapes
+            .iter()
+            .map(|f| {
+                atlasmesh::formats::read_outlines(f, true)
+                    .unwrap()
+                    .remove(0)
+            })
+            .collect();
+        let pairing = atlasmesh::study::attach_landmarks(&mut read, files).unwrap();
+        (read, pairing)
+    };
+    let (read, pairing) = paired(&files);
     assert_eq!(pairing.ids, ["front", "side", "tip"]);
     assert!(pairing.warnings.is_empty());
     for sh in &read {
@@ -218,15 +223,7 @@ fn landmarks_are_paired_by_id() {
         "{:?}",
         r.inputs
     );
-    let mut read: Vec<atlasmesh::geometry::Shape<2>> = shapes
-        .iter()
-        .map(|f| {
-            atlasmesh::formats::read_outlines(f, true)
-                .unwrap()
-                .remove(0)
-        })
-        .collect();
-    let pairing = atlasmesh::study::attach_landmarks(&mut read, &files).unwrap();
+    let (read, pairing) = paired(&files);
     assert_eq!(pairing.ids, ["front", "tip"]);
     assert!(read.iter().all(|s| s.landmarks == [0, 30]));
     // No id in common.

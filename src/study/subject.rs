@@ -169,7 +169,7 @@ pub fn fit_subject<const D: usize>(
 
 /// Refuses a morphed (and repaired) mesh no solver could use: no elements, a node with a NaN
 /// or infinite coordinate, or an inverted element (a corner Jacobian ≤ 0).
-fn check_valid<const D: usize>(
+pub(crate) fn check_valid<const D: usize>(
     subject: &Shape<D>,
     mesh: &crate::mesh::FeMesh<D>,
     q: &crate::mesh::quality::QualitySummary,
@@ -248,15 +248,15 @@ fn mirrored_fit_rms<const D: usize>(
 }
 
 /// The delivered mesh measured against its subject.
-struct Delivered {
-    distances: SurfaceDistances,
-    element_size: f64,
-    finite: bool,
+pub(crate) struct Delivered {
+    pub(crate) distances: SurfaceDistances,
+    pub(crate) element_size: f64,
+    pub(crate) finite: bool,
 }
 
 /// The boundary of the mesh written against the subject (two-way, or subject → mesh for a
 /// partial subject or an open outline), with the mesh's element size (median boundary edge).
-fn delivered_distances<const D: usize>(
+pub(crate) fn delivered_distances<const D: usize>(
     mesh: &FeMesh<D>,
     subject: &Shape<D>,
     index: &ClosestPointIndex<D>,

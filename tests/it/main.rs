@@ -16,6 +16,7 @@ mod hostile;
 mod hostile_inputs;
 mod hostile_outputs;
 mod html;
+mod instances;
 mod register;
 mod repair;
 mod solver;

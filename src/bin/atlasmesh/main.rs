@@ -6,6 +6,7 @@ mod build;
 mod convert;
 mod demo;
 mod fit;
+mod instance;
 mod loo;
 mod merge_reports;
 mod population;
@@ -39,6 +40,9 @@ enum Command {
     Build(build::BuildArgs),
     /// Fit subjects with a saved atlas, morph the mean mesh onto them, and measure.
     Fit(fit::FitArgs),
+    /// Shapes of the model for given weights (in standard deviations), each with its FE mesh
+    /// (the mean mesh morphed onto it, repaired, checked), in the data's unit.
+    Instance(instance::InstanceArgs),
     /// Joins the report.json files of several `fit --shard` runs (or batches of one atlas)
     /// into one.
     MergeReports(merge_reports::MergeArgs),
@@ -67,6 +71,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Loo(a) => loo::run(a, &term),
         Command::Build(a) => build::run(a, &term),
         Command::Fit(a) => fit::run(a, &term),
+        Command::Instance(a) => instance::run(a),
         Command::MergeReports(a) => merge_reports::run(a),
         Command::Register(a) => register::run(a),
         Command::Quality(a) => quality::run(a),

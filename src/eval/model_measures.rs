@@ -58,13 +58,7 @@ pub fn shape_model_measures<const D: usize>(
     // Shape units per Procrustes unit: the mean centroid size (the mean has norm 1).
     let unit = raw
         .iter()
-        .map(|s| {
-            let c = crate::geometry::centroid(s);
-            s.iter()
-                .map(|p| crate::geometry::dist2(*p, c))
-                .sum::<f64>()
-                .sqrt()
-        })
+        .map(|s| crate::geometry::centroid_size(s))
         .sum::<f64>()
         / ns as f64;
     let mean_distance = |a: &[Point<D>], b: &[Point<D>]| -> f64 {

@@ -427,16 +427,18 @@ pub fn parse_inp(path: &Path, text: &str) -> Result<InpDeck> {
         .into_iter()
         .filter(|(n, _)| !n.eq_ignore_ascii_case("EALL"))
         .collect();
+    let sets = MeshSets {
+        node_sets,
+        element_sets,
+        surfaces: surface_sets,
+    };
+    super::fe_mesh::check_mesh(path, &nodes, kind, &conn, &sets)?;
     Ok(InpDeck {
         mesh: FeMesh {
             nodes,
             kind,
             connectivity: conn,
-            sets: MeshSets {
-                node_sets,
-                element_sets,
-                surfaces: surface_sets,
-            },
+            sets,
         },
         node_ids,
         text: text.to_string(),

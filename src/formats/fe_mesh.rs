@@ -29,14 +29,13 @@ pub fn read_fe_mesh_raw(path: &Path) -> Result<FeMesh<3>> {
 /// only names the file in messages (no file is read).
 pub fn parse_fe_mesh_raw(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
     let text = || super::outline::utf8(path, bytes);
-    let m = match mesh_extension(path)? {
-        "inp" => parse_inp(path, text()?)?.mesh,
-        "msh" => parse_msh(path, bytes)?,
-        "vtu" => super::vtk_xml::parse_vtu(path, bytes)?,
-        _ => parse_vtk_unstructured(path, bytes)?,
-    };
-    check_mesh(path, &m.nodes, m.kind, &m.connectivity, &m.sets)?;
-    Ok(m)
+    // (Each parser checks its mesh: `check_mesh`.)
+    match mesh_extension(path)? {
+        "inp" => Ok(parse_inp(path, text()?)?.mesh),
+        "msh" => parse_msh(path, bytes),
+        "vtu" => super::vtk_xml::parse_vtu(path, bytes),
+        _ => parse_vtk_unstructured(path, bytes),
+    }
 }
 
 /// The FE mesh format of `path`, by its extension: `inp`, `msh`, `vtu` or `vtk`.

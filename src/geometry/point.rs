@@ -20,6 +20,13 @@ pub fn coordinate_problem(p: &[f64]) -> Option<String> {
     })
 }
 
+/// The centroid size of a point set: the root of the summed squared distances to its
+/// centroid (the size GPA scales away; units of the points).
+pub fn centroid_size<const D: usize>(points: &[Point<D>]) -> f64 {
+    let c = centroid(points);
+    points.iter().map(|p| dist2(*p, c)).sum::<f64>().sqrt()
+}
+
 /// Axis-aligned bounding box `(min, max)` of a non-empty point list.
 pub fn bounding_box<const D: usize>(points: &[Point<D>]) -> (Point<D>, Point<D>) {
     let mut lo = [f64::INFINITY; D];

@@ -51,13 +51,7 @@ fn data_frame<const D: usize>(mean: &[Point<D>], shapes: &[Shape<D>]) -> Similar
         .map(|s| crate::model::fit_similarity(mean, &s.points, None))
         .collect();
     let n = fits.len() as f64;
-    let size = |p: &[Point<D>]| {
-        let c = crate::geometry::centroid(p);
-        p.iter()
-            .map(|q| crate::geometry::dist2(*q, c))
-            .sum::<f64>()
-            .sqrt()
-    };
+    let size = crate::geometry::centroid_size;
     let scale = shapes.iter().map(|s| size(&s.points)).sum::<f64>() / n / size(mean);
     let mut average = vec![[0.0; D]; mean.len()];
     for t in &fits {

@@ -33,10 +33,7 @@ pub(crate) fn mean_mesh_report<const D: usize>(
 /// How many units of the data one unit of the reference-frame `mean` is: the shapes' mean
 /// centroid size over the mean's (the scale GPA removed).
 pub fn data_per_mean<const D: usize>(shapes: &[Shape<D>], mean: &Shape<D>) -> f64 {
-    let size = |p: &[crate::geometry::Point<D>]| {
-        let c = crate::geometry::centroid(p);
-        (p.iter().map(|q| crate::geometry::dist2(*q, c)).sum::<f64>()).sqrt()
-    };
+    let size = crate::geometry::centroid_size;
     let data = shapes.iter().map(|s| size(&s.points)).sum::<f64>() / shapes.len().max(1) as f64;
     data / size(&mean.points)
 }

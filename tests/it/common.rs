@@ -297,11 +297,12 @@ pub fn python() -> Option<PathBuf> {
 }
 
 /// A mesh as meshio reads it: its points and the cells of its first block.
-type MeshioMesh = (Vec<Vec<f64>>, Vec<Vec<usize>>);
+pub type MeshioMesh = (Vec<Vec<f64>>, Vec<Vec<usize>>);
 
 /// The meshes of `files` as meshio reads them (one Python run for all), or `None` without a
 /// Python with meshio.
-fn meshio_meshes(files: &[PathBuf]) -> Option<Vec<MeshioMesh>> {
+#[allow(dead_code)]
+pub fn meshio_meshes(files: &[PathBuf]) -> Option<Vec<MeshioMesh>> {
     let py = python()?;
     let script = r#"
 import sys, json, meshio

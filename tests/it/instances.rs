@@ -1,29 +1,32 @@
-//! `atlasmesh instance` as users run it (default options): a sweep of the first mode, each
-//! instance's surface and FE mesh in the data's unit, every mesh valid and close to its
-//! surface, read back by atlasmesh (and meshio when it is there).
+//! `atlasmesh instance` as users run it: a sweep of the first mode, each instance's surface
+//! and FE mesh in the data's unit, every mesh valid and close to its surface, read back by
+//! atlasmesh and by meshio (when there is a Python with it).
 
 use crate::bad_input::{atlas_2d, fails, files_in};
 use crate::common::{self, atlasmesh};
+use std::path::{Path, PathBuf};
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
 
 #[test]
 fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
     let d = common::temp_dir("instance-sweep");
     let atlas = atlas_2d(&d);
+    // `atlasmesh instance --atlas ATLAS ARGS --out OUT`.
+    let run = |args: &[&str], out: &Path| {
+        let (a, o) = (s(&atlas), s(out));
+        let mut all = vec!["instance", "--atlas", &a];
+        all.extend_from_slice(args);
+        all.extend(["--out", &o]);
+        atlasmesh(&all)
+    };
     let out = d.join("sweep");
-    let s = |p: &std::path::Path| p.display().to_string();
-    let o = atlasmesh(&[
-        "instance",
-        "--atlas",
-        &s(&atlas),
-        "--mode",
-        "1",
-        "--steps",
-        "-3:3:1",
-        "--format",
-        "vtu,inp",
-        "--out",
-        &s(&out),
-    ]);
+    let o = run(
+        &["--mode", "1", "--steps", "-3:3:1", "--format", "vtu,inp"],
+        &out,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let reports: Vec<atlasmesh::study::InstanceReport> =
         serde_json::from_slice(&std::fs::read(out.join("instances.json")).unwrap()).unwrap();
@@ -35,6 +38,8 @@ fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
         (hi[0] - lo[0]).max(hi[1] - lo[1])
     };
     let pop_size = pop.iter().map(|s| size(&s.points)).sum::<f64>() / pop.len() as f64;
+    let mut mesh_files: Vec<PathBuf> = Vec::new();
+    let mut read: Vec<atlasmesh::mesh::FeMesh<2>> = Vec::new();
     for r in &reports {
         assert_eq!(r.inverted_elements, 0, "{}", r.name);
         assert!(
@@ -53,10 +58,21 @@ fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
             r.element_size
         );
         let base = out.join(&r.name);
-        let mesh: atlasmesh::mesh::FeMesh<2> =
-            atlasmesh::formats::read_fe_mesh(&base.join(format!("{}_mesh.inp", r.name))).unwrap();
-        let q = atlasmesh::mesh::quality::summarize(&atlasmesh::mesh::quality::mesh_quality(&mesh));
-        assert_eq!(q.inverted_elements, 0);
+        for ext in ["inp", "vtu"] {
+            let f = base.join(format!("{}_mesh.{ext}", r.name));
+            let mesh: atlasmesh::mesh::FeMesh<2> = atlasmesh::formats::read_fe_mesh(&f).unwrap();
+            let q =
+                atlasmesh::mesh::quality::summarize(&atlasmesh::mesh::quality::mesh_quality(&mesh));
+            assert_eq!(q.inverted_elements, 0, "{}", f.display());
+            let checked = atlasmesh(&["quality", &s(&f)]);
+            assert!(
+                checked.status.success(),
+                "{}",
+                String::from_utf8_lossy(&checked.stdout)
+            );
+            mesh_files.push(f);
+            read.push(mesh);
+        }
         let outline =
             atlasmesh::formats::read_outlines(&base.join(format!("{}.vtp", r.name)), true)
                 .unwrap()
@@ -67,50 +83,38 @@ fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
             "{}: extent {e}, population {pop_size}",
             r.name
         );
-        let q = atlasmesh(&["quality", &s(&base.join(format!("{}_mesh.vtu", r.name)))]);
-        assert!(q.status.success(), "{}", String::from_utf8_lossy(&q.stdout));
     }
-    // The mean instance's outline is the mean shape in the data's unit.
+    // meshio reads every mesh with the nodes and cells atlasmesh reads.
+    if let Some(meshes) = common::meshio_meshes(&mesh_files) {
+        for ((f, m), (points, cells)) in mesh_files.iter().zip(&read).zip(meshes) {
+            assert_eq!(points.len(), m.nodes.len(), "{}", f.display());
+            assert_eq!(cells.len(), m.num_elements(), "{}", f.display());
+            for (p, q) in points.iter().zip(&m.nodes) {
+                assert!((p[0] - q[0]).abs() + (p[1] - q[1]).abs() < 1e-9);
+            }
+        }
+    }
+    // The weight 0 is the mean, named as such.
     let mean = reports
         .iter()
         .find(|r| r.sd == [0.0])
         .expect("the weight 0");
     assert_eq!(mean.name, "mode1_0");
-    // Bad weights: nothing written.
+    // Bad weights and steps: nothing written.
     let bad = d.join("bad");
-    let o = atlasmesh(&[
-        "instance",
-        "--atlas",
-        &s(&atlas),
-        "--weights",
-        "9=1",
-        "--out",
-        &s(&bad),
-    ]);
-    fails(&o, 2, &["9 weights for a model of 4 modes"]);
+    fails(
+        &run(&["--weights", "9=1"], &bad),
+        2,
+        &["9 weights for a model of 4 modes"],
+    );
     assert!(files_in(&bad).is_empty() && !bad.exists());
-    let o = atlasmesh(&[
-        "instance",
-        "--atlas",
-        &s(&atlas),
-        "--mode",
-        "1",
-        "--steps",
-        "3:1:1",
-        "--out",
-        &s(&bad),
-    ]);
-    fails(&o, 2, &["--steps"]);
+    fails(
+        &run(&["--mode", "1", "--steps", "3:1:1"], &bad),
+        2,
+        &["--steps"],
+    );
     // Given weights.
-    let o = atlasmesh(&[
-        "instance",
-        "--atlas",
-        &s(&atlas),
-        "--weights",
-        "1=+2,3=-1.5",
-        "--out",
-        &s(&bad),
-    ]);
+    let o = run(&["--weights", "1=+2,3=-1.5"], &bad);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
         bad.join("mode1_plus2_mode3_minus1.5/mode1_plus2_mode3_minus1.5_mesh.vtu")

@@ -384,3 +384,164 @@ const SCRIPT: &str = r#"
   });
 })();
 "#;
+
+/// Writes `instances.html` for the instances of `report` (`atlasmesh instance` or `sample`),
+/// embedding their pictures found in `dir`: the summary, the weights of the first two modes
+/// against each other (a sampled population's spread), and a sortable table with a row per
+/// instance (its weights, its mesh's quality and distance to its surface, its files).
+pub fn write_instances(path: &Path, report: &super::InstancesReport, dir: &Path) -> Result<()> {
+    let mut h = String::with_capacity(1 << 20);
+    let title = "atlasmesh instances of the model";
+    let _ = writeln!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{title}</title>\n<style>{STYLE}</style></head>\n<body>\n<h1>{title}</h1>"
+    );
+    let s = &report.summary;
+    let unit = if report.data_unit {
+        "the data's unit"
+    } else {
+        "the atlas's reference frame (an atlas of format 2)"
+    };
+    let _ = writeln!(
+        h,
+        "<p class=\"meta\">Atlas {} ({}D, {} modes); shapes and meshes in {unit}; atlasmesh {}.{}</p>",
+        escape(&report.atlas),
+        report.dimension,
+        report.modes,
+        escape(&report.atlasmesh_version),
+        report.sampling.as_ref().map_or(String::new(), |p| format!(
+            " Sampled: {} weights vectors from the prior N(0, Λ), seed {}{}.",
+            p.n,
+            p.seed,
+            p.max_sd
+                .map_or(String::new(), |k| format!(", each weight within ±{k} sd"))
+        ))
+    );
+    let _ = writeln!(
+        h,
+        "<table><tbody><tr><td>instances written</td><td>{}</td></tr><tr><td>failed</td><td>{}</td></tr><tr><td>skipped (complete)</td><td>{}</td></tr><tr><td>with elements below the repair bound</td><td>{}</td></tr><tr><td>smallest scaled Jacobian</td><td>{}</td></tr><tr><td>largest boundary RMS distance / element size</td><td>{}</td></tr></tbody></table>",
+        s.written,
+        s.failed,
+        s.resumed,
+        s.below_repair_bound,
+        num(s.scaled_jacobian_min, 3),
+        num(s.mesh_rms_distance_per_element_max, 4)
+    );
+    if report.modes >= 2 && report.instances.len() > 1 {
+        h.push_str("<h2>Weights of modes 1 and 2</h2>\n");
+        h.push_str(&weights_scatter(&report.instances));
+    }
+    if !report.failed.is_empty() {
+        h.push_str("<h2>Failed</h2>\n<table><thead><tr><th>instance</th><th>reason</th></tr></thead><tbody>\n");
+        for f in &report.failed {
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}</td></tr>",
+                escape(&f.name),
+                escape(&f.error)
+            );
+        }
+        h.push_str("</tbody></table>\n");
+    }
+    let shown = report.modes.min(5);
+    h.push_str("<h2>Instances</h2>\n<table class=\"sortable\"><thead><tr><th>instance</th><th>Mahalanobis</th>");
+    for k in 1..=shown {
+        let _ = write!(h, "<th>mode {k} (sd)</th>");
+    }
+    h.push_str("<th>elements</th><th>SJ min</th><th>SJ min before repair</th><th>below repair bound</th><th>boundary RMS</th><th>RMS / element</th><th>boundary p95</th><th>element size</th><th>files</th><th>picture</th></tr></thead><tbody>\n");
+    for (k, r) in report.instances.iter().enumerate() {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td>",
+            escape(&r.name),
+            num(r.mahalanobis, 2)
+        );
+        for m in 0..shown {
+            let _ = write!(
+                h,
+                "<td>{}</td>",
+                num(r.sd.get(m).copied().unwrap_or(0.0), 2)
+            );
+        }
+        let _ = write!(
+            h,
+            "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>",
+            r.elements,
+            num(r.scaled_jacobian_min, 3),
+            num(r.scaled_jacobian_min_before_repair, 3),
+            r.elements_below_repair_bound,
+            num(r.mesh_rms_distance, 4),
+            num(r.mesh_rms_distance / r.element_size, 4),
+            num(r.mesh_p95_distance, 4),
+            num(r.element_size, 3)
+        );
+        for f in r.files.iter().filter(|f| !f.ends_with(".png")) {
+            let short = f.rsplit('/').next().unwrap_or(f);
+            let _ = write!(h, "<a href=\"{}\">{}</a> ", escape(f), escape(short));
+        }
+        h.push_str("</td><td class=\"pics\">");
+        if k < MAX_SUBJECT_PICTURES {
+            for f in r.files.iter().filter(|f| f.ends_with(".png")) {
+                h.push_str(&img(dir, f, &format!("{}: its mesh", r.name), "thumb"));
+            }
+        }
+        h.push_str("</td></tr>\n");
+    }
+    h.push_str("</tbody></table>\n");
+    let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");
+    crate::formats::write_atomic(path, h.as_bytes())
+}
+
+/// An inline SVG of the instances' weights of mode 1 (x) against mode 2 (y), in standard
+/// deviations, with the 1, 2 and 3 sd circles; each dot titled with its instance.
+fn weights_scatter(instances: &[super::InstanceReport]) -> String {
+    let (size, pad) = (320.0, 20.0);
+    let reach = instances
+        .iter()
+        .flat_map(|r| r.sd.iter().take(2))
+        .filter(|v| v.is_finite())
+        .fold(3.0_f64, |a, v| a.max(v.abs()))
+        .ceil();
+    let scale = (size / 2.0 - pad) / reach;
+    let c = size / 2.0;
+    let mut svg = format!(
+        "<svg width=\"{size}\" height=\"{size}\" viewBox=\"0 0 {size} {size}\" role=\"img\" aria-label=\"weights of modes 1 and 2 in sd\">"
+    );
+    for k in 1..=3 {
+        let _ = write!(
+            svg,
+            "<circle cx=\"{c}\" cy=\"{c}\" r=\"{:.1}\" fill=\"none\" stroke=\"#bbb\"/><text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\" fill=\"#777\">{k}σ</text>",
+            k as f64 * scale,
+            c + k as f64 * scale * 0.71 + 2.0,
+            c - k as f64 * scale * 0.71 - 2.0
+        );
+    }
+    let _ = write!(
+        svg,
+        "<line x1=\"{pad}\" y1=\"{c}\" x2=\"{}\" y2=\"{c}\" stroke=\"#888\"/><line x1=\"{c}\" y1=\"{pad}\" x2=\"{c}\" y2=\"{}\" stroke=\"#888\"/><text x=\"{}\" y=\"{}\" font-size=\"11\">mode 1</text><text x=\"{}\" y=\"{}\" font-size=\"11\">mode 2</text>",
+        size - pad,
+        size - pad,
+        size - pad - 40.0,
+        c - 4.0,
+        c + 4.0,
+        pad + 8.0
+    );
+    for r in instances {
+        let (x, y) = (
+            r.sd.first().copied().unwrap_or(0.0),
+            r.sd.get(1).copied().unwrap_or(0.0),
+        );
+        if !(x.is_finite() && y.is_finite()) {
+            continue;
+        }
+        let _ = write!(
+            svg,
+            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3\" fill=\"#1f5fa8\"><title>{}: {x:.2}, {y:.2}</title></circle>",
+            c + x * scale,
+            c - y * scale,
+            escape(&r.name)
+        );
+    }
+    svg.push_str("</svg>\n");
+    svg
+}

@@ -7,11 +7,14 @@
 //! | `plots` | PNG plots: variance, `E_d`, measures, modes, Jacobians, subjects |
 //! | `render` | a small rasterizer for 3D surfaces and meshes |
 //! | `html` | `report.html` |
+//! | `instances` | [`InstancesReport`]: the `instances.json` schema of `instance` and `sample` |
 
 pub mod html;
+mod instances;
 mod plots;
 pub mod render;
 mod schema;
 
+pub use instances::*;
 pub use plots::*;
 pub use schema::*;

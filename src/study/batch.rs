@@ -228,7 +228,7 @@ pub fn fit_batch<const D: usize>(
     check_folder_names(files)?;
     crate::formats::create_dir(out)?;
     let _lock = crate::formats::lock_dir(out)?;
-    check_report_shard(out, opts.shard.as_deref())?;
+    check_report_shard(&out.join("report.json"), opts.shard.as_deref())?;
     let run_crc = {
         let mut h = crc32fast::Hasher::new();
         h.update(&atlas_crc.to_le_bytes());
@@ -330,11 +330,10 @@ fn finish_batch<const D: usize>(
     )
 }
 
-/// Refuses to run a batch into a folder whose `report.json` is another shard's (or of a run
+/// Refuses to run a batch into a folder whose report (`path`) is another shard's (or of a run
 /// without shards, or with shards when this one has none): the report would be replaced.
-fn check_report_shard(out: &Path, shard: Option<&str>) -> Result<()> {
-    let path = out.join("report.json");
-    let Ok(bytes) = std::fs::read(&path) else {
+pub(crate) fn check_report_shard(path: &Path, shard: Option<&str>) -> Result<()> {
+    let Ok(bytes) = std::fs::read(path) else {
         return Ok(());
     };
     let before: Option<String> = serde_json::from_slice::<serde_json::Value>(&bytes)

@@ -45,64 +45,73 @@ fn pictures_3d<const D: usize>(
     let view = render::View::fitting(&to3(&subject.points));
     let far = 0.01 * subject.bbox_diagonal();
     let by_distance = render::distance_color(far);
+    let legend = render::Legend {
+        color: &by_distance,
+        lo: 0.0,
+        hi: far,
+        lo_label: "0".into(),
+        hi_label: format!("{far:.3} (1 % diag.)"),
+    };
+    let img = render::render(
+        &instance,
+        &tris,
+        Some(&distance),
+        None,
+        legend.color,
+        &view,
+        480,
+        360,
+    );
+    let title = format!("{}: fit, distance to the subject", subject.name);
+    let img = render::annotated(&img, &title, Some(&legend));
+    let name = format!("{base}_distance.png");
+    write_atomic(&out.join(&name), &img.png()?)?;
+    files.push(name);
+    let title = format!("{}: morphed mesh, scaled Jacobian", subject.name);
+    let name = format!("{base}_quality.png");
+    write_atomic(
+        &out.join(&name),
+        &quality_picture(mesh, per_element, &view, &title)?,
+    )?;
+    files.push(name);
+    Ok(files)
+}
+
+/// The boundary of the volume mesh `mesh` coloured by the scaled Jacobian of its elements
+/// (fig. 27), seen by `view`, with `title` and the colour scale: a PNG.
+pub(crate) fn quality_picture<const D: usize>(
+    mesh: &FeMesh<D>,
+    per_element: &[ElementQuality],
+    view: &crate::report::render::View,
+    title: &str,
+) -> Result<Vec<u8>> {
+    use crate::report::render;
     let mesh3 = FeMesh {
-        nodes: to3(&mesh.nodes),
+        nodes: mesh.nodes.iter().map(same_dim::<D, 3>).collect(),
         kind: mesh.kind,
         connectivity: mesh.connectivity.clone(),
         sets: Default::default(),
     };
     let sj: Vec<f64> = per_element.iter().map(|e| e.scaled_jacobian_min).collect();
     let (btris, bvals) = render::boundary_triangles(&mesh3, &sj);
-    type Picture<'a> = (
-        &'a str,
-        &'a [Point<3>],
-        &'a [[usize; 3]],
-        Option<&'a [f64]>,
-        Option<&'a [f64]>,
-        render::Legend<'a>,
+    let legend = render::Legend {
+        color: &render::jacobian_color,
+        lo: 0.0,
+        hi: 1.0,
+        lo_label: "≤ 0".into(),
+        hi_label: "1".into(),
+    };
+    let img = render::render(
+        &mesh3.nodes,
+        &btris,
+        None,
+        Some(&bvals),
+        legend.color,
+        view,
+        480,
+        360,
     );
-    let pictures: [Picture; 2] = [
-        (
-            "distance",
-            &instance,
-            &tris,
-            Some(&distance),
-            None,
-            render::Legend {
-                color: &by_distance,
-                lo: 0.0,
-                hi: far,
-                lo_label: "0".into(),
-                hi_label: format!("{far:.3} (1 % diag.)"),
-            },
-        ),
-        (
-            "quality",
-            &mesh3.nodes,
-            &btris,
-            None,
-            Some(&bvals),
-            render::Legend {
-                color: &render::jacobian_color,
-                lo: 0.0,
-                hi: 1.0,
-                lo_label: "≤ 0".into(),
-                hi_label: "1".into(),
-            },
-        ),
-    ];
-    for (what, points, facets, vertex, face, legend) in pictures {
-        let img = render::render(points, facets, vertex, face, legend.color, &view, 480, 360);
-        let title = match what {
-            "distance" => format!("{}: fit, distance to the subject", subject.name),
-            _ => format!("{}: morphed mesh, scaled Jacobian", subject.name),
-        };
-        let img = render::annotated(&img, &title, Some(&legend));
-        let name = format!("{base}_{what}.png");
-        write_atomic(&out.join(&name), &img.png()?)?;
-        files.push(name);
-    }
-    Ok(files)
+    render::annotated(&img, title, Some(&legend)).png()
 }
 
 /// The 2D picture of a subject (fig. 9): the mean, the subject, the fit's locus and the

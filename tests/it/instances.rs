@@ -10,6 +10,23 @@ fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
+fn read_report(out: &Path) -> atlasmesh::report::InstancesReport {
+    serde_json::from_slice(&std::fs::read(out.join("instances.json")).unwrap()).unwrap()
+}
+
+/// Every `href` of an HTML page names a file that exists beside it.
+fn links_resolve(html: &str, dir: &Path) {
+    let links: Vec<&str> = html
+        .split("href=\"")
+        .skip(1)
+        .map(|r| &r[..r.find('"').unwrap()])
+        .collect();
+    assert!(!links.is_empty());
+    for l in links {
+        assert!(dir.join(l).is_file(), "link {l} of {}", dir.display());
+    }
+}
+
 #[test]
 fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
     let d = common::temp_dir("instance-sweep");
@@ -28,9 +45,14 @@ fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
         &out,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let reports: Vec<atlasmesh::study::InstanceReport> =
-        serde_json::from_slice(&std::fs::read(out.join("instances.json")).unwrap()).unwrap();
+    let report = read_report(&out);
+    let reports = &report.instances;
     assert_eq!(reports.len(), 7);
+    assert!(report.data_unit && report.sampling.is_none());
+    // The page, with a picture per instance (plots are on by default), links that resolve.
+    let html = std::fs::read_to_string(out.join("instances.html")).unwrap();
+    assert_eq!(html.matches("<img class=\"thumb\"").count(), 7);
+    links_resolve(&html, &out);
     // The population's size (the demo outlines are about 2 units across).
     let pop = atlasmesh::study::demo_population(12, 120, 5);
     let size = |pts: &[[f64; 2]]| {
@@ -40,8 +62,21 @@ fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
     let pop_size = pop.iter().map(|s| size(&s.points)).sum::<f64>() / pop.len() as f64;
     let mut mesh_files: Vec<PathBuf> = Vec::new();
     let mut read: Vec<atlasmesh::mesh::FeMesh<2>> = Vec::new();
-    for r in &reports {
+    for r in reports {
         assert_eq!(r.inverted_elements, 0, "{}", r.name);
+        assert_eq!(r.elements_below_repair_bound, 0, "{}", r.name);
+        // The morph puts the boundary nodes on the instance's outline as closely as the mean
+        // mesh's are on the mean's (the quadrilateral mesher's boundary is a few % of an
+        // element off the outline's polyline): within 1 % of the element size more.
+        let at_mean = reports.iter().find(|r| r.sd == [0.0]).unwrap();
+        assert!(
+            r.boundary_node_rms_distance / r.element_size
+                < at_mean.boundary_node_rms_distance / at_mean.element_size + 0.01,
+            "{}: boundary nodes at {} (RMS) for elements of {}",
+            r.name,
+            r.boundary_node_rms_distance,
+            r.element_size
+        );
         assert!(
             r.scaled_jacobian_min > 0.2,
             "{}: {}",
@@ -120,4 +155,221 @@ fn a_sweep_of_the_first_mode_gives_valid_meshes_in_the_data_unit() {
         bad.join("mode1_plus2_mode3_minus1.5/mode1_plus2_mode3_minus1.5_mesh.vtu")
             .is_file()
     );
+}
+
+#[test]
+fn a_sampled_population_is_reproducible_resumable_and_shardable() {
+    let d = common::temp_dir("sample-2d");
+    let atlas = atlas_2d(&d);
+    let sample = |args: &[&str], out: &Path| {
+        let (a, o) = (s(&atlas), s(out));
+        let mut all = vec!["sample", "--atlas", &a, "--n", "9"];
+        if !args.contains(&"--seed") {
+            all.extend(["--seed", "5"]);
+        }
+        all.extend_from_slice(args);
+        all.extend(["--out", &o, "--no-plots"]);
+        atlasmesh(&all)
+    };
+    let whole = d.join("whole");
+    let o = sample(&["--max-sd", "2"], &whole);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = read_report(&whole);
+    assert_eq!(r.instances.len(), 9);
+    assert_eq!(r.summary.failed, 0);
+    assert_eq!(
+        r.sampling,
+        Some(atlasmesh::report::Sampling {
+            n: 9,
+            seed: 5,
+            max_sd: Some(2.0)
+        })
+    );
+    for i in &r.instances {
+        assert_eq!(i.sd.len(), r.modes, "{}", i.name);
+        assert!(i.sd.iter().all(|v| v.abs() <= 2.0 + 1e-9), "{:?}", i.sd);
+        assert_eq!(i.inverted_elements, 0);
+        assert!(
+            whole
+                .join(&i.name)
+                .join(format!("{}_mesh.vtu", i.name))
+                .is_file()
+        );
+    }
+    // Different weights for each sample, not all on one side.
+    let first: Vec<f64> = r.instances.iter().map(|i| i.sd[0]).collect();
+    assert!(first.iter().any(|&v| v > 0.0) && first.iter().any(|&v| v < 0.0));
+    // A re-run makes nothing again and reports the same.
+    let o = sample(&["--max-sd", "2"], &whole);
+    assert!(o.status.success());
+    let again = read_report(&whole);
+    assert_eq!(again.summary.resumed, 9);
+    assert_eq!(
+        again.instances.iter().map(|i| &i.sd).collect::<Vec<_>>(),
+        r.instances.iter().map(|i| &i.sd).collect::<Vec<_>>()
+    );
+    // Another seed draws other weights.
+    let other = d.join("other");
+    assert!(
+        sample(&["--max-sd", "2", "--seed", "6"], &other)
+            .status
+            .success()
+    );
+    assert_ne!(read_report(&other).instances[0].sd, r.instances[0].sd);
+    // Two shards into their own folders, merged: the same samples as the whole run.
+    let parts: Vec<PathBuf> = (0..2).map(|i| d.join(format!("part{i}"))).collect();
+    for (i, p) in parts.iter().enumerate() {
+        let shard = format!("{i}/2");
+        let o = sample(&["--max-sd", "2", "--shard", &shard], p);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert_eq!(read_report(&parts[0]).instances.len(), 5);
+    let merged = d.join("merged.json");
+    let (p0, p1, m) = (
+        s(&parts[0].join("instances.json")),
+        s(&parts[1].join("instances.json")),
+        s(&merged),
+    );
+    let o = atlasmesh(&["merge-reports", &p0, &p1, "--out", &m]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let merged: atlasmesh::report::InstancesReport =
+        serde_json::from_slice(&std::fs::read(&merged).unwrap()).unwrap();
+    assert_eq!(merged.summary.written, 9);
+    for (a, b) in merged.instances.iter().zip(&r.instances) {
+        assert_eq!((&a.name, &a.sd), (&b.name, &b.sd));
+    }
+    // A shard into a folder holding another shard's report is refused.
+    fails(
+        &sample(&["--max-sd", "2", "--shard", "1/2"], &parts[0]),
+        2,
+        &["shard 0/2"],
+    );
+    // Bad counts and bounds: nothing written.
+    let bad = d.join("bad");
+    fails(&sample(&["--max-sd", "0.1"], &bad), 2, &["at least 0.5"]);
+    assert!(!bad.exists());
+}
+
+/// The femur figures: from an atlas of the 30 femurs, 100 samples within 3 σ and the sweeps
+/// of modes 1-5 at ±3 σ, as users run them (plots on): every mesh read back from its file is
+/// valid and at or above the repair bound, its boundary nodes within 1 % of the element size
+/// of the instance's surface read back from its file, in mm.
+#[test]
+fn femur_samples_and_mode_sweeps_are_valid_fe_models_in_mm() {
+    let Some(data) = common::data_dir("femur_samples_and_mode_sweeps_are_valid_fe_models_in_mm")
+    else {
+        return;
+    };
+    let d = common::temp_dir("femur-samples");
+    let dir = data.join("knee-distal-femur-synthetic-3d/femur");
+    let shapes: Vec<String> = (1..=30)
+        .map(|k| s(&dir.join(format!("S{k:03}_Femur.ply"))))
+        .collect();
+    let atlas = s(&d.join("femur.safetensors"));
+    let mut args = vec!["build", "--element-size", "2%", "--out", &atlas, "--shapes"];
+    args.extend(shapes.iter().map(String::as_str));
+    let o = atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let samples = d.join("samples");
+    let o = atlasmesh(&[
+        "sample",
+        "--atlas",
+        &atlas,
+        "--n",
+        "100",
+        "--seed",
+        "7",
+        "--max-sd",
+        "3",
+        "--out",
+        &s(&samples),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut runs = vec![(samples.clone(), 100)];
+    for m in 1..=5 {
+        let out = d.join(format!("mode{m}"));
+        let o = atlasmesh(&[
+            "instance",
+            "--atlas",
+            &atlas,
+            "--mode",
+            &m.to_string(),
+            "--steps",
+            "-3:3:6",
+            "--out",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        runs.push((out, 2));
+    }
+    let mut vtus = Vec::new();
+    let mut worst_node_rms: f64 = 0.0;
+    for (out, n) in &runs {
+        let r = read_report(out);
+        assert_eq!(r.instances.len(), *n, "{}", out.display());
+        assert!(r.data_unit);
+        assert!(out.join("instances.html").is_file());
+        for i in &r.instances {
+            assert!(i.mahalanobis <= 3.0 * (r.modes as f64).sqrt() + 1e-9);
+            let base = out.join(&i.name);
+            let mesh: atlasmesh::mesh::FeMesh<3> =
+                atlasmesh::formats::read_fe_mesh(&base.join(format!("{}_mesh.vtu", i.name)))
+                    .unwrap();
+            let per = atlasmesh::mesh::quality::mesh_quality(&mesh);
+            let q = atlasmesh::mesh::quality::summarize(&per);
+            assert_eq!(q.inverted_elements, 0, "{}", i.name);
+            assert!(
+                q.scaled_jacobian_min >= i.repair_bound - 1e-9 && i.repair_bound >= 0.2,
+                "{}: scaled Jacobian {} below the repair bound {}",
+                i.name,
+                q.scaled_jacobian_min,
+                i.repair_bound
+            );
+            let surface =
+                atlasmesh::formats::read_surface(&base.join(format!("{}.vtp", i.name))).unwrap();
+            // In mm: a distal femur is 60-110 mm across and the elements about 2 mm.
+            let diag = surface.bbox_diagonal();
+            assert!(
+                diag > 60.0 && diag < 200.0,
+                "{}: diagonal {diag} mm",
+                i.name
+            );
+            assert!(
+                i.element_size > 1.5 && i.element_size < 3.0,
+                "{}: {}",
+                i.name,
+                i.element_size
+            );
+            let index = atlasmesh::geometry::ClosestPointIndex::from_shape(&surface);
+            let nodes = atlasmesh::mesh::boundary_surface(&mesh).points;
+            let rms = (nodes.iter().map(|p| index.closest(p).dist2).sum::<f64>()
+                / nodes.len() as f64)
+                .sqrt();
+            assert!(
+                rms <= 0.01 * i.element_size,
+                "{}: boundary nodes {rms} mm (RMS) off the surface, elements of {} mm",
+                i.name,
+                i.element_size
+            );
+            assert!((rms - i.boundary_node_rms_distance).abs() < 1e-6 * i.element_size);
+            worst_node_rms = worst_node_rms.max(rms / i.element_size);
+            vtus.push(base.join(format!("{}_mesh.vtu", i.name)));
+        }
+    }
+    eprintln!(
+        "femur instances: {} meshes valid, boundary nodes at most {:.2} % of the element size off their surface (RMS)",
+        vtus.len(),
+        100.0 * worst_node_rms
+    );
+    // A second program reads some of them alike.
+    let some: Vec<PathBuf> = vtus.iter().step_by(10).cloned().collect();
+    if let Some(meshes) = common::meshio_meshes(&some) {
+        for (f, (points, cells)) in some.iter().zip(meshes) {
+            let m: atlasmesh::mesh::FeMesh<3> = atlasmesh::formats::read_fe_mesh(f).unwrap();
+            assert_eq!(
+                (points.len(), cells.len()),
+                (m.nodes.len(), m.num_elements())
+            );
+        }
+    }
 }

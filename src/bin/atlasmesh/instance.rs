@@ -1,8 +1,11 @@
-//! `atlasmesh instance`: shapes of the model for given weights, each with its FE mesh.
+//! `atlasmesh instance` and `atlasmesh sample`: shapes of the model for given or random
+//! weights, each with its FE mesh.
 
 use crate::args::RunArgs;
+use crate::terminal::Terminal;
 use atlasmesh::model::Atlas;
-use atlasmesh::study::{self, InstanceSpec};
+use atlasmesh::report::Sampling;
+use atlasmesh::study::{self, InstanceRun, InstanceSpec};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -23,9 +26,12 @@ pub struct InstanceArgs {
     steps: Option<String>,
     #[command(flatten)]
     run: RunArgs,
-    /// Output folder: one folder per instance, and instances.json.
+    /// Output folder: one folder per instance, instances.json and instances.html.
     #[arg(long)]
     out: PathBuf,
+    /// Make every instance again, even those whose outputs are complete.
+    #[arg(long)]
+    no_resume: bool,
 }
 
 /// The instances asked for by `--weights` or `--mode` with `--steps`.
@@ -120,38 +126,185 @@ fn sd_name(v: f64) -> String {
 }
 
 /// Runs `atlasmesh instance`.
-pub fn run(a: InstanceArgs) -> anyhow::Result<()> {
+pub fn run(a: InstanceArgs, term: &Terminal) -> anyhow::Result<()> {
     let specs = specs(&a)?;
+    let out = Outputs {
+        atlas: &a.atlas,
+        run: &a.run,
+        out: &a.out,
+        jobs: 0,
+        shard: None,
+        resume: !a.no_resume,
+    };
     if atlasmesh::formats::atlas_dimension(&a.atlas)? == 3 {
-        instances::<3>(&a, &specs)
+        instances::<3>(&out, &|_| Ok((specs.clone(), None)), term)
     } else {
-        instances::<2>(&a, &specs)
+        instances::<2>(&out, &|_| Ok((specs.clone(), None)), term)
     }
 }
 
-fn instances<const D: usize>(a: &InstanceArgs, specs: &[InstanceSpec]) -> anyhow::Result<()> {
-    let atlas = Atlas::<D>::load(&a.atlas)?;
-    if atlas.data_frame.is_none() {
+/// Arguments of `atlasmesh sample`.
+#[derive(Args)]
+pub struct SampleArgs {
+    /// Atlas file written by `atlasmesh build`.
+    #[arg(long)]
+    atlas: PathBuf,
+    /// Samples to draw.
+    #[arg(long, value_parser = crate::args::count::<1, 1_000_000>)]
+    n: usize,
+    /// Seed of the random stream: the same seed, count and atlas give the same samples.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Draw every weight within this many standard deviations (a truncated normal), e.g. 3.
+    #[arg(long, value_name = "K")]
+    max_sd: Option<f64>,
+    #[command(flatten)]
+    run: RunArgs,
+    /// Output folder: one folder per sample, instances.json and instances.html.
+    #[arg(long)]
+    out: PathBuf,
+    /// Worker threads (0 = all cores).
+    #[arg(long, default_value_t = 0, value_parser = crate::args::count::<0, 1024>)]
+    jobs: usize,
+    /// Only the I-th of N parts of the samples (sample k to part k mod N), each into its own
+    /// --out; join the parts' instances.json with `atlasmesh merge-reports`.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
+    /// Make every sample again, even those whose outputs are complete.
+    #[arg(long)]
+    no_resume: bool,
+}
+
+/// Runs `atlasmesh sample`.
+pub fn run_sample(a: SampleArgs, term: &Terminal) -> anyhow::Result<()> {
+    let shard = a
+        .shard
+        .as_deref()
+        .map(atlasmesh::study::batch::parse_shard)
+        .transpose()?;
+    let out = Outputs {
+        atlas: &a.atlas,
+        run: &a.run,
+        out: &a.out,
+        jobs: a.jobs,
+        shard,
+        resume: !a.no_resume,
+    };
+    let sampling = Sampling {
+        n: a.n,
+        seed: a.seed,
+        max_sd: a.max_sd,
+    };
+    if atlasmesh::formats::atlas_dimension(&a.atlas)? == 3 {
+        instances::<3>(
+            &out,
+            &|atlas| {
+                let s = study::sample_specs(atlas, a.n, a.seed, a.max_sd)?;
+                Ok((s, Some(sampling.clone())))
+            },
+            term,
+        )
+    } else {
+        instances::<2>(
+            &out,
+            &|atlas| {
+                let s = study::sample_specs(atlas, a.n, a.seed, a.max_sd)?;
+                Ok((s, Some(sampling.clone())))
+            },
+            term,
+        )
+    }
+}
+
+/// What `instance` and `sample` share: the atlas, the run's options and the outputs.
+struct Outputs<'a> {
+    atlas: &'a PathBuf,
+    run: &'a RunArgs,
+    out: &'a PathBuf,
+    jobs: usize,
+    shard: Option<(usize, usize)>,
+    resume: bool,
+}
+
+/// The instances' specs of an atlas, and how they were drawn.
+type SpecsOf<'a, const D: usize> =
+    dyn Fn(&Atlas<D>) -> atlasmesh::Result<(Vec<InstanceSpec>, Option<Sampling>)> + 'a;
+
+fn instances<const D: usize>(
+    o: &Outputs,
+    specs: &SpecsOf<D>,
+    term: &Terminal,
+) -> anyhow::Result<()> {
+    let mut atlas = Atlas::<D>::load(o.atlas)?;
+    if atlas.data_frame.is_none() && !term.is_quiet() {
         eprintln!(
             "warning: {} is an atlas of format version 2, which does not know its data's unit: the instances are in its reference frame (rebuild it to have them in the data's unit)",
-            a.atlas.display()
+            o.atlas.display()
         );
     }
-    let params = a.run.params_for(D)?;
+    let mut params = o.run.params_for(D)?;
+    params.atlas = atlas.params;
+    if let Some(c) = &params.sets {
+        study::apply_sets(&mut atlas, c)?;
+    }
+    if let (Some(deck), Some(path)) = (&params.deck, &o.run.deck) {
+        study::check_deck(&atlas, deck, path)?;
+    }
+    let (specs, sampling) = specs(&atlas)?;
     let morpher = atlas.morpher(&params.morph)?;
-    let reports = study::write_instances(&atlas, &morpher, specs, &params, &a.out)?;
-    let json = serde_json::to_vec_pretty(&reports)?;
-    atlasmesh::formats::write_atomic(&a.out.join("instances.json"), &json)?;
-    for r in &reports {
-        println!(
-            "{}: scaled Jacobian min {:.3}, {} below the bound, boundary within {:.3} (RMS) of the surface, element size {:.3}",
-            r.name,
-            r.scaled_jacobian_min,
-            r.elements_below_bound,
-            r.mesh_rms_distance,
-            r.element_size
-        );
+    let run = InstanceRun {
+        resume: o.resume,
+        shard: o.shard,
+        sampling,
+        atlas_file: o.atlas.display().to_string(),
+        atlas_crc: atlasmesh::study::batch::file_crc32(o.atlas)?,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(o.jobs)
+        .build()
+        .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
+    let r = pool
+        .install(|| study::write_instances(&atlas, &morpher, &specs, &params, o.out, &run, term))?;
+    let unit = if r.data_unit {
+        ""
+    } else {
+        " (reference frame)"
+    };
+    if r.instances.len() <= 20 {
+        for i in &r.instances {
+            println!(
+                "{}: scaled Jacobian min {:.3}, {} below the bound, boundary within {:.3}{unit} (RMS) of the surface, element size {:.3}",
+                i.name,
+                i.scaled_jacobian_min,
+                i.elements_below_bound,
+                i.mesh_rms_distance,
+                i.element_size
+            );
+        }
     }
-    println!("instances: {}", a.out.join("instances.json").display());
+    let s = &r.summary;
+    println!(
+        "{} instances written ({} already complete), {} failed; smallest scaled Jacobian {:.3}, {} with elements below the repair bound; boundary nodes within {:.2} % of the element size of the surface (RMS, largest), faces within {:.2} %",
+        s.written,
+        s.resumed,
+        s.failed,
+        s.scaled_jacobian_min,
+        s.below_repair_bound,
+        100.0 * s.boundary_node_rms_distance_per_element_max,
+        100.0 * s.mesh_rms_distance_per_element_max
+    );
+    for f in &r.failed {
+        eprintln!("failed: {}: {}", f.name, f.error);
+    }
+    println!("instances: {}", o.out.join("instances.json").display());
+    if s.failed > 0 {
+        return Err(crate::summary::BatchFailed {
+            failed: s.failed,
+            total: s.failed + s.written,
+            items: "instances",
+            report: "instances.json",
+        }
+        .into());
+    }
     Ok(())
 }

@@ -43,6 +43,9 @@ enum Command {
     /// Shapes of the model for given weights (in standard deviations), each with its FE mesh
     /// (the mean mesh morphed onto it, repaired, checked), in the data's unit.
     Instance(instance::InstanceArgs),
+    /// A population of shapes drawn from the model (weights ~ N(0, Λ), optionally within
+    /// ±K sd), each with its FE mesh, in parallel, resumable and shardable like `fit`.
+    Sample(instance::SampleArgs),
     /// Joins the report.json files of several `fit --shard` runs (or batches of one atlas)
     /// into one.
     MergeReports(merge_reports::MergeArgs),
@@ -71,7 +74,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Loo(a) => loo::run(a, &term),
         Command::Build(a) => build::run(a, &term),
         Command::Fit(a) => fit::run(a, &term),
-        Command::Instance(a) => instance::run(a),
+        Command::Instance(a) => instance::run(a, &term),
+        Command::Sample(a) => instance::run_sample(a, &term),
         Command::MergeReports(a) => merge_reports::run(a),
         Command::Register(a) => register::run(a),
         Command::Quality(a) => quality::run(a),

@@ -95,6 +95,8 @@ pub fn failures(r: &Report) -> anyhow::Result<()> {
     Err(BatchFailed {
         failed: r.failed.len(),
         total: r.summary.subjects,
+        items: "subjects",
+        report: "report.json",
     }
     .into())
 }
@@ -106,19 +108,23 @@ pub struct BatchFailed {
     pub failed: usize,
     /// Subjects in the batch.
     pub total: usize,
+    /// What the items are (`subjects`, `instances`).
+    pub items: &'static str,
+    /// The report that lists the failures.
+    pub report: &'static str,
 }
 
 impl std::fmt::Display for BatchFailed {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let rest = if self.failed >= self.total {
-            "no subject was written"
+            "none was written"
         } else {
             "the others were written"
         };
         write!(
             f,
-            "{} of {} subjects failed (see `failed` in report.json); {rest}",
-            self.failed, self.total
+            "{} of {} {} failed (see `failed` in {}); {rest}",
+            self.failed, self.total, self.items, self.report
         )
     }
 }

@@ -32,7 +32,10 @@ pub struct ShapeModelMeasures {
 /// Compactness, generalization and specificity (see [`ShapeModelMeasures`]) of the model of
 /// `shapes` (in correspondence: same point count), for `1..=max_modes` modes (at most
 /// `n_s - 2`, the modes of every leave-one-out model), with `samples` random instances per
-/// `M` drawn from a generator seeded with `seed`. Units of the shapes.
+/// `M` drawn from a generator seeded with `seed`. Units of the shapes. Built on the model's
+/// vocabulary: [`crate::model::Atlas::build_model`] of the shapes (and of each leave-one-out
+/// population), [`crate::model::Atlas::truncate`], [`crate::model::Atlas::project`],
+/// [`crate::model::Atlas::instance`].
 pub fn shape_model_measures<const D: usize>(
     shapes: &[Shape<D>],
     max_modes: usize,
@@ -40,7 +43,7 @@ pub fn shape_model_measures<const D: usize>(
     seed: u64,
 ) -> crate::error::Result<ShapeModelMeasures> {
     use crate::error::Error;
-    use crate::model::{align_to_mean, generalized_procrustes};
+    use crate::model::{Atlas, AtlasParams, ModeSelection, align_to_mean};
     use rayon::prelude::*;
     let ns = shapes.len();
     if ns < 4 {
@@ -55,78 +58,87 @@ pub fn shape_model_measures<const D: usize>(
         ));
     }
     let raw: Vec<Vec<Point<D>>> = shapes.iter().map(|s| s.points.clone()).collect();
-    // Shape units per Procrustes unit: the mean centroid size (the mean has norm 1).
+    // Shape units per Procrustes unit: the mean centroid size (the Procrustes mean has norm 1).
     let unit = raw
         .iter()
         .map(|s| crate::geometry::centroid_size(s))
         .sum::<f64>()
         / ns as f64;
-    let mean_distance = |a: &[Point<D>], b: &[Point<D>]| -> f64 {
+    // Every model keeps all its modes; `truncate` gives the first M.
+    let params = AtlasParams {
+        modes: ModeSelection::Variance(1.0),
+        ..AtlasParams::default()
+    };
+    let model_of = |shapes: &[Shape<D>]| -> crate::error::Result<Atlas<D>> {
+        Atlas::build_model(shapes, &params).map_err(|e| match e {
+            Error::Population(m) if m.contains("identical") => Error::Population(
+                "the shapes are identical after alignment: no variance to model".into(),
+            ),
+            e => e,
+        })
+    };
+    let full = model_of(shapes)?;
+    // A model's reference frame is its Procrustes frame scaled to a mean of norm `r`: a
+    // shape there is aligned to the unit mean (tangent space), then scaled back; distances
+    // are brought to shape units by `unit / r`.
+    let frame = |a: &Atlas<D>| -> (Vec<Point<D>>, f64) {
+        let r = a
+            .mean
+            .iter()
+            .map(|p| p.iter().map(|c| c * c).sum::<f64>())
+            .sum::<f64>()
+            .sqrt();
+        (a.mean.iter().map(|p| p.map(|c| c / r)).collect(), r)
+    };
+    let mean_distance = |a: &[Point<D>], b: &[Point<D>], r: f64| -> f64 {
         a.iter()
             .zip(b)
             .map(|(p, q)| crate::geometry::dist2(*p, *q).sqrt())
             .sum::<f64>()
             / a.len() as f64
             * unit
+            / r
     };
-    let gpa = generalized_procrustes(&raw)?;
-    let full = crate::model::pca(&gpa.aligned, &gpa.mean)?;
-    let total: f64 = full.eigenvalues.iter().sum();
-    if total.is_nan() || total <= 0.0 {
-        return Err(Error::Population(
-            "the shapes are identical after alignment: no variance to model".into(),
-        ));
-    }
     // (A population may have fewer modes than shapes less one: PCA drops the round-off ones.)
-    let mm = mm.min(full.eigenvalues.len());
+    let mm = mm.min(full.num_modes());
     let mut out = ShapeModelMeasures {
         modes: (1..=mm).collect(),
         specificity_samples: samples,
         ..Default::default()
     };
+    let variance: f64 = full.eigenvalues.iter().sum();
     let (mut c, mut csd) = (0.0, 0.0);
     for &l in &full.eigenvalues[..mm] {
-        c += l / total;
-        csd += (2.0 / ns as f64).sqrt() * l / total;
+        c += l / variance;
+        csd += (2.0 / ns as f64).sqrt() * l / variance;
         out.compactness.push(c);
         out.compactness_sd.push(csd);
     }
-    // Generalization: per left-out shape, its error for every M.
+    // Generalization: per left-out shape, the model of the others truncated to M modes, the
+    // shape projected into it (`truncate(M).project`), for every M.
     let errors: Vec<Vec<f64>> = (0..ns)
         .into_par_iter()
         .map(|i| {
-            let rest: Vec<Vec<Point<D>>> = raw
+            let rest: Vec<Shape<D>> = shapes
                 .iter()
                 .enumerate()
                 .filter(|(k, _)| *k != i)
                 .map(|(_, s)| s.clone())
                 .collect();
-            let g = generalized_procrustes(&rest)?;
-            let p = crate::model::pca(&g.aligned, &g.mean)?;
-            let x = align_to_mean(&raw[i], &g.mean);
-            let mut recon = g.mean.clone();
-            let mut e = Vec::with_capacity(mm);
-            for m in 0..mm {
-                // A left-out model with fewer modes: the reconstruction stays.
-                if m >= p.modes.ncols() {
-                    e.push(mean_distance(&recon, &x));
-                    continue;
-                }
-                let col = p.modes.col(m);
-                let w: f64 = x
-                    .iter()
-                    .zip(&g.mean)
-                    .enumerate()
-                    .map(|(j, (a, b))| (0..D).map(|d| col[j * D + d] * (a[d] - b[d])).sum::<f64>())
-                    .sum();
-                for (j, r) in recon.iter_mut().enumerate() {
-                    for d in 0..D {
-                        r[d] += w * col[j * D + d];
-                    }
-                }
-                e.push(mean_distance(&recon, &x));
-            }
-            Ok(e)
+            let model = model_of(&rest)?;
+            let (unit_mean, r) = frame(&model);
+            let x: Vec<Point<D>> = align_to_mean(&raw[i], &unit_mean)
+                .iter()
+                .map(|p| p.map(|c| c * r))
+                .collect();
+            (0..mm)
+                .map(|m| {
+                    // A left-out model with fewer modes: its projection stays.
+                    let kept = (m + 1).min(model.num_modes());
+                    let projected = model.truncate(kept)?.project(&x);
+                    Ok(mean_distance(&projected, &x, r))
+                })
+                .collect()
         })
         .collect::<crate::error::Result<_>>()?;
     let mean_sd = |v: &[f64]| -> (f64, f64) {
@@ -140,7 +152,18 @@ pub fn shape_model_measures<const D: usize>(
         out.generalization.push(g);
         out.generalization_sd.push(sd);
     }
-    // Specificity: the same weights for every M (the first M of them), seeded per sample.
+    // Specificity: the same weights for every M (the first M of them), seeded per sample;
+    // the training shapes aligned to the full model's mean as the left-out ones above.
+    let (unit_mean, r) = frame(&full);
+    let training: Vec<Vec<Point<D>>> = raw
+        .iter()
+        .map(|s| {
+            align_to_mean(s, &unit_mean)
+                .iter()
+                .map(|p| p.map(|c| c * r))
+                .collect()
+        })
+        .collect();
     let spec: Vec<Vec<f64>> = (0..samples)
         .into_par_iter()
         .map(|k| {
@@ -148,19 +171,14 @@ pub fn shape_model_measures<const D: usize>(
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
                 seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
             );
-            let mut inst = gpa.mean.clone();
+            let mut w = vec![0.0; full.num_modes()];
             (0..mm)
                 .map(|m| {
-                    let w = standard_normal(&mut rng) * full.eigenvalues[m].sqrt();
-                    let col = full.modes.col(m);
-                    for (j, r) in inst.iter_mut().enumerate() {
-                        for d in 0..D {
-                            r[d] += w * col[j * D + d];
-                        }
-                    }
-                    gpa.aligned
+                    w[m] = standard_normal(&mut rng) * full.eigenvalues[m].sqrt();
+                    let inst = full.instance(&w);
+                    training
                         .iter()
-                        .map(|t| mean_distance(&inst, t))
+                        .map(|t| mean_distance(&inst, t, r))
                         .fold(f64::INFINITY, f64::min)
                 })
                 .collect()

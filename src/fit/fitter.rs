@@ -119,6 +119,10 @@ pub(super) enum Level {
 
 impl<'a, const D: usize> Fitter<'a, D> {
     /// A fitter of `atlas`: its model at full and coarse resolution, precomputed once for every subject.
+    ///
+    /// # Panics
+    /// For an atlas without facets (a model of point sets, [`Atlas::build_model`]), which has
+    /// no surface to fit: check [`Atlas::has_mesh`] or [`Atlas::morpher`] first.
     pub fn new(atlas: &'a Atlas<D>) -> Self {
         let n = atlas.mean.len();
         let coarse_points = FitParams::default().coarse_points;

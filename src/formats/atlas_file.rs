@@ -235,6 +235,9 @@ impl<const D: usize> Atlas<D> {
             "params".to_string(),
             serde_json::to_string(&self.params).unwrap_or_default(),
         );
+        if !self.has_mesh() {
+            meta.insert("mesh".to_string(), "none".to_string());
+        }
         meta.insert(
             "mesh_sets".to_string(),
             serde_json::to_string(&self.mesh.sets).unwrap_or_default(),
@@ -275,6 +278,7 @@ impl<const D: usize> Atlas<D> {
             sets,
             training_shapes,
             data_frame,
+            model_only,
         } = AtlasMetadata::<D>::of(path, bytes)?;
         let st = SafeTensors::deserialize(bytes).map_err(|e| bad(format!("{e}")))?;
         let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
@@ -380,7 +384,7 @@ impl<const D: usize> Atlas<D> {
             training_shapes,
             data_frame,
         };
-        validate(&atlas).map_err(bad)?;
+        validate(&atlas, model_only).map_err(bad)?;
         Ok(atlas)
     }
 }
@@ -389,8 +393,8 @@ impl<const D: usize> Atlas<D> {
 /// positive finite eigenvalues in falling order, at most as many as the cumulative variance
 /// has modes, a cumulative variance that rises within [0, 1], a mesh of
 /// this dimension's elements, none degenerate or inverted.
-fn validate<const D: usize>(a: &Atlas<D>) -> std::result::Result<(), String> {
-    if a.mean.len() < D + 1 || a.facets.is_empty() {
+fn validate<const D: usize>(a: &Atlas<D>, model_only: bool) -> std::result::Result<(), String> {
+    if a.mean.len() < D + 1 || (a.facets.is_empty() && !model_only) {
         return Err(format!(
             "the mean shape has {} points and {} facets",
             a.mean.len(),
@@ -425,6 +429,14 @@ fn validate<const D: usize>(a: &Atlas<D>) -> std::result::Result<(), String> {
     if kind.dimension() != D {
         return Err(format!("a {D}D atlas with {} elements", kind.name()));
     }
+    if model_only {
+        // A shape model without a mean mesh (`build --no-mesh`): it must say so.
+        return if a.mesh.nodes.is_empty() && a.mesh.num_elements() == 0 {
+            Ok(())
+        } else {
+            Err("a model without a mesh (mesh = none) that has mesh nodes".into())
+        };
+    }
     if a.mesh.num_elements() == 0 {
         return Err("the mean mesh has no elements".into());
     }
@@ -447,6 +459,8 @@ struct AtlasMetadata<const D: usize> {
     sets: crate::mesh::MeshSets,
     training_shapes: usize,
     data_frame: Option<Similarity<D>>,
+    /// A shape model without a mean mesh (`mesh = none`).
+    model_only: bool,
 }
 
 impl<const D: usize> AtlasMetadata<D> {
@@ -516,7 +530,17 @@ impl<const D: usize> AtlasMetadata<D> {
                     .map_err(bad)?,
             ),
         };
+        let model_only = match meta.get("mesh").map(String::as_str) {
+            None => false,
+            Some("none") => true,
+            Some(other) => {
+                return Err(bad(format!(
+                    "mesh metadata {other:?}, \"none\" or nothing expected"
+                )));
+            }
+        };
         Ok(AtlasMetadata {
+            model_only,
             kind,
             params,
             sets,

@@ -65,7 +65,7 @@ pub use outline_text::{parse_text_outlines, read_text_outlines};
 pub use ply::write_ply;
 pub use shape_file::{ShapeFormat, write_shape};
 pub use stl::write_stl;
-pub use surface::{parse_surface, read_surface};
+pub use surface::{parse_surface, read_point_set, read_surface};
 pub use vtk_cells::VtkPolyData;
 pub use vtk_legacy::{
     parse_vtk_outline, parse_vtk_polydata, parse_vtk_unstructured, read_vtk_outline,

@@ -19,6 +19,31 @@ pub fn read_surface(path: &Path) -> Result<Shape<3>> {
 /// [`read_surface`] of a file's bytes: the format from the extension of `path`, which only
 /// names the file (and the shape) in messages (no file is read).
 pub fn parse_surface(path: &Path, bytes: &[u8]) -> Result<Shape<3>> {
+    let shape = parse_vertices_and_faces(path, bytes, true)?;
+    prepare_surface(shape).map_err(|e| Error::parse(path, 0, e.to_string()))
+}
+
+/// A 3D point set (for a shape model without a mesh, `build --no-mesh`): the vertices of a
+/// PLY, OBJ, VTP or legacy VTK file, which may have no faces; faces, when there are, make it
+/// a surface checked and oriented as [`read_surface`] does.
+///
+/// # Errors
+/// As [`read_surface`], but for a file without faces.
+pub fn read_point_set(path: &Path) -> Result<Shape<3>> {
+    let bytes = crate::formats::read_input(path)?;
+    let shape = parse_vertices_and_faces(path, &bytes, false)?;
+    if shape.facets.is_empty() {
+        shape
+            .validate()
+            .map_err(|e| Error::parse(path, 0, e.to_string()))?;
+        return Ok(shape);
+    }
+    prepare_surface(shape).map_err(|e| Error::parse(path, 0, e.to_string()))
+}
+
+/// The vertices and (triangulated) faces of a surface file, unchecked as a surface;
+/// `need_faces`: a VTK file without polygons is an error.
+fn parse_vertices_and_faces(path: &Path, bytes: &[u8], need_faces: bool) -> Result<Shape<3>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
@@ -37,7 +62,7 @@ pub fn parse_surface(path: &Path, bytes: &[u8]) -> Result<Shape<3>> {
             } else {
                 super::vtk_legacy::parse_vtk_polydata(path, bytes)?
             };
-            if v.polygons.is_empty() {
+            if v.polygons.is_empty() && need_faces {
                 return Err(Error::parse(
                     path,
                     0,
@@ -78,13 +103,12 @@ pub fn parse_surface(path: &Path, bytes: &[u8]) -> Result<Shape<3>> {
             facets.push([poly[0], poly[j], poly[j + 1]]);
         }
     }
-    let shape = Shape {
+    Ok(Shape {
         name,
         points,
         facets,
         landmarks: Vec::new(),
-    };
-    prepare_surface(shape).map_err(|e| Error::parse(path, 0, e.to_string()))
+    })
 }
 
 pub(crate) type Parsed = (Vec<Point<3>>, Vec<Vec<usize>>);

@@ -71,6 +71,20 @@ fn data_frame<const D: usize>(mean: &[Point<D>], shapes: &[Shape<D>]) -> Similar
     )
 }
 
+/// The empty mesh of a model-only atlas ([`Atlas::build_model`]).
+pub(crate) fn no_mesh<const D: usize>() -> FeMesh<D> {
+    FeMesh {
+        nodes: Vec::new(),
+        kind: if D == 2 {
+            crate::mesh::ElementKind::Quad4
+        } else {
+            crate::mesh::ElementKind::Hex8
+        },
+        connectivity: Vec::new(),
+        sets: Default::default(),
+    }
+}
+
 /// A statistical atlas in `D` dimensions.
 #[derive(Clone, Debug)]
 pub struct Atlas<const D: usize> {
@@ -86,7 +100,8 @@ pub struct Atlas<const D: usize> {
     pub facets: Vec<[usize; D]>,
     /// Landmark indices.
     pub landmarks: Vec<usize>,
-    /// FE mesh of the mean shape (reference frame).
+    /// FE mesh of the mean shape (reference frame); empty for a model-only atlas
+    /// ([`Atlas::build_model`]).
     pub mesh: FeMesh<D>,
     /// Parameters used to build it.
     pub params: AtlasParams,
@@ -105,6 +120,20 @@ impl<const D: usize> Atlas<D> {
         Self::build_meshed(shapes, params, |mean| {
             mesh_mean_shape(mean, params.element_size, params.smoothing_passes)
         })
+    }
+
+    /// The shape model alone (GPA with tangent projection, PCA, mode selection; sections
+    /// 2.2-2.3) without an FE mesh of the mean ([`Atlas::has_mesh`] is false): for
+    /// populations that need no mesh, 3D point sets without facets included. Such an atlas
+    /// has the model's vocabulary ([`Atlas::instance`], [`Atlas::project`],
+    /// [`Atlas::posterior`], ...) but no [`Atlas::morpher`].
+    pub fn build_model(shapes: &[Shape<D>], params: &AtlasParams) -> Result<Self> {
+        Self::build_meshed(shapes, params, |_| Ok(no_mesh::<D>()))
+    }
+
+    /// Whether the atlas has an FE mesh of its mean (not one of [`Atlas::build_model`]).
+    pub fn has_mesh(&self) -> bool {
+        self.mesh.num_elements() > 0
     }
 
     /// Builds the atlas with a template FE mesh instead of the automatic one: `meshes[i]` is
@@ -266,6 +295,11 @@ impl<const D: usize> Atlas<D> {
     /// The morph of the mean mesh by the mean shape's points (eq. 9), factorized once for
     /// every subject: [`crate::mesh::Morpher::new`].
     pub fn morpher(&self, params: &crate::ffd::FfdParams) -> Result<crate::mesh::Morpher<D>> {
+        if !self.has_mesh() {
+            return Err(Error::Parameter(
+                "this atlas is a shape model without a mean mesh (built with --no-mesh): build it with a mesh to morph one onto subjects or instances".into(),
+            ));
+        }
         crate::mesh::Morpher::new(&self.mean, &self.mesh, params)
     }
 

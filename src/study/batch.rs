@@ -235,8 +235,9 @@ pub fn fit_batch<const D: usize>(
         h.update(serde_json::to_string(params).unwrap_or_default().as_bytes());
         h.finalize()
     };
-    let fitter = Fitter::new(atlas);
+    // (The morpher first: it refuses an atlas without a mesh, which has nothing to fit.)
     let morpher = atlas.morpher(&params.morph)?;
+    let fitter = Fitter::new(atlas);
     let label = "fit";
     progress.items_started(label, files.len());
     let skipped = std::sync::atomic::AtomicUsize::new(0);
@@ -275,8 +276,9 @@ pub fn fit_shapes<const D: usize>(
 ) -> Result<Report> {
     crate::formats::create_dir(out)?;
     let _lock = crate::formats::lock_dir(out)?;
-    let fitter = Fitter::new(atlas);
+    // (The morpher first: it refuses an atlas without a mesh, which has nothing to fit.)
     let morpher = atlas.morpher(&params.morph)?;
+    let fitter = Fitter::new(atlas);
     let label = "fit";
     progress.items_started(label, subjects.len());
     let results: Vec<(Vec<SubjectReport>, Vec<FailedSubject>)> = subjects

@@ -97,13 +97,36 @@ pub fn build_with_meshes<const D: usize>(
             .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes)),
         None,
     )?;
+    write_mean_shape(&atlas, atlas_path)?;
+    Ok(atlas)
+}
+
+/// The shape model of `shapes` alone ([`Atlas::build_model`]: no mean mesh) written to
+/// `atlas_path`, with the mean shape beside it in the data's frame and unit
+/// (`ATLAS_mean.vtp`; points only for point sets).
+pub fn build_model<const D: usize>(
+    shapes: &[Shape<D>],
+    params: &RunParams,
+    atlas_path: &Path,
+) -> Result<Atlas<D>> {
+    let atlas = Atlas::build_model(shapes, &params.atlas)?;
+    if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        create_dir(dir)?;
+    }
+    atlas.save(atlas_path)?;
+    write_mean_shape(&atlas, atlas_path)?;
+    Ok(atlas)
+}
+
+/// `ATLAS_mean.vtp` beside the atlas file: the mean shape in the data's frame and unit.
+fn write_mean_shape<const D: usize>(atlas: &Atlas<D>, atlas_path: &Path) -> Result<()> {
     let mut mean = atlas.mean_shape();
     mean.points = atlas.to_data_frame(&mean.points);
+    let stem = atlas_path.with_extension("");
     write_vtp(
         &PathBuf::from(format!("{}_mean.vtp", stem.display())),
         &mean,
-    )?;
-    Ok(atlas)
+    )
 }
 
 /// Compactness, generalization and specificity of the model of `shapes` (in correspondence;
@@ -143,7 +166,7 @@ pub fn write_build_facts<const D: usize>(
     let json = serde_json::json!({
         "inputs": inputs,
         "template": template,
-        "mean_mesh": mean_mesh_report(atlas, data_per_mean),
+        "mean_mesh": atlas.has_mesh().then(|| mean_mesh_report(atlas, data_per_mean)),
     });
     let text = serde_json::to_vec_pretty(&json)
         .map_err(|e| crate::error::Error::Numerical(format!("inputs.json: {e}")))?;

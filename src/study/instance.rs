@@ -95,7 +95,8 @@ pub fn sample_specs<const D: usize>(
         .collect()
 }
 
-/// Makes and writes the instances of `specs` (those of the shard of `run`) into `out/NAME/`:
+/// Makes and writes the instances of `specs` (those of the shard of `run`) into `out/NAME/`
+/// (without a `morpher`, for an atlas without a mesh, their surfaces alone):
 /// the surface (`NAME.EXT` in every `params.surface_formats`), the FE mesh (`NAME_mesh.EXT`
 /// in every `params.formats`, with the displacement from the mean mesh as point data), the
 /// deck (`NAME_deck.inp|feb`) and, with `params.plots`, a picture (`NAME.png`), in the data's
@@ -108,7 +109,7 @@ pub fn sample_specs<const D: usize>(
 /// instances of one folder name; the errors of the output folder and of the report.
 pub fn write_instances<const D: usize>(
     atlas: &Atlas<D>,
-    morpher: &Morpher<D>,
+    morpher: Option<&Morpher<D>>,
     specs: &[InstanceSpec],
     params: &RunParams,
     out: &Path,
@@ -146,7 +147,7 @@ pub fn write_instances<const D: usize>(
         .collect();
     let parameters = serde_json::to_value(params).unwrap_or_default();
     // The same view of every instance (3D pictures): the mean in the data's frame, widened.
-    let view = (D == 3).then(|| {
+    let view = (D == 3 && morpher.is_some()).then(|| {
         let mean: Vec<Point<3>> = atlas
             .to_data_frame(&atlas.mean)
             .iter()
@@ -235,10 +236,67 @@ fn complete(out: &Path, folder: &str, crc: u32) -> Option<InstanceReport> {
         .then_some(rec.report)
 }
 
-/// One instance of [`write_instances`], written into `out/NAME/` with its record last.
+/// The FE mesh of one instance: the mean mesh morphed onto it, repaired, checked, measured.
+struct InstanceMesh<const D: usize> {
+    mesh: crate::mesh::FeMesh<D>,
+    quality: Vec<crate::mesh::ElementQuality>,
+    before: crate::mesh::quality::QualitySummary,
+    after: crate::mesh::quality::QualitySummary,
+    repair_bound: f64,
+    elements_below_bound: usize,
+    delivered: super::subject::Delivered,
+    node_distances: Vec<f64>,
+}
+
+/// The mean mesh morphed onto `surface` (data's frame) by eq. 9, repaired and checked.
+fn instance_mesh<const D: usize>(
+    morpher: &Morpher<D>,
+    surface: &Shape<D>,
+    frame: Similarity<D>,
+    params: &RunParams,
+) -> Result<InstanceMesh<D>> {
+    let morph = morpher.morph(&Correspondence {
+        targets: surface.points.clone(),
+        partnered: Vec::new(),
+        frame,
+    })?;
+    let mut mesh = morph.mesh;
+    let before = summarize(&morph.quality);
+    let mut quality = morph.quality;
+    let index = ClosestPointIndex::from_shape(surface);
+    let mut repair_bound = 0.0;
+    if let Some(rp) = &params.repair {
+        let (r, q) = repair_with_quality(&mut mesh, Some(&index), rp, &quality)?;
+        (repair_bound, quality) = (r.bound, q);
+    }
+    let after = summarize(&quality);
+    check_valid(surface, &mesh, &after, params)?;
+    let delivered = delivered_distances(&mesh, surface, &index, params);
+    let elements_below_bound =
+        crate::mesh::quality::distribution(&mesh, &quality).elements_below_bound;
+    let node_distances = crate::mesh::boundary_surface(&mesh)
+        .points
+        .iter()
+        .map(|p| index.closest(p).dist2.sqrt())
+        .collect();
+    Ok(InstanceMesh {
+        mesh,
+        quality,
+        before,
+        after,
+        repair_bound,
+        elements_below_bound,
+        delivered,
+        node_distances,
+    })
+}
+
+/// One instance of [`write_instances`], written into `out/NAME/` with its record last; the
+/// surface alone without a `morpher` (an atlas without a mesh).
+#[allow(clippy::too_many_arguments)]
 fn write_instance<const D: usize>(
     atlas: &Atlas<D>,
-    morpher: &Morpher<D>,
+    morpher: Option<&Morpher<D>>,
     spec: &InstanceSpec,
     params: &RunParams,
     view: Option<&crate::report::render::View>,
@@ -256,67 +314,58 @@ fn write_instance<const D: usize>(
         facets: atlas.facets.clone(),
         landmarks: atlas.landmarks.clone(),
     };
-    let morph = morpher.morph(&Correspondence {
-        targets: surface.points.clone(),
-        partnered: Vec::new(),
-        frame,
-    })?;
-    let mut mesh = morph.mesh;
-    let before = summarize(&morph.quality);
-    let mut quality = morph.quality;
-    let index = ClosestPointIndex::from_shape(&surface);
-    let mut repair_bound = 0.0;
-    if let Some(rp) = &params.repair {
-        let (r, q) = repair_with_quality(&mut mesh, Some(&index), rp, &quality)?;
-        (repair_bound, quality) = (r.bound, q);
-    }
-    let q = summarize(&quality);
-    check_valid(&surface, &mesh, &q, params)?;
-    let delivered = delivered_distances(&mesh, &surface, &index, params);
-    let dist = crate::mesh::quality::distribution(&mesh, &quality);
-    let node_distances: Vec<f64> = crate::mesh::boundary_surface(&mesh)
-        .points
-        .iter()
-        .map(|p| index.closest(p).dist2.sqrt())
-        .collect();
+    let made = morpher
+        .map(|m| instance_mesh(m, &surface, frame, params))
+        .transpose()?;
     let base = file_name(&spec.name);
     let dir = out.join(&base);
     crate::formats::create_dir(&dir)?;
     let _ = std::fs::remove_file(dir.join(INSTANCE_RECORD));
-    let mean_mesh = atlas
-        .mesh
-        .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes));
     let mut files = Vec::new();
-    for f in &params.formats {
-        let name = format!("{base}_mesh.{}", f.extension());
-        write_mesh(&dir.join(&name), &mesh, Some(&mean_mesh), &quality)?;
-        files.push(format!("{base}/{name}"));
+    if let Some(im) = &made {
+        let mean_mesh = atlas
+            .mesh
+            .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes));
+        for f in &params.formats {
+            let name = format!("{base}_mesh.{}", f.extension());
+            write_mesh(&dir.join(&name), &im.mesh, Some(&mean_mesh), &im.quality)?;
+            files.push(format!("{base}/{name}"));
+        }
+        if let Some(deck) = &params.deck {
+            let name = format!("{base}_deck.{}", deck.extension());
+            write_atomic(
+                &dir.join(&name),
+                deck.with_nodes(&im.mesh.nodes)?.as_bytes(),
+            )?;
+            files.push(format!("{base}/{name}"));
+        }
     }
-    if let Some(deck) = &params.deck {
-        let name = format!("{base}_deck.{}", deck.extension());
-        write_atomic(&dir.join(&name), deck.with_nodes(&mesh.nodes)?.as_bytes())?;
-        files.push(format!("{base}/{name}"));
-    }
-    for &f in &params.surface_formats {
+    // A point set (no facets) is written as VTP points only.
+    let surface_formats: &[crate::formats::ShapeFormat] = if surface.facets.is_empty() {
+        &[crate::formats::ShapeFormat::Vtp]
+    } else {
+        &params.surface_formats
+    };
+    for &f in surface_formats {
         let name = format!("{base}.{}", f.extension());
         write_shape(&dir.join(&name), &surface, f)?;
         files.push(format!("{base}/{name}"));
     }
-    if params.plots {
+    if let (true, Some(im)) = (params.plots, &made) {
         let name = format!("{base}.png");
         if let Some(view) = view {
             let title = format!("{}: mesh, scaled Jacobian", spec.name);
             write_atomic(
                 &dir.join(&name),
-                &quality_picture(&mesh, &quality, view, &title)?,
+                &quality_picture(&im.mesh, &im.quality, view, &title)?,
             )?;
         } else {
             let to2 =
                 |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
             let mesh2 = crate::mesh::FeMesh {
-                nodes: to2(&mesh.nodes),
-                kind: mesh.kind,
-                connectivity: mesh.connectivity.clone(),
+                nodes: to2(&im.mesh.nodes),
+                kind: im.mesh.kind,
+                connectivity: im.mesh.connectivity.clone(),
                 sets: Default::default(),
             };
             crate::report::plot_subject(
@@ -331,28 +380,34 @@ fn write_instance<const D: usize>(
         }
         files.push(format!("{base}/{name}"));
     }
+    let nan = f64::NAN;
+    let rms = |v: &[f64]| (v.iter().map(|d| d * d).sum::<f64>() / v.len().max(1) as f64).sqrt();
     let report = InstanceReport {
         name: spec.name.clone(),
         sd: spec.sd.clone(),
         mahalanobis: spec.sd.iter().map(|v| v * v).sum::<f64>().sqrt(),
-        elements: mesh.num_elements(),
-        scaled_jacobian_min: q.scaled_jacobian_min,
-        scaled_jacobian_min_before_repair: before.scaled_jacobian_min,
-        inverted_elements: q.inverted_elements,
-        repair_bound,
-        elements_below_repair_bound: quality
-            .iter()
-            .filter(|e| e.scaled_jacobian_min < repair_bound)
-            .count(),
-        elements_below_bound: dist.elements_below_bound,
-        mesh_rms_distance: delivered.distances.rms,
-        mesh_p95_distance: delivered.distances.p95,
-        mesh_max_distance: delivered.distances.max,
-        boundary_node_rms_distance: (node_distances.iter().map(|d| d * d).sum::<f64>()
-            / node_distances.len().max(1) as f64)
-            .sqrt(),
-        boundary_node_max_distance: node_distances.iter().fold(0.0, |a, &d| a.max(d)),
-        element_size: delivered.element_size,
+        elements: made.as_ref().map_or(0, |im| im.mesh.num_elements()),
+        scaled_jacobian_min: made.as_ref().map_or(nan, |im| im.after.scaled_jacobian_min),
+        scaled_jacobian_min_before_repair: made
+            .as_ref()
+            .map_or(nan, |im| im.before.scaled_jacobian_min),
+        inverted_elements: made.as_ref().map_or(0, |im| im.after.inverted_elements),
+        repair_bound: made.as_ref().map_or(0.0, |im| im.repair_bound),
+        elements_below_repair_bound: made.as_ref().map_or(0, |im| {
+            im.quality
+                .iter()
+                .filter(|e| e.scaled_jacobian_min < im.repair_bound)
+                .count()
+        }),
+        elements_below_bound: made.as_ref().map_or(0, |im| im.elements_below_bound),
+        mesh_rms_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.rms),
+        mesh_p95_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.p95),
+        mesh_max_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.max),
+        boundary_node_rms_distance: made.as_ref().map_or(nan, |im| rms(&im.node_distances)),
+        boundary_node_max_distance: made.as_ref().map_or(nan, |im| {
+            im.node_distances.iter().fold(0.0, |a, &d| a.max(d))
+        }),
+        element_size: made.as_ref().map_or(nan, |im| im.delivered.element_size),
         files,
     };
     let rec = InstanceRecord {

@@ -203,11 +203,25 @@ fn id_list<'a>(ids: impl Iterator<Item = &'a String>) -> String {
 pub const ISLAND_SHARE: f64 = 0.01;
 
 /// Drops from every shape the floating components under `min_share` of its area (length),
-/// and describes each shape's topology (components, genus) and what was dropped.
+/// and describes each shape's topology (components, genus) and what was dropped; a point set
+/// without facets is left as it is (0 components).
 pub fn clean_shapes<const D: usize>(shapes: &mut [Shape<D>], min_share: f64) -> Vec<InputReport> {
     shapes
         .iter_mut()
         .map(|s| {
+            if s.facets.is_empty() {
+                // A point set (`build --no-mesh`): no topology to clean.
+                return InputReport {
+                    name: s.name.clone(),
+                    vertices: s.points.len(),
+                    components: 0,
+                    genus: None,
+                    dropped_components: 0,
+                    dropped_share: 0.0,
+                    registration: None,
+                    warnings: Vec::new(),
+                };
+            }
             let parts = crate::geometry::components(s);
             let (clean, dropped) = crate::geometry::drop_small_components(s, min_share);
             let dropped_share: f64 = dropped.iter().map(|d| d.1).sum();
@@ -431,6 +445,18 @@ fn clean_candidates<const D: usize>(shapes: &[Shape<D>]) -> Vec<bool> {
     }
 }
 
+/// Reads the 3D point sets in `paths` ([`crate::formats::read_point_set`]: files with or
+/// without faces), in the order given.
+pub fn load_point_sets(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
+    if paths.is_empty() {
+        return Err(Error::Population("no input file given".into()));
+    }
+    paths
+        .par_iter()
+        .map(|p| crate::formats::read_point_set(p))
+        .collect()
+}
+
 /// Reads the triangle surfaces in `paths` (PLY, STL, OBJ), in the order given. Shapes in
 /// correspondence must share their vertex count and facets (checked when the atlas is built).
 pub fn load_surfaces(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
@@ -460,14 +486,15 @@ pub fn is_surface_file(path: &Path) -> Result<bool> {
         "vtp" => crate::formats::read_vtp(path)?,
         _ => return Ok(false),
     };
-    if v.polygons.is_empty() && v.lines.is_empty() {
+    if v.polygons.is_empty() && v.lines.is_empty() && v.points.is_empty() {
         return Err(Error::parse(
             path,
             0,
-            "neither polygons (a surface) nor lines (an outline)",
+            "neither polygons (a surface) nor lines (an outline) nor points",
         ));
     }
-    Ok(!v.polygons.is_empty())
+    // Points alone: a 3D point set (`build --no-mesh`).
+    Ok(v.lines.is_empty())
 }
 
 /// Reads the outlines in `paths` and, with `resample`, resamples them: in correspondence when

@@ -17,6 +17,7 @@ mod hostile_inputs;
 mod hostile_outputs;
 mod html;
 mod instances;
+mod model_only;
 mod register;
 mod repair;
 mod solver;

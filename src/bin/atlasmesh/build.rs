@@ -21,12 +21,21 @@ pub struct BuildArgs {
     /// modes; 1000 random instances): ATLAS.measures.json and ATLAS.measures.png.
     #[arg(long)]
     measures: bool,
+    /// The shape model alone (GPA, PCA; with --measures its measures), without a mean mesh:
+    /// for populations that need none, 3D point sets in correspondence without faces
+    /// included. `instance` and `sample` then write shapes only; `fit` needs a mesh.
+    #[arg(long, conflicts_with = "template_mesh")]
+    no_mesh: bool,
 }
 
 /// Runs `atlasmesh build`.
 pub fn run(a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
     if study::inputs_are_surfaces(&a.pop.shapes)? {
-        build(&a, surfaces_and_params(&a.pop, &a.run, term)?, term)
+        build(
+            &a,
+            surfaces_and_params(&a.pop, &a.run, a.no_mesh, term)?,
+            term,
+        )
     } else {
         build(&a, outlines_and_params(&a.pop, &a.run, term)?, term)
     }
@@ -44,9 +53,22 @@ fn build<const D: usize>(a: &BuildArgs, pop: Population<D>, term: &Terminal) -> 
     let (shapes, template) = corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, 0, term)?;
     let meshes = meshes.as_deref();
     let params = &params;
-    let step = "atlas (GPA, PCA, mesh of the mean)";
+    let step = if a.no_mesh {
+        "shape model (GPA, PCA)"
+    } else {
+        "atlas (GPA, PCA, mesh of the mean)"
+    };
     term.step_started(step);
-    let atlas = study::build_with_meshes(&shapes, meshes, params, &a.out)?;
+    let atlas = if a.no_mesh {
+        study::build_model(&shapes, params, &a.out)?
+    } else {
+        study::build_with_meshes(&shapes, meshes, params, &a.out).map_err(|e| match e {
+            atlasmesh::Error::Mesh(m) => atlasmesh::Error::Mesh(format!(
+                "{m}; the shape model itself was built: save it without a mean mesh with --no-mesh, or mesh the mean with another --element-size or a --template-mesh"
+            )),
+            e => e,
+        })?
+    };
     term.step_finished(step);
     if a.measures {
         let step = "compactness, generalization, specificity (1000 instances per mode count)";
@@ -67,16 +89,23 @@ fn build<const D: usize>(a: &BuildArgs, pop: Population<D>, term: &Terminal) -> 
     }
     let m = atlas.num_modes();
     let unit = study::data_per_mean(&shapes, &atlas.mean_shape());
+    let mesh = if atlas.has_mesh() {
+        format!(
+            "mean mesh {} {} elements of size {:.3} in the shapes' unit ({:.2} % of the largest extent)",
+            atlas.mesh.num_elements(),
+            atlas.mesh.kind.name(),
+            atlas.params.element_size * unit,
+            100.0 * atlas.params.element_size
+        )
+    } else {
+        "no mean mesh".to_string()
+    };
     println!(
-        "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, mean mesh {} {} elements of size {:.3} in the shapes' unit ({:.2} % of the largest extent))",
+        "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, {mesh})",
         a.out.display(),
         shapes.len(),
         atlas.mean.len(),
         atlas.cumulative_variance[m - 1],
-        atlas.mesh.num_elements(),
-        atlas.mesh.kind.name(),
-        atlas.params.element_size * unit,
-        100.0 * atlas.params.element_size
     );
     let facts = study::write_build_facts(&a.out, &inputs, template.as_deref(), &atlas, unit)?;
     println!("inputs and registration: {}", facts.display());

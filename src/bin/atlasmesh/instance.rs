@@ -251,7 +251,11 @@ fn instances<const D: usize>(
         study::check_deck(&atlas, deck, path)?;
     }
     let (specs, sampling) = specs(&atlas)?;
-    let morpher = atlas.morpher(&params.morph)?;
+    // An atlas without a mean mesh (build --no-mesh): the shapes alone.
+    let morpher = atlas
+        .has_mesh()
+        .then(|| atlas.morpher(&params.morph))
+        .transpose()?;
     let run = InstanceRun {
         resume: o.resume,
         shard: o.shard,
@@ -263,8 +267,17 @@ fn instances<const D: usize>(
         .num_threads(o.jobs)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let r = pool
-        .install(|| study::write_instances(&atlas, &morpher, &specs, &params, o.out, &run, term))?;
+    let r = pool.install(|| {
+        study::write_instances(&atlas, morpher.as_ref(), &specs, &params, o.out, &run, term)
+    })?;
+    if !atlas.has_mesh() {
+        println!(
+            "{} shapes written ({} already complete): the atlas has no mean mesh (built with --no-mesh), so no FE mesh",
+            r.summary.written, r.summary.resumed
+        );
+        println!("instances: {}", o.out.join("instances.json").display());
+        return Ok(());
+    }
     let unit = if r.data_unit {
         ""
     } else {

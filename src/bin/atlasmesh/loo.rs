@@ -27,7 +27,7 @@ pub struct LooArgs {
 /// Runs `atlasmesh loo`.
 pub fn run(a: LooArgs, term: &Terminal) -> anyhow::Result<()> {
     let r = if study::inputs_are_surfaces(&a.pop.shapes)? {
-        loo(&a, surfaces_and_params(&a.pop, &a.run, term)?, term)?
+        loo(&a, surfaces_and_params(&a.pop, &a.run, false, term)?, term)?
     } else {
         loo(&a, outlines_and_params(&a.pop, &a.run, term)?, term)?
     };

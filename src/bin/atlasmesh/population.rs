@@ -65,11 +65,16 @@ fn clean<const D: usize>(
 pub fn surfaces_and_params(
     pop: &PopArgs,
     run: &RunArgs,
+    point_sets: bool,
     term: &Terminal,
 ) -> anyhow::Result<Population<3>> {
     let mut params = run.params_for(3)?;
     apply_pop(&mut params, pop);
-    let mut shapes = study::load_surfaces(&pop.shapes)?;
+    let mut shapes = if point_sets && !pop.register {
+        study::load_point_sets(&pop.shapes)?
+    } else {
+        study::load_surfaces(&pop.shapes)?
+    };
     let pairing = study::attach_landmarks(&mut shapes, &pop.landmarks)?;
     let inputs = clean(pop, &mut shapes, &pairing, term)?;
     let meshes = if pop.template_mesh.is_empty() {

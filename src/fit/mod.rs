@@ -13,8 +13,10 @@
 //! | `state` | what a fit carries from one update to the next |
 //! | `scratch` | buffers reused by the updates, apart from the maths |
 //! | `result` | [`FitResult`] |
+//! | `landmarks` | [`fit_landmarks`]: the posterior of the model given a few landmarks |
 
 mod fitter;
+mod landmarks;
 mod params;
 mod resolution;
 mod result;
@@ -23,6 +25,7 @@ mod state;
 mod update;
 
 pub use fitter::Fitter;
+pub use landmarks::{LandmarkFit, fit_landmarks};
 pub use params::FitParams;
 pub use result::FitResult;
 

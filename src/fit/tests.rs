@@ -173,3 +173,41 @@ fn symmetric_fit_recovers_a_far_instance() {
         .sqrt();
     assert!(err < 0.1 * a.eigenvalues[0].sqrt(), "weight error {err}");
 }
+
+/// Landmarks alone: points of a model instance under a known similarity, observed with a
+/// tiny noise at a dozen points, give back the instance and the similarity (the posterior
+/// mean of eq. 4 and `t_{R,T,s}`), with no spread left; noisier landmarks leave more.
+#[test]
+fn a_dozen_exact_landmarks_give_back_the_instance_and_its_pose() {
+    let a = atlas();
+    let w = weights_at(&a, [1.5, -1.0, 0.5]);
+    let truth = Similarity::centred(
+        40.0,
+        crate::geometry::rotation_exp::<2>(&[0.4]),
+        &[0.0, 0.0],
+        &[100.0, -20.0],
+    );
+    let shape: Vec<Point<2>> = a.instance(&w).iter().map(|p| truth.apply(p)).collect();
+    let points: Vec<usize> = (0..12).map(|k| k * 10).collect();
+    let observed: Vec<(usize, Point<2>)> = points.iter().map(|&i| (i, shape[i])).collect();
+    let fit = fit_landmarks(&a, &observed, 1e-6).unwrap();
+    let err = shape
+        .iter()
+        .zip(&fit.mean)
+        .map(|(p, q)| crate::geometry::dist2(*p, *q).sqrt())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-3, "largest error {err} (shape about 80 across)");
+    assert!(
+        (fit.similarity.s - 40.0).abs() < 1e-3,
+        "{}",
+        fit.similarity.s
+    );
+    // Twelve exact landmarks leave nothing of three modes open; one noisier leaves more.
+    let tight = fit.point_sd.iter().fold(0.0, |m: f64, &v| m.max(v));
+    assert!(tight < 1e-4, "{tight}");
+    let loose = fit_landmarks(&a, &observed, 1.0).unwrap();
+    assert!(loose.point_sd.iter().all(|&v| v > tight));
+    // Too few landmarks, a bad sd: refused.
+    assert!(fit_landmarks(&a, &observed[..1], 1.0).is_err());
+    assert!(fit_landmarks(&a, &observed, f64::NAN).is_err());
+}

@@ -238,6 +238,12 @@ impl<const D: usize> Atlas<D> {
         if !self.has_mesh() {
             meta.insert("mesh".to_string(), "none".to_string());
         }
+        if !self.landmark_ids.is_empty() {
+            meta.insert(
+                "landmark_ids".to_string(),
+                serde_json::to_string(&self.landmark_ids).unwrap_or_default(),
+            );
+        }
         meta.insert(
             "mesh_sets".to_string(),
             serde_json::to_string(&self.mesh.sets).unwrap_or_default(),
@@ -279,6 +285,7 @@ impl<const D: usize> Atlas<D> {
             training_shapes,
             data_frame,
             model_only,
+            landmark_ids,
         } = AtlasMetadata::<D>::of(path, bytes)?;
         let st = SafeTensors::deserialize(bytes).map_err(|e| bad(format!("{e}")))?;
         let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
@@ -374,6 +381,7 @@ impl<const D: usize> Atlas<D> {
             cumulative_variance: f64v(&cvb),
             facets,
             landmarks: idxv(&lb, n, "landmark")?,
+            landmark_ids,
             mesh: FeMesh {
                 nodes,
                 kind,
@@ -425,6 +433,13 @@ fn validate<const D: usize>(a: &Atlas<D>, model_only: bool) -> std::result::Resu
     {
         return Err("the cumulative variance must rise within [0, 1]".into());
     }
+    if !a.landmark_ids.is_empty() && a.landmark_ids.len() != a.landmarks.len() {
+        return Err(format!(
+            "{} landmark ids for {} landmarks",
+            a.landmark_ids.len(),
+            a.landmarks.len()
+        ));
+    }
     let kind = a.mesh.kind;
     if kind.dimension() != D {
         return Err(format!("a {D}D atlas with {} elements", kind.name()));
@@ -461,6 +476,8 @@ struct AtlasMetadata<const D: usize> {
     data_frame: Option<Similarity<D>>,
     /// A shape model without a mean mesh (`mesh = none`).
     model_only: bool,
+    /// The landmarks' ids (`landmark_ids`, optional).
+    landmark_ids: Vec<String>,
 }
 
 impl<const D: usize> AtlasMetadata<D> {
@@ -539,7 +556,13 @@ impl<const D: usize> AtlasMetadata<D> {
                 )));
             }
         };
+        let landmark_ids: Vec<String> = match meta.get("landmark_ids") {
+            None => Vec::new(),
+            Some(j) => serde_json::from_str(j)
+                .map_err(|e| bad(format!("malformed landmark_ids metadata: {e}")))?,
+        };
         Ok(AtlasMetadata {
+            landmark_ids,
             model_only,
             kind,
             params,

@@ -72,7 +72,8 @@ pub use vtk_legacy::{
     read_vtk_polydata, read_vtk_unstructured,
 };
 pub use vtk_xml::{
-    parse_vtp, parse_vtu, read_vtp, read_vtu, write_vtp, write_vtu, write_vtu_with_quality,
+    parse_vtp, parse_vtu, read_vtp, read_vtu, write_vtp, write_vtp_with_point_data, write_vtu,
+    write_vtu_with_point_data, write_vtu_with_quality,
 };
 
 #[cfg(test)]

@@ -237,6 +237,23 @@ pub fn write_vtu_with_quality<const D: usize>(
     reference: Option<&FeMesh<D>>,
     q: &[crate::mesh::quality::ElementQuality],
 ) -> Result<()> {
+    write_vtu_with_point_data(path, mesh, reference, q, &[])
+}
+
+/// [`write_vtu_with_quality`] with named scalar point data (`(name, one value per node)`;
+/// names of ASCII letters, digits and `_`).
+///
+/// # Errors
+/// [`Error::Parameter`] for a field of another length than the nodes or an unusable name;
+/// the errors of the write.
+pub fn write_vtu_with_point_data<const D: usize>(
+    path: &Path,
+    mesh: &FeMesh<D>,
+    reference: Option<&FeMesh<D>>,
+    q: &[crate::mesh::quality::ElementQuality],
+    fields: &[(&str, &[f64])],
+) -> Result<()> {
+    check_fields(path, fields, mesh.nodes.len())?;
     let k = mesh.kind.nodes();
     let ne = mesh.num_elements();
     let z = |p: &Point<D>| if D > 2 { p[2] } else { 0.0 };
@@ -259,6 +276,15 @@ pub fn write_vtu_with_quality<const D: usize>(
             .zip(&r.nodes)
             .flat_map(|(p, o)| [p[0] - o[0], p[1] - o[1], z(p) - z(o)]);
         binary_array(&mut s, "Float64", Some("displacement"), 3, &f64_bytes(d));
+    }
+    for (name, values) in fields {
+        binary_array(
+            &mut s,
+            "Float64",
+            Some(name),
+            1,
+            &f64_bytes(values.iter().copied()),
+        );
     }
     s.push_str("      </PointData>\n      <CellData Scalars=\"scaled_jacobian_min\">\n");
     for (name, members) in &mesh.sets.element_sets {
@@ -299,8 +325,38 @@ pub fn write_vtu_with_quality<const D: usize>(
     crate::formats::write_atomic(path, s.as_bytes())
 }
 
+/// Refuses point data of another length than `n` or with a name that is not plain.
+fn check_fields(path: &Path, fields: &[(&str, &[f64])], n: usize) -> Result<()> {
+    for (name, values) in fields {
+        if values.len() != n
+            || name.is_empty()
+            || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        {
+            return Err(Error::Parameter(format!(
+                "{}: point data {name:?} of {} values for {n} points",
+                path.display(),
+                values.len()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Writes a shape as VTP: an outline as line cells, a surface as polygons.
 pub fn write_vtp<const D: usize>(path: &Path, shape: &Shape<D>) -> Result<()> {
+    write_vtp_with_point_data(path, shape, &[])
+}
+
+/// [`write_vtp`] with named scalar point data (`(name, one value per point)`).
+///
+/// # Errors
+/// As [`write_vtu_with_point_data`].
+pub fn write_vtp_with_point_data<const D: usize>(
+    path: &Path,
+    shape: &Shape<D>,
+    fields: &[(&str, &[f64])],
+) -> Result<()> {
+    check_fields(path, fields, shape.points.len())?;
     let mut s = String::new();
     s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <PolyData>\n");
     let tag = if D == 2 { "Lines" } else { "Polys" };
@@ -314,6 +370,19 @@ pub fn write_vtp<const D: usize>(path: &Path, shape: &Shape<D>) -> Result<()> {
         "    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"{nl}\" NumberOfStrips=\"0\" NumberOfPolys=\"{np}\">",
         shape.points.len()
     );
+    if !fields.is_empty() {
+        s.push_str("      <PointData>\n");
+        for (name, values) in fields {
+            binary_array(
+                &mut s,
+                "Float64",
+                Some(name),
+                1,
+                &f64_bytes(values.iter().copied()),
+            );
+        }
+        s.push_str("      </PointData>\n");
+    }
     points_xml(&mut s, &shape.points);
     let _ = writeln!(
         s,

@@ -100,6 +100,9 @@ pub struct Atlas<const D: usize> {
     pub facets: Vec<[usize; D]>,
     /// Landmark indices.
     pub landmarks: Vec<usize>,
+    /// The landmarks' ids (names in the landmark files), one per landmark, when the
+    /// population's files named them; empty otherwise (landmarks are then paired by order).
+    pub landmark_ids: Vec<String>,
     /// FE mesh of the mean shape (reference frame); empty for a model-only atlas
     /// ([`Atlas::build_model`]).
     pub mesh: FeMesh<D>,
@@ -276,6 +279,7 @@ impl<const D: usize> Atlas<D> {
             cumulative_variance: p.cumulative_variance(),
             facets: shapes[0].facets.clone(),
             landmarks: shapes[0].landmarks.clone(),
+            landmark_ids: Vec::new(),
             mesh,
             params: *params,
             training_shapes: shapes.len(),

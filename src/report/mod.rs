@@ -7,14 +7,17 @@
 //! | `plots` | PNG plots: variance, `E_d`, measures, modes, Jacobians, subjects |
 //! | `render` | a small rasterizer for 3D surfaces and meshes |
 //! | `html` | `report.html` |
+//! | `posterior` | [`PosteriorRunReport`]: the `posterior.json` schema of `fit --landmarks-only` |
 //! | `instances` | [`InstancesReport`]: the `instances.json` schema of `instance` and `sample` |
 
 pub mod html;
 mod instances;
 mod plots;
+mod posterior;
 pub mod render;
 mod schema;
 
 pub use instances::*;
 pub use plots::*;
+pub use posterior::*;
 pub use schema::*;

@@ -73,17 +73,28 @@ pub fn build<const D: usize>(
     params: &RunParams,
     atlas_path: &Path,
 ) -> Result<Atlas<D>> {
-    build_with_meshes(shapes, None, params, atlas_path)
+    build_with_meshes(shapes, None, params, &[], atlas_path)
 }
 
-/// [`build`] with template volume meshes (one per shape, or one for the first shape).
+/// Names the atlas's landmarks by `ids` (the ids of the population's landmark files, one per
+/// landmark; otherwise they stay unnamed and are paired by order).
+fn name_landmarks<const D: usize>(atlas: &mut Atlas<D>, ids: &[String]) {
+    if ids.len() == atlas.landmarks.len() {
+        atlas.landmark_ids = ids.to_vec();
+    }
+}
+
+/// [`build`] with template volume meshes (one per shape, or one for the first shape) and the
+/// ids of the landmarks (see [`Atlas::landmark_ids`]).
 pub fn build_with_meshes<const D: usize>(
     shapes: &[Shape<D>],
     meshes: Option<&[FeMesh<D>]>,
     params: &RunParams,
+    landmark_ids: &[String],
     atlas_path: &Path,
 ) -> Result<Atlas<D>> {
-    let atlas = atlas_of(shapes, meshes, params)?;
+    let mut atlas = atlas_of(shapes, meshes, params)?;
+    name_landmarks(&mut atlas, landmark_ids);
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
     }
@@ -107,9 +118,11 @@ pub fn build_with_meshes<const D: usize>(
 pub fn build_model<const D: usize>(
     shapes: &[Shape<D>],
     params: &RunParams,
+    landmark_ids: &[String],
     atlas_path: &Path,
 ) -> Result<Atlas<D>> {
-    let atlas = Atlas::build_model(shapes, &params.atlas)?;
+    let mut atlas = Atlas::build_model(shapes, &params.atlas)?;
+    name_landmarks(&mut atlas, landmark_ids);
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
     }

@@ -13,6 +13,8 @@
 //! | `sets` | sets and decks on the atlas's mean mesh |
 //! | `subject` | [`fit_subject`]: one subject's fit, morph, repair and measures |
 //! | `baselines` | the paper's ICP and FFD baselines (fig. 12/20) |
+//! | `landmark_fit` | a subject known by a few landmarks: the posterior, its mesh |
+//! | `instance` | shapes of the model (given or sampled weights) as FE models |
 //! | `write_subject` | [`write_subject`]: a subject's meshes, deck, surface, pictures |
 //! | `report_files` | the population plots, `report.json` and `report.html` |
 //! | `leave_one_out` | the leave-one-out experiment |
@@ -26,6 +28,7 @@ pub mod batch;
 mod build;
 mod demo;
 mod instance;
+mod landmark_fit;
 mod leave_one_out;
 mod mesh_file;
 mod params;
@@ -42,6 +45,7 @@ pub use batch::{BatchFacts, BatchOptions, fit_batch, fit_shapes};
 pub use build::*;
 pub use demo::*;
 pub use instance::*;
+pub use landmark_fit::*;
 pub use leave_one_out::*;
 pub use mesh_file::*;
 pub use params::*;

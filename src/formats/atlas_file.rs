@@ -449,7 +449,10 @@ fn validate<const D: usize>(a: &Atlas<D>, model_only: bool) -> std::result::Resu
         return if a.mesh.nodes.is_empty() && a.mesh.num_elements() == 0 {
             Ok(())
         } else {
-            Err("a model without a mesh (mesh = none) that has mesh nodes".into())
+            Err(format!(
+                "the mean mesh has no elements but {} nodes",
+                a.mesh.nodes.len()
+            ))
         };
     }
     if a.mesh.num_elements() == 0 {

@@ -373,3 +373,61 @@ fn femur_samples_and_mode_sweeps_are_valid_fe_models_in_mm() {
         }
     }
 }
+
+/// `--sets` and `--deck` reach every instance as they reach fitted subjects: the sets in the
+/// mesh files, and a deck per instance with its node coordinates (CalculiX reads it in the
+/// solver tests).
+#[test]
+fn instances_carry_the_sets_and_get_their_decks() {
+    let d = common::temp_dir("instance-deck");
+    let atlas = atlas_2d(&d);
+    let sets = d.join("sets.toml");
+    std::fs::write(
+        &sets,
+        "[[node_set]]\nname = \"BASE\"\nhalf_space = { axis = \"longest\", below = 0.1 }\n[[element_set]]\nname = \"TOP\"\nhalf_space = { axis = \"longest\", above = 0.5 }\n",
+    )
+    .unwrap();
+    let mean = d.join("mean.inp");
+    let o = atlasmesh(&["convert", &s(&atlas), &s(&mean)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let deck = d.join("deck.inp");
+    let mut text = std::fs::read_to_string(&mean).unwrap();
+    text.push_str("*MATERIAL, NAME=M\n*ELASTIC\n1000, 0.3\n");
+    std::fs::write(&deck, text).unwrap();
+    let out = d.join("out");
+    let o = atlasmesh(&[
+        "instance",
+        "--atlas",
+        &s(&atlas),
+        "--mode",
+        "2",
+        "--steps",
+        "-2:2:4",
+        "--sets",
+        &s(&sets),
+        "--deck",
+        &s(&deck),
+        "--format",
+        "inp,vtu",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for r in &read_report(&out).instances {
+        let base = out.join(&r.name);
+        let mesh: atlasmesh::mesh::FeMesh<2> =
+            atlasmesh::formats::read_fe_mesh(&base.join(format!("{}_mesh.inp", r.name))).unwrap();
+        assert!(mesh.sets.node_sets.contains_key("BASE"), "{}", r.name);
+        assert!(mesh.sets.element_sets.contains_key("TOP"), "{}", r.name);
+        let deck_file = base.join(format!("{}_deck.inp", r.name));
+        assert!(r.files.contains(&format!("{0}/{0}_deck.inp", r.name)));
+        let deck_text = std::fs::read_to_string(&deck_file).unwrap();
+        assert!(deck_text.contains("*MATERIAL, NAME=M"));
+        let in_deck: atlasmesh::mesh::FeMesh<2> =
+            atlasmesh::formats::read_fe_mesh(&deck_file).unwrap();
+        assert_eq!(in_deck.nodes.len(), mesh.nodes.len());
+        for (p, q) in in_deck.nodes.iter().zip(&mesh.nodes) {
+            assert!((p[0] - q[0]).abs() + (p[1] - q[1]).abs() < 1e-9);
+        }
+    }
+}

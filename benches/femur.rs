@@ -1,5 +1,6 @@
 //! Benchmarks on the distal femurs (`$ATLASMESH_DATA/knee-distal-femur-synthetic-3d`):
-//! one femur fit (7313 vertices, 15 modes) on one core, the hexahedral mesh of the mean femur
+//! one femur fit (7313 vertices, 15 modes) on one core, a whole subject (fit, morph, repair,
+//! measures), the hexahedral mesh of the mean femur
 //! at 2 mm, the morph plus corner Jacobians of that mesh, and the registration of a femur
 //! pair, and the atlas from the 30 femurs made non-corresponding (decimated and
 //! shuffled as in `tests/it/register.rs`; registration with 3 landmarks on both cores, then
@@ -80,6 +81,20 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let m = morpher.morph(&fit.correspondence()).expect("morph");
             summarize(&mesh_quality(&m.mesh))
+        })
+    });
+    // The whole subject as `atlasmesh fit` and Python's `Atlas.fit` make it: its index, the
+    // fit, the morph, the repair and the measures (`study::fit_subject`), with the fitter made
+    // for it as Python makes one per call.
+    let run = atlasmesh::study::RunParams {
+        plots: false,
+        ..Default::default()
+    };
+    g.bench_function("femur_subject_fit_morph_repair", |b| {
+        b.iter(|| {
+            let fitter = Fitter::new(&atlas);
+            atlasmesh::study::fit_subject(&atlas, &fitter, &morpher, subject, &run)
+                .expect("subject")
         })
     });
     // Morph plus Jacobians of a 100k-hexahedron mesh of the mean (about 1.27 mm).

@@ -42,7 +42,7 @@ pub fn data_per_mean<const D: usize>(shapes: &[Shape<D>], mean: &Shape<D>) -> f6
 /// first) their mean as the FE mesh (`Atlas::build_with_meshes`), else the automatic mesh at
 /// `params.element_size` (a length in the shapes' unit, a share, or from the thickness); the
 /// atlas's `params.element_size` is then the share used.
-pub(crate) fn atlas_of<const D: usize>(
+pub fn atlas_of<const D: usize>(
     shapes: &[Shape<D>],
     meshes: Option<&[FeMesh<D>]>,
     params: &RunParams,

@@ -1,0 +1,138 @@
+"""Type stubs of atlasmesh (the extension module atlasmesh._atlasmesh)."""
+
+from os import PathLike
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+ShapeLike = Union[str, PathLike, Tuple[npt.ArrayLike, npt.ArrayLike]]
+
+class Error(Exception):
+    """Any atlasmesh error; the message names the file and the problem."""
+
+class BadInputError(Error):
+    """Malformed, degenerate or inconsistent input, or a parameter out of range (exit code 2)."""
+
+class IoError(Error):
+    """A file could not be read or written (exit code 3)."""
+
+class InvalidMeshError(Error):
+    """A mesh that no solver could use (exit code 4)."""
+
+class NotConvergedError(Error):
+    """A fit that did not converge, or a numerical failure (exit code 5)."""
+
+class Mesh:
+    """An FE mesh in the data's frame and unit."""
+
+    @property
+    def nodes(self) -> FloatArray:
+        """Node coordinates, (N, D)."""
+    @property
+    def elements(self) -> IntArray:
+        """Connectivity, (E, k), VTK node order."""
+    @property
+    def kind(self) -> str:
+        """quad4, hex8, tri3, tet4, hex20 or tet10."""
+    @property
+    def vtk_type(self) -> int: ...
+    @property
+    def scaled_jacobian(self) -> FloatArray:
+        """Each element's smallest corner scaled Jacobian, (E,)."""
+    @property
+    def sets(self) -> Dict[str, Dict[str, IntArray]]:
+        """{"nodes": {...}, "elements": {...}, "surfaces": {name: (n, 2) element, face}}."""
+    def write(self, path: Union[str, PathLike]) -> None:
+        """Writes .vtu, .vtk, .inp, .msh or .feb (by extension), with the sets."""
+    def to_meshio(self) -> Any:
+        """The mesh as a meshio.Mesh."""
+
+class FitResult:
+    """A subject fitted (Algorithm 1, eq. 5-8) with its morphed mesh (eq. 9) and measures.
+
+    The measures of report.json are attributes too (rms_distance, success,
+    scaled_jacobian_min, inverted_elements, ...)."""
+
+    @property
+    def weights(self) -> FloatArray:
+        """The instance's weights in standard deviations of each mode."""
+    @property
+    def pose(self) -> Dict[str, Any]:
+        """{"scale", "rotation" (D, D), "translation" (D,)}: reference frame to subject."""
+    @property
+    def surface(self) -> FloatArray:
+        """The fitted shape projected onto the subject, (N, D)."""
+    @property
+    def facets(self) -> IntArray: ...
+    @property
+    def mesh(self) -> Mesh: ...
+    @property
+    def measures(self) -> Dict[str, Any]: ...
+    def __getattr__(self, name: str) -> Any: ...
+
+class Atlas:
+    """A statistical atlas: shape model (eq. 3-4) and FE mesh of the mean, in the data's unit."""
+
+    @staticmethod
+    def load(path: Union[str, PathLike]) -> "Atlas": ...
+    @staticmethod
+    def build(
+        shapes: List[ShapeLike],
+        modes: Optional[int] = None,
+        variance: float = 0.985,
+        element_size: str = "auto",
+        register: bool = False,
+        mesh: bool = True,
+    ) -> "Atlas": ...
+    def save(self, path: Union[str, PathLike]) -> None: ...
+    @property
+    def dimension(self) -> int: ...
+    @property
+    def mean(self) -> FloatArray:
+        """The mean shape, (N, D), in the data's frame and unit."""
+    @property
+    def facets(self) -> IntArray: ...
+    @property
+    def modes(self) -> FloatArray:
+        """Orthonormal modes, (m, N, D)."""
+    @property
+    def variances(self) -> FloatArray:
+        """The modes' variances in the data's unit squared."""
+    @property
+    def cumulative_variance(self) -> FloatArray: ...
+    @property
+    def mean_mesh(self) -> Optional[Mesh]: ...
+    def instance(self, sd: npt.ArrayLike) -> FloatArray:
+        """The shape of weights sd (standard deviations), eq. 4, (N, D)."""
+    def project(self, points: npt.ArrayLike) -> Tuple[FloatArray, FloatArray]:
+        """The closest model shape to corresponding points (any pose), and its weights."""
+    def sample(
+        self, n: int, seed: int = 1, max_sd: Optional[float] = None
+    ) -> Tuple[FloatArray, FloatArray]:
+        """n random shapes (n, N, D) and their weights (n, m) in standard deviations."""
+    def fit(
+        self,
+        subject: Union[ShapeLike, npt.ArrayLike],
+        facets: Optional[npt.ArrayLike] = None,
+        partial: bool = False,
+        grid: int = 20,
+        alpha: float = 50.0,
+    ) -> FitResult: ...
+    def fit_many(
+        self,
+        subjects: List[ShapeLike],
+        partial: bool = False,
+        grid: int = 20,
+        alpha: float = 50.0,
+        jobs: int = 0,
+    ) -> List[Union[FitResult, Error]]: ...
+
+def read_shapes(
+    path: Union[str, PathLike], closed: bool = True, resample: Optional[int] = None
+) -> List[Tuple[str, FloatArray, IntArray]]:
+    """The shapes of a surface or outline file as (name, points, facets)."""

@@ -1,0 +1,25 @@
+//! `atlasmesh` for Python: the library's engine over NumPy arrays (pyo3, the stable ABI).
+//! Atlases are built, loaded and saved, their shape model sampled and projected, and subjects
+//! fitted (Algorithm 1, eq. 5-8) with the mean mesh morphed onto them (eq. 9), repaired and
+//! checked, the GIL released while the work runs. Shapes and meshes come in and out in the
+//! data's frame and unit (mm for mm data).
+
+mod arrays;
+mod errors;
+mod model;
+mod read;
+mod result;
+
+use pyo3::prelude::*;
+
+/// The extension module `atlasmesh._atlasmesh` (re-exported by the `atlasmesh` package).
+#[pymodule]
+fn _atlasmesh(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add_class::<model::Atlas>()?;
+    m.add_class::<result::Mesh>()?;
+    m.add_class::<result::FitResult>()?;
+    m.add_function(wrap_pyfunction!(read::read_shapes, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

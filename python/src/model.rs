@@ -1,0 +1,562 @@
+//! `atlasmesh.Atlas`: an atlas of 2D outlines or 3D surfaces, its shape model and its fits.
+
+use crate::arrays;
+use crate::errors::to_py;
+use crate::result::{FitResult, Mesh};
+use atlasmesh::geometry::{Point, Shape};
+use atlasmesh::model::Atlas as RustAtlas;
+use atlasmesh::study::RunParams;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+/// An atlas of one dimension with its morph, factorized on first use.
+struct Held<const D: usize> {
+    atlas: RustAtlas<D>,
+    morpher: OnceLock<atlasmesh::mesh::Morpher<D>>,
+}
+
+impl<const D: usize> Held<D> {
+    fn new(atlas: RustAtlas<D>) -> Self {
+        Held {
+            atlas,
+            morpher: OnceLock::new(),
+        }
+    }
+
+    fn morpher(&self, params: &RunParams) -> atlasmesh::Result<&atlasmesh::mesh::Morpher<D>> {
+        if let Some(m) = self.morpher.get() {
+            return Ok(m);
+        }
+        let m = self.atlas.morpher(&params.morph)?;
+        Ok(self.morpher.get_or_init(|| m))
+    }
+}
+
+enum Inner {
+    Two(Held<2>),
+    Three(Held<3>),
+}
+
+/// Runs `$body` with `$a` the `Held<D>` of either dimension and `D` its dimension.
+macro_rules! each {
+    ($inner:expr, $a:ident, $d:ident => $body:expr) => {
+        match $inner {
+            Inner::Two($a) => {
+                #[allow(dead_code)]
+                const $d: usize = 2;
+                $body
+            }
+            Inner::Three($a) => {
+                #[allow(dead_code)]
+                const $d: usize = 3;
+                $body
+            }
+        }
+    };
+}
+
+/// A statistical atlas (sections 2.2-2.4): the shape model of a population (mean, modes,
+/// variances, eq. 4) and the FE mesh of its mean, in the population's unit.
+#[pyclass(frozen, module = "atlasmesh")]
+pub struct Atlas {
+    inner: Inner,
+}
+
+/// A shape from `(points, facets)` arrays or a file path.
+fn shape_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Shape<D>> {
+    if let Ok(path) = obj.extract::<PathBuf>() {
+        return if D == 3 {
+            let s = atlasmesh::formats::read_surface(&path).map_err(to_py)?;
+            Ok(Shape {
+                name: s.name,
+                points: s
+                    .points
+                    .iter()
+                    .map(atlasmesh::geometry::same_dim::<3, D>)
+                    .collect(),
+                facets: s
+                    .facets
+                    .iter()
+                    .map(|f| std::array::from_fn(|d| f[d]))
+                    .collect(),
+                landmarks: Vec::new(),
+            })
+        } else {
+            let mut v = atlasmesh::formats::read_outlines(&path, true).map_err(to_py)?;
+            if v.len() != 1 {
+                return Err(PyValueError::new_err(format!(
+                    "{}: {} outlines; give one per file, or arrays",
+                    path.display(),
+                    v.len()
+                )));
+            }
+            let s = v.remove(0);
+            Ok(Shape {
+                name: s.name,
+                points: s
+                    .points
+                    .iter()
+                    .map(atlasmesh::geometry::same_dim::<2, D>)
+                    .collect(),
+                facets: s
+                    .facets
+                    .iter()
+                    .map(|f| std::array::from_fn(|d| f[d.min(1)]))
+                    .collect(),
+                landmarks: Vec::new(),
+            })
+        };
+    }
+    let (points, facets): (Bound<'_, PyAny>, Bound<'_, PyAny>) = obj.extract().map_err(|_| {
+        PyValueError::new_err(format!(
+            "shape {k}: a (points, facets) pair of arrays or a file path expected"
+        ))
+    })?;
+    let points = arrays::points::<D>(&points, &format!("shape {k}: points"))?;
+    let facets = arrays::indices::<D>(&facets, &format!("shape {k}: facets"))?;
+    let shape = Shape {
+        name: format!("shape{k}"),
+        points,
+        facets,
+        landmarks: Vec::new(),
+    };
+    let shape = if D == 3 {
+        // Checked and oriented as a surface file is.
+        let s3 = Shape::<3> {
+            name: shape.name.clone(),
+            points: shape
+                .points
+                .iter()
+                .map(atlasmesh::geometry::same_dim::<D, 3>)
+                .collect(),
+            facets: shape
+                .facets
+                .iter()
+                .map(|f| std::array::from_fn(|d| f[d.min(D - 1)]))
+                .collect(),
+            landmarks: Vec::new(),
+        };
+        let s3 = atlasmesh::geometry::prepare_surface(s3).map_err(to_py)?;
+        Shape {
+            name: s3.name,
+            points: s3
+                .points
+                .iter()
+                .map(atlasmesh::geometry::same_dim::<3, D>)
+                .collect(),
+            facets: s3
+                .facets
+                .iter()
+                .map(|f| std::array::from_fn(|d| f[d]))
+                .collect(),
+            landmarks: Vec::new(),
+        }
+    } else {
+        shape
+    };
+    shape.validate().map_err(to_py)?;
+    Ok(shape)
+}
+
+/// The dimension of `(points, facets)` or a file.
+fn dimension_of(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    if let Ok(path) = obj.extract::<PathBuf>() {
+        return Ok(
+            if atlasmesh::study::is_surface_file(&path).map_err(to_py)? {
+                3
+            } else {
+                2
+            },
+        );
+    }
+    let (points, _): (Bound<'_, PyAny>, Bound<'_, PyAny>) = obj.extract().map_err(|_| {
+        PyValueError::new_err("a shape is a (points, facets) pair of arrays or a file path")
+    })?;
+    let np = obj.py().import("numpy")?;
+    let shape: Vec<usize> = np.call_method1("shape", (points,))?.extract()?;
+    match shape.as_slice() {
+        [_, 2] => Ok(2),
+        [_, 3] => Ok(3),
+        s => Err(PyValueError::new_err(format!(
+            "points of shape {s:?}: (n, 2) or (n, 3) expected"
+        ))),
+    }
+}
+
+/// Options of a fit or a build, from keyword arguments.
+fn run_params(partial: bool, grid: usize, alpha: f64) -> PyResult<RunParams> {
+    if !((4..=32).contains(&grid) && alpha.is_finite() && alpha > 0.0) {
+        return Err(crate::errors::BadInputError::new_err(format!(
+            "grid {grid} (4 to 32) and alpha {alpha} (positive) expected"
+        )));
+    }
+    let mut p = RunParams {
+        plots: false,
+        ..RunParams::default()
+    };
+    p.fit.partial = partial;
+    p.morph.grid = grid;
+    p.morph.alpha = alpha;
+    Ok(p)
+}
+
+/// The fit of one subject (Algorithm 1, eq. 9, repair), as the Python result.
+fn fit_one<const D: usize>(
+    held: &Held<D>,
+    shape: &Shape<D>,
+    params: &RunParams,
+) -> atlasmesh::Result<(atlasmesh::study::SubjectOutcome<D>, String)> {
+    let morpher = held.morpher(params)?;
+    let fitter = atlasmesh::fit::Fitter::new(&held.atlas);
+    let o = atlasmesh::study::fit_subject(&held.atlas, &fitter, morpher, shape, params)?;
+    let report = serde_json::to_string(&o.report)
+        .map_err(|e| atlasmesh::Error::Numerical(format!("report: {e}")))?;
+    Ok((o, report))
+}
+
+fn result<const D: usize>(
+    py: Python<'_>,
+    held: &Held<D>,
+    o: atlasmesh::study::SubjectOutcome<D>,
+    report: String,
+) -> PyResult<FitResult> {
+    let t = o.fit.similarity;
+    Ok(FitResult {
+        dim: D,
+        sd: o
+            .fit
+            .weights
+            .iter()
+            .zip(&held.atlas.eigenvalues)
+            .map(|(w, l)| w / l.sqrt())
+            .collect(),
+        scale: t.s,
+        rotation: t.r.iter().flatten().copied().collect(),
+        translation: t.t.to_vec(),
+        surface: o.fit.projected.iter().flat_map(|p| p.point).collect(),
+        facets: held.atlas.facets.iter().flatten().copied().collect(),
+        mesh: Py::new(py, Mesh::of(&o.mesh, &o.quality))?,
+        report,
+    })
+}
+
+#[pymethods]
+impl Atlas {
+    /// Loads an atlas written by `atlasmesh build` or `Atlas.save`.
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Self> {
+        let inner = match atlasmesh::formats::atlas_dimension(&path).map_err(to_py)? {
+            3 => Inner::Three(Held::new(RustAtlas::load(&path).map_err(to_py)?)),
+            _ => Inner::Two(Held::new(RustAtlas::load(&path).map_err(to_py)?)),
+        };
+        Ok(Atlas { inner })
+    }
+
+    /// Builds an atlas from shapes in point correspondence (same point count and facets):
+    /// `(points, facets)` pairs of arrays (points `(N, 2)` or `(N, 3)`, facets `(F, 2)`
+    /// segments or `(F, 3)` triangles) or file paths. GPA with tangent projection (eq. 3),
+    /// PCA (eq. 4), `modes` modes or the fewest explaining `variance`, and the automatic
+    /// quadrilateral or hexahedral mesh of the mean at `element_size` (a length in the
+    /// shapes' unit, a share such as `"2%"`, or `"auto"`); `mesh=False` keeps the shape model
+    /// alone. `register=True` brings raw shapes into correspondence first (FFD registration
+    /// of a template, eq. 1-2).
+    #[staticmethod]
+    #[pyo3(signature = (shapes, modes=None, variance=0.985, element_size="auto", register=false, mesh=true))]
+    fn build(
+        py: Python<'_>,
+        shapes: &Bound<'_, PyList>,
+        modes: Option<usize>,
+        variance: f64,
+        element_size: &str,
+        register: bool,
+        mesh: bool,
+    ) -> PyResult<Self> {
+        if shapes.is_empty() {
+            return Err(crate::errors::BadInputError::new_err("no shape given"));
+        }
+        let dim = dimension_of(&shapes.get_item(0)?)?;
+        let mut params = run_params(false, 20, 50.0)?;
+        params.atlas.modes = match modes {
+            Some(m) => atlasmesh::model::ModeSelection::Count(m),
+            None => atlasmesh::model::ModeSelection::Variance(variance),
+        };
+        params.element_size = element_size
+            .parse()
+            .map_err(|e: String| crate::errors::BadInputError::new_err(e))?;
+        fn go<const D: usize>(
+            py: Python<'_>,
+            list: &Bound<'_, PyList>,
+            params: &RunParams,
+            register: bool,
+            mesh: bool,
+        ) -> PyResult<Held<D>> {
+            let shapes: Vec<Shape<D>> = list
+                .iter()
+                .enumerate()
+                .map(|(k, o)| shape_of::<D>(&o, k))
+                .collect::<PyResult<_>>()?;
+            py.detach(|| {
+                let shapes = if register {
+                    let r = atlasmesh::study::register_population(
+                        &shapes,
+                        atlasmesh::study::Template::Nearest,
+                        &atlasmesh::register::RegisterParams::for_dimension(D),
+                        0,
+                        &atlasmesh::study::Silent,
+                    )?;
+                    r.shapes
+                } else {
+                    shapes
+                };
+                let atlas = if mesh {
+                    atlasmesh::study::atlas_of(&shapes, None, params)?
+                } else {
+                    RustAtlas::build_model(&shapes, &params.atlas)?
+                };
+                Ok(Held::new(atlas))
+            })
+            .map_err(to_py)
+        }
+        let inner = if dim == 3 {
+            Inner::Three(go::<3>(py, shapes, &params, register, mesh)?)
+        } else {
+            Inner::Two(go::<2>(py, shapes, &params, register, mesh)?)
+        };
+        Ok(Atlas { inner })
+    }
+
+    /// Writes the atlas (safetensors; `atlasmesh` reads it back).
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        each!(&self.inner, a, D => a.atlas.save(&path)).map_err(to_py)
+    }
+
+    /// 2 or 3.
+    #[getter]
+    fn dimension(&self) -> usize {
+        each!(&self.inner, _a, D => D)
+    }
+
+    /// The mean shape `S_bar`, `(N, D)`, in the data's frame and unit.
+    #[getter]
+    fn mean<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        each!(&self.inner, a, D => arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.mean)))
+    }
+
+    /// The facets of the shapes (triangles or segments), `(F, D)` int64.
+    #[getter]
+    fn facets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        each!(&self.inner, a, D => arrays::to_i64(py, a.atlas.facets.iter().flatten().copied(), &[a.atlas.facets.len(), D]))
+    }
+
+    /// The modes `Psi`, `(m, N, D)`: orthonormal directions of the shape space (the
+    /// reference frame's axes, which the data's frame rotates).
+    #[getter]
+    fn modes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        each!(&self.inner, a, D => {
+            let (n, m) = (a.atlas.mean.len(), a.atlas.num_modes());
+            arrays::to_f64(
+                py,
+                (0..m).flat_map(|k| (0..n * D).map(move |r| (k, r))).map(|(k, r)| a.atlas.modes[(r, k)]),
+                &[m, n, D],
+            )
+        })
+    }
+
+    /// The variances of the modes `lambda_k` in the data's unit squared (mm² for mm data).
+    #[getter]
+    fn variances<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        each!(&self.inner, a, D => {
+            let s = a.atlas.data_frame.map_or(1.0, |t| t.s);
+            arrays::to_f64(py, a.atlas.eigenvalues.iter().map(|l| l * s * s), &[a.atlas.num_modes()])
+        })
+    }
+
+    /// The cumulative share of the variance of the first 1, 2, ... modes (of all the
+    /// training PCA's modes).
+    #[getter]
+    fn cumulative_variance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        each!(&self.inner, a, D => arrays::to_f64(py, a.atlas.cumulative_variance.iter().copied(), &[a.atlas.cumulative_variance.len()]))
+    }
+
+    /// The atlas's FE mesh of the mean (data's frame and unit), or None (`mesh=False`).
+    #[getter]
+    fn mean_mesh(&self, py: Python<'_>) -> PyResult<Option<Py<Mesh>>> {
+        each!(&self.inner, a, D => {
+            if !a.atlas.has_mesh() {
+                return Ok(None);
+            }
+            let m = a.atlas.mesh.with_nodes(a.atlas.to_data_frame(&a.atlas.mesh.nodes));
+            let q = atlasmesh::mesh::quality::mesh_quality(&m);
+            Ok(Some(Py::new(py, Mesh::of(&m, &q))?))
+        })
+    }
+
+    /// The instance of weights `sd` (standard deviations of each mode; fewer: the rest 0):
+    /// `S_bar + Psi w` (eq. 4), `(N, D)` in the data's frame and unit.
+    fn instance<'py>(
+        &self,
+        py: Python<'py>,
+        sd: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let sd = arrays::vector(sd, "sd")?;
+        each!(&self.inner, a, D => {
+            let m = a.atlas.num_modes();
+            if sd.len() > m || sd.iter().any(|v| !v.is_finite()) {
+                return Err(crate::errors::BadInputError::new_err(format!(
+                    "{} weights for a model of {m} modes (finite numbers of standard deviations)",
+                    sd.len()
+                )));
+            }
+            let w: Vec<f64> = (0..m).map(|k| sd.get(k).copied().unwrap_or(0.0) * a.atlas.eigenvalues[k].sqrt()).collect();
+            arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.instance(&w)))
+        })
+    }
+
+    /// The model's closest shape to `points` (`(N, D)`, in correspondence with the model's
+    /// points, any pose and size): `points` aligned to the mean by a similarity, projected
+    /// onto the model's span (`S_bar + Psi Psi^T (x - S_bar)`), and put back in their pose.
+    /// Returns the projection `(N, D)` and its weights in standard deviations.
+    fn project<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'py, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        each!(&self.inner, a, D => {
+            let x = arrays::points::<D>(points, "points")?;
+            if x.len() != a.atlas.mean.len() {
+                return Err(crate::errors::BadInputError::new_err(format!(
+                    "{} points for a model of {}",
+                    x.len(),
+                    a.atlas.mean.len()
+                )));
+            }
+            let t = atlasmesh::model::fit_similarity(&a.atlas.mean, &x, None);
+            let inside: Vec<Point<D>> = x.iter().map(|p| t.apply_inverse(p)).collect();
+            let w = a.atlas.coefficients(&inside);
+            let p: Vec<Point<D>> = a.atlas.instance(&w).iter().map(|q| t.apply(q)).collect();
+            let sd: Vec<f64> = w.iter().zip(&a.atlas.eigenvalues).map(|(w, l)| w / l.sqrt()).collect();
+            Ok((arrays::of_points::<D>(py, &p)?, arrays::to_f64(py, sd.iter().copied(), &[sd.len()])?))
+        })
+    }
+
+    /// `n` random shapes of the model (weights ~ N(0, Lambda), each within `max_sd`
+    /// standard deviations when given), seeded: `(shapes (n, N, D), weights (n, m) in
+    /// standard deviations)`, shapes in the data's frame and unit.
+    #[pyo3(signature = (n, seed=1, max_sd=None))]
+    fn sample<'py>(
+        &self,
+        py: Python<'py>,
+        n: usize,
+        seed: u64,
+        max_sd: Option<f64>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        each!(&self.inner, a, D => {
+            let specs = atlasmesh::study::sample_specs(&a.atlas, n, seed, max_sd).map_err(to_py)?;
+            let m = a.atlas.num_modes();
+            let mut pts = Vec::with_capacity(n * a.atlas.mean.len() * D);
+            for s in &specs {
+                let w: Vec<f64> = (0..m).map(|k| s.sd[k] * a.atlas.eigenvalues[k].sqrt()).collect();
+                pts.extend(a.atlas.to_data_frame(&a.atlas.instance(&w)).iter().flatten().copied());
+            }
+            Ok((
+                arrays::to_f64(py, pts, &[n, a.atlas.mean.len(), D])?,
+                arrays::to_f64(py, specs.iter().flat_map(|s| s.sd.clone()), &[n, m])?,
+            ))
+        })
+    }
+
+    /// Fits a subject, `(points, facets)` arrays or a file path, in its own frame and unit:
+    /// the model instance that matches it (Algorithm 1, eq. 5-8), projected onto it, and the
+    /// mean mesh morphed onto it by the B-spline FFD of eq. 9 (`grid` control points per
+    /// axis, smoothing `alpha`), repaired and checked. `partial=True` for a subject that
+    /// misses parts. The GIL is released while it runs.
+    #[pyo3(signature = (subject, facets=None, partial=false, grid=20, alpha=50.0))]
+    fn fit(
+        &self,
+        py: Python<'_>,
+        subject: &Bound<'_, PyAny>,
+        facets: Option<&Bound<'_, PyAny>>,
+        partial: bool,
+        grid: usize,
+        alpha: f64,
+    ) -> PyResult<FitResult> {
+        let params = run_params(partial, grid, alpha)?;
+        each!(&self.inner, a, D => {
+            let shape = match facets {
+                Some(f) => shape_of::<D>(&pyo3::types::PyTuple::new(py, [subject, f])?.into_any(), 0)?,
+                None => shape_of::<D>(subject, 0)?,
+            };
+            let (o, report) = py.detach(|| fit_one(a, &shape, &params)).map_err(to_py)?;
+            result(py, a, o, report)
+        })
+    }
+
+    /// Fits every subject of `subjects` (as `fit` takes them) in parallel on `jobs` threads
+    /// (0: every core), the GIL released: a list with a `FitResult` or the exception (an
+    /// `atlasmesh.Error`) of each, in order.
+    #[pyo3(signature = (subjects, partial=false, grid=20, alpha=50.0, jobs=0))]
+    fn fit_many(
+        &self,
+        py: Python<'_>,
+        subjects: &Bound<'_, PyList>,
+        partial: bool,
+        grid: usize,
+        alpha: f64,
+        jobs: usize,
+    ) -> PyResult<Vec<Py<PyAny>>> {
+        let params = run_params(partial, grid, alpha)?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(jobs)
+            .build()
+            .map_err(|e| crate::errors::Error::new_err(format!("thread pool: {e}")))?;
+        each!(&self.inner, a, D => {
+            let shapes: Vec<PyResult<Shape<D>>> = subjects
+                .iter()
+                .enumerate()
+                .map(|(k, o)| shape_of::<D>(&o, k))
+                .collect();
+            let outcomes: Vec<atlasmesh::Result<(atlasmesh::study::SubjectOutcome<D>, String)>> =
+                py.detach(|| {
+                    pool.install(|| {
+                        shapes
+                            .par_iter()
+                            .map(|s| match s {
+                                Ok(s) => fit_one(a, s, &params),
+                                Err(_) => Err(atlasmesh::Error::Parameter(String::new())),
+                            })
+                            .collect()
+                    })
+                });
+            shapes
+                .into_iter()
+                .zip(outcomes)
+                .map(|(s, o)| -> PyResult<Py<PyAny>> {
+                    Ok(match (s, o) {
+                        (Err(e), _) => e.into_value(py).into_any(),
+                        (Ok(_), Err(e)) => to_py(e).into_value(py).into_any(),
+                        (Ok(_), Ok((o, report))) => {
+                            Py::new(py, result(py, a, o, report)?)?.into_any()
+                        }
+                    })
+                })
+                .collect()
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        each!(&self.inner, a, D => format!(
+            "Atlas({D}D, {} points, {} modes, {})",
+            a.atlas.mean.len(),
+            a.atlas.num_modes(),
+            if a.atlas.has_mesh() {
+                format!("mean mesh of {} {} elements", a.atlas.mesh.num_elements(), a.atlas.mesh.kind.name())
+            } else {
+                "no mesh".to_string()
+            }
+        ))
+    }
+}

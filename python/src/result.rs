@@ -1,0 +1,246 @@
+//! What a fit gives back to Python: the morphed FE mesh and the fit's figures.
+
+use crate::arrays;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// An FE mesh: nodes, elements, kind, sets and each element's smallest scaled Jacobian.
+#[pyclass(frozen, module = "atlasmesh")]
+pub struct Mesh {
+    dim: usize,
+    nodes: Vec<f64>,
+    kind: atlasmesh::mesh::ElementKind,
+    connectivity: Vec<usize>,
+    sets: atlasmesh::mesh::MeshSets,
+    scaled_jacobian: Vec<f64>,
+}
+
+impl Mesh {
+    /// The Python mesh of `mesh` with its elements' quality.
+    pub fn of<const D: usize>(
+        mesh: &atlasmesh::mesh::FeMesh<D>,
+        quality: &[atlasmesh::mesh::ElementQuality],
+    ) -> Self {
+        Mesh {
+            dim: D,
+            nodes: mesh.nodes.iter().flatten().copied().collect(),
+            kind: mesh.kind,
+            connectivity: mesh.connectivity.clone(),
+            sets: mesh.sets.clone(),
+            scaled_jacobian: quality.iter().map(|q| q.scaled_jacobian_min).collect(),
+        }
+    }
+
+    fn fe_mesh<const D: usize>(&self) -> atlasmesh::mesh::FeMesh<D> {
+        atlasmesh::mesh::FeMesh {
+            nodes: self
+                .nodes
+                .chunks_exact(D)
+                .map(|c| std::array::from_fn(|d| c[d]))
+                .collect(),
+            kind: self.kind,
+            connectivity: self.connectivity.clone(),
+            sets: self.sets.clone(),
+        }
+    }
+}
+
+#[pymethods]
+impl Mesh {
+    /// Node coordinates, `(N, D)` float64 (data's frame and unit).
+    #[getter]
+    fn nodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        arrays::to_f64(
+            py,
+            self.nodes.iter().copied(),
+            &[self.nodes.len() / self.dim, self.dim],
+        )
+    }
+
+    /// Element connectivity, `(E, k)` int64 (VTK node order).
+    #[getter]
+    fn elements<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let k = self.kind.nodes();
+        arrays::to_i64(
+            py,
+            self.connectivity.iter().copied(),
+            &[self.connectivity.len() / k, k],
+        )
+    }
+
+    /// The element kind: `quad4`, `hex8`, `tri3`, `tet4`, `hex20` or `tet10`.
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.kind.name()
+    }
+
+    /// The VTK cell type number of the elements.
+    #[getter]
+    fn vtk_type(&self) -> u8 {
+        self.kind.vtk_type()
+    }
+
+    /// Each element's smallest corner scaled Jacobian (1 is a perfect element), `(E,)`.
+    #[getter]
+    fn scaled_jacobian<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        arrays::to_f64(
+            py,
+            self.scaled_jacobian.iter().copied(),
+            &[self.scaled_jacobian.len()],
+        )
+    }
+
+    /// The sets: `{"nodes": {name: indices}, "elements": {name: indices}, "surfaces": {name:
+    /// (element, face) pairs}}`.
+    #[getter]
+    fn sets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        let nodes = PyDict::new(py);
+        for (n, v) in &self.sets.node_sets {
+            nodes.set_item(n, arrays::to_i64(py, v.iter().copied(), &[v.len()])?)?;
+        }
+        let elements = PyDict::new(py);
+        for (n, v) in &self.sets.element_sets {
+            elements.set_item(n, arrays::to_i64(py, v.iter().copied(), &[v.len()])?)?;
+        }
+        let surfaces = PyDict::new(py);
+        for (n, v) in &self.sets.surfaces {
+            surfaces.set_item(
+                n,
+                arrays::to_i64(
+                    py,
+                    v.iter().flat_map(|&(e, f)| [e, usize::from(f)]),
+                    &[v.len(), 2],
+                )?,
+            )?;
+        }
+        out.set_item("nodes", nodes)?;
+        out.set_item("elements", elements)?;
+        out.set_item("surfaces", surfaces)?;
+        Ok(out)
+    }
+
+    /// Writes the mesh with its sets; the format from the extension: `.vtu`, `.vtk`, `.inp`
+    /// (Abaqus/CalculiX), `.msh` (Gmsh 4.1), `.feb` (FEBio, 3D).
+    fn write(&self, path: std::path::PathBuf) -> PyResult<()> {
+        fn go<const D: usize>(m: &Mesh, path: &std::path::Path) -> atlasmesh::Result<()> {
+            let mesh = m.fe_mesh::<D>();
+            let q = atlasmesh::mesh::quality::mesh_quality(&mesh);
+            atlasmesh::formats::write_mesh(path, &mesh, None, &q)
+        }
+        if self.dim == 3 {
+            go::<3>(self, &path)
+        } else {
+            go::<2>(self, &path)
+        }
+        .map_err(crate::errors::to_py)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Mesh({} nodes, {} {} elements)",
+            self.nodes.len() / self.dim,
+            self.connectivity.len() / self.kind.nodes(),
+            self.kind.name()
+        )
+    }
+}
+
+/// A subject fitted (Algorithm 1) with its morphed mesh and its measures.
+#[pyclass(frozen, module = "atlasmesh")]
+pub struct FitResult {
+    pub(crate) dim: usize,
+    /// The fit's weights in standard deviations of each mode.
+    pub(crate) sd: Vec<f64>,
+    pub(crate) scale: f64,
+    pub(crate) rotation: Vec<f64>,
+    pub(crate) translation: Vec<f64>,
+    pub(crate) surface: Vec<f64>,
+    pub(crate) facets: Vec<usize>,
+    pub(crate) mesh: Py<Mesh>,
+    pub(crate) report: String,
+}
+
+#[pymethods]
+impl FitResult {
+    /// The fitted instance's weights, in standard deviations of each mode.
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        arrays::to_f64(py, self.sd.iter().copied(), &[self.sd.len()])
+    }
+
+    /// The pose `t_{R,T,s}` (reference frame → subject): `{"scale", "rotation" (D×D),
+    /// "translation" (D,)}`.
+    #[getter]
+    fn pose<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("scale", self.scale)?;
+        d.set_item(
+            "rotation",
+            arrays::to_f64(py, self.rotation.iter().copied(), &[self.dim, self.dim])?,
+        )?;
+        d.set_item(
+            "translation",
+            arrays::to_f64(py, self.translation.iter().copied(), &[self.dim])?,
+        )?;
+        Ok(d)
+    }
+
+    /// The fitted surface (or outline) projected onto the subject, `(N, D)`: point `i` of every
+    /// subject corresponds.
+    #[getter]
+    fn surface<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        arrays::to_f64(
+            py,
+            self.surface.iter().copied(),
+            &[self.surface.len() / self.dim, self.dim],
+        )
+    }
+
+    /// The facets of `surface` (triangles, or outline segments), `(F, D)` int64.
+    #[getter]
+    fn facets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        arrays::to_i64(
+            py,
+            self.facets.iter().copied(),
+            &[self.facets.len() / self.dim, self.dim],
+        )
+    }
+
+    /// The subject's FE mesh: the mean mesh morphed onto it (eq. 9), repaired, checked.
+    #[getter]
+    fn mesh(&self, py: Python<'_>) -> Py<Mesh> {
+        self.mesh.clone_ref(py)
+    }
+
+    /// The measures of `report.json` for this subject, as a dict.
+    #[getter]
+    fn measures<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?.call_method1("loads", (&self.report,))
+    }
+
+    /// A measure of `report.json` by name (`rms_distance`, `success`, `scaled_jacobian_min`,
+    /// ...).
+    fn __getattr__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+        let m = self.measures(py)?;
+        m.get_item(name).map_err(|_| {
+            pyo3::exceptions::PyAttributeError::new_err(format!(
+                "FitResult has no attribute {name:?}"
+            ))
+        })
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let v = |k: &str| {
+            self.__getattr__(py, k)
+                .map(|x| x.to_string())
+                .unwrap_or_default()
+        };
+        format!(
+            "FitResult(rms_distance={}, success={}, scaled_jacobian_min={})",
+            v("rms_distance"),
+            v("success"),
+            v("scaled_jacobian_min")
+        )
+    }
+}

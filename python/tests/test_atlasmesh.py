@@ -1,0 +1,136 @@
+"""atlasmesh from Python as its users run it: arrays in, arrays and files out, the same
+figures as the Rust tests, the meshes read back by meshio (and PyVista when installed)."""
+
+import time
+
+import numpy as np
+import pytest
+
+import atlasmesh
+
+
+def ellipses(n=12, points=120, seed=3):
+    """Outlines in correspondence: ellipses of random axes, shapes of a (points, facets)."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 2 * np.pi, points, endpoint=False)
+    facets = np.stack([np.arange(points), (np.arange(points) + 1) % points], axis=1)
+    out = []
+    for _ in range(n):
+        a, b = 1 + 0.2 * rng.standard_normal(), 0.6 + 0.1 * rng.standard_normal()
+        c, d = 0.1 * rng.standard_normal(), 0.05 * rng.standard_normal()
+        x = a * np.cos(t) + c * np.cos(2 * t)
+        y = b * np.sin(t) + d * np.sin(3 * t)
+        pts = np.stack([x, y], axis=1) * 40.0
+        out.append((pts, facets))
+    return out
+
+
+def test_a_2d_atlas_from_arrays_samples_projects_and_fits():
+    shapes = ellipses()
+    atlas = atlasmesh.Atlas.build(shapes, modes=3)
+    assert atlas.dimension == 2
+    assert atlas.mean.shape == (120, 2)
+    assert atlas.modes.shape == (3, 120, 2)
+    assert np.all(np.diff(atlas.variances) <= 0) and np.all(atlas.variances > 0)
+    # In the data's unit: the mean is about as large as the shapes (80 across).
+    extent = np.ptp(atlas.mean, axis=0).max()
+    assert 60 < extent < 100, extent
+    # project(instance(w)) gives back the instance and w.
+    shape = atlas.instance([1.0, -0.5])
+    back, sd = atlas.project(shape)
+    assert np.abs(back - shape).max() < 1e-9 * extent
+    assert np.allclose(sd, [1.0, -0.5, 0.0], atol=1e-9)
+    # Samples: reproducible, within the bound.
+    s1, w1 = atlas.sample(5, seed=7, max_sd=2)
+    s2, w2 = atlas.sample(5, seed=7, max_sd=2)
+    assert s1.shape == (5, 120, 2) and w1.shape == (5, 3)
+    assert np.array_equal(s1, s2) and np.abs(w1).max() <= 2
+    # A fit of a held-out ellipse: the mesh comes back as arrays, valid.
+    held = ellipses(1, seed=11)[0]
+    r = atlas.fit(*held)
+    mesh = r.mesh
+    assert mesh.kind == "quad4"
+    assert mesh.nodes.shape[1] == 2 and mesh.elements.shape[1] == 4
+    assert mesh.scaled_jacobian.min() > 0.3
+    assert r.success and r.rms_distance < 0.01 * extent
+    assert r.weights.shape == (3,)
+    assert r.pose["rotation"].shape == (2, 2)
+    assert r.surface.shape == (120, 2)
+
+
+def test_errors_are_one_family_with_the_message():
+    shapes = ellipses()
+    with pytest.raises(atlasmesh.BadInputError, match="at least 3"):
+        atlasmesh.Atlas.build(shapes[:2])
+    with pytest.raises(atlasmesh.IoError, match="no-such-file"):
+        atlasmesh.Atlas.load("no-such-file.safetensors")
+    atlas = atlasmesh.Atlas.build(shapes, modes=2)
+    with pytest.raises(atlasmesh.Error, match="weights for a model of 2 modes"):
+        atlas.instance([1, 2, 3])
+    bad = shapes[0][0].copy()
+    bad[3] = np.nan
+    with pytest.raises(atlasmesh.BadInputError, match="NaN"):
+        atlas.fit(bad, shapes[0][1])
+    assert issubclass(atlasmesh.InvalidMeshError, atlasmesh.Error)
+    # fit_many: a failing subject is its exception, the others their results.
+    results = atlas.fit_many([shapes[1], (bad, shapes[0][1]), shapes[2]])
+    assert isinstance(results[0], atlasmesh.FitResult)
+    assert isinstance(results[1], atlasmesh.BadInputError)
+    assert isinstance(results[2], atlasmesh.FitResult)
+
+
+def test_save_load_and_mesh_files(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    atlas = atlasmesh.Atlas.build(ellipses(), modes=3)
+    atlas.save(str(tmp_path / "a.safetensors"))
+    again = atlasmesh.Atlas.load(str(tmp_path / "a.safetensors"))
+    assert np.array_equal(again.mean, atlas.mean)
+    r = again.fit(*ellipses(1, seed=5)[0])
+    for ext in ["vtu", "inp", "msh"]:
+        f = tmp_path / f"m.{ext}"
+        r.mesh.write(str(f))
+        m = meshio.read(f)
+        assert len(m.points) == len(r.mesh.nodes)
+        assert np.abs(m.points[:, :2] - r.mesh.nodes).max() < 1e-9
+        assert sum(len(c.data) for c in m.cells) == len(r.mesh.elements)
+    m = r.mesh.to_meshio()
+    assert m.cells[0].type == "quad"
+    assert len(m.cell_data["scaled_jacobian"][0]) == len(r.mesh.elements)
+
+
+def test_hands_leave_one_out_as_the_rust_test(data):
+    """Section 6.1 with the paper's settings (2001 points, 11 modes): every morphed mesh
+    valid, at least 36 of the 40 fits within 1 % two-way RMS of their subject's diagonal."""
+    hands = atlasmesh.read_shapes(
+        str(data / "imm-hands-2d/hands_long.csv"), closed=False, resample=2001
+    )
+    assert len(hands) == 40
+    shapes = [(p, f) for _, p, f in hands]
+    close = 0
+    for i, (p, f) in enumerate(shapes):
+        atlas = atlasmesh.Atlas.build(shapes[:i] + shapes[i + 1 :], modes=11)
+        r = atlas.fit(p, f)
+        assert r.inverted_elements == 0
+        assert r.mesh.scaled_jacobian.min() > 0
+        close += r.rms_distance_relative < 0.01
+    assert close >= 36, close
+
+
+def test_a_femur_fit_from_arrays(data, femur_atlas):
+    """A femur outside the atlas, read by meshio into arrays, fitted: the mesh back as arrays,
+    valid, within the Rust test's bound of its subject; fit_many agrees with fit."""
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(data / "knee-distal-femur-synthetic-3d/femur/S031_Femur.ply")
+    points, facets = m.points.astype(float), m.cells_dict["triangle"]
+    start = time.perf_counter()
+    r = femur_atlas.fit(points, facets)
+    seconds = time.perf_counter() - start
+    print(f"femur fit through Python, arrays in and out: {seconds:.3f} s")
+    assert r.mesh.kind == "hex8"
+    assert r.mesh.scaled_jacobian.min() >= 0.2
+    assert r.inverted_elements == 0 and r.success
+    edge = np.median(np.linalg.norm(points[facets[:, 0]] - points[facets[:, 1]], axis=1))
+    assert r.rms_distance <= 0.5 * edge, (r.rms_distance, edge)
+    assert r.mesh.nodes.shape == (len(r.mesh.nodes), 3)
+    many = femur_atlas.fit_many([(points, facets)], jobs=1)
+    assert np.allclose(many[0].mesh.nodes, r.mesh.nodes, atol=1e-9)

@@ -13,32 +13,119 @@ use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
-/// An atlas of one dimension with its morph, factorized on first use.
-struct Held<const D: usize> {
-    atlas: RustAtlas<D>,
+type Fitter2<'a> = Option<atlasmesh::fit::Fitter<'a, 2>>;
+type Fitter3<'a> = Option<atlasmesh::fit::Fitter<'a, 3>>;
+
+self_cell::self_cell!(
+    /// A 2D atlas with its fitter (which borrows it), made once for every fit.
+    struct Cell2 {
+        owner: RustAtlas<2>,
+        #[not_covariant]
+        dependent: Fitter2,
+    }
+);
+
+self_cell::self_cell!(
+    /// A 3D atlas with its fitter (which borrows it), made once for every fit.
+    struct Cell3 {
+        owner: RustAtlas<3>,
+        #[not_covariant]
+        dependent: Fitter3,
+    }
+);
+
+/// An atlas with its fitter (none for a model of point sets, which has no surface to fit).
+trait Cell<const D: usize>: Send + Sync {
+    fn atlas(&self) -> &RustAtlas<D>;
+    fn with_fitter<R>(
+        &self,
+        f: impl FnOnce(&RustAtlas<D>, Option<&atlasmesh::fit::Fitter<'_, D>>) -> R,
+    ) -> R;
+}
+
+impl Cell<2> for Cell2 {
+    fn atlas(&self) -> &RustAtlas<2> {
+        self.borrow_owner()
+    }
+    fn with_fitter<R>(
+        &self,
+        f: impl FnOnce(&RustAtlas<2>, Option<&atlasmesh::fit::Fitter<'_, 2>>) -> R,
+    ) -> R {
+        self.with_dependent(|a, fitter| f(a, fitter.as_ref()))
+    }
+}
+
+impl Cell<3> for Cell3 {
+    fn atlas(&self) -> &RustAtlas<3> {
+        self.borrow_owner()
+    }
+    fn with_fitter<R>(
+        &self,
+        f: impl FnOnce(&RustAtlas<3>, Option<&atlasmesh::fit::Fitter<'_, 3>>) -> R,
+    ) -> R {
+        self.with_dependent(|a, fitter| f(a, fitter.as_ref()))
+    }
+}
+
+/// An atlas of one dimension with its fitter and its morph, factorized on first use.
+struct Held<C, const D: usize> {
+    cell: C,
     morpher: OnceLock<atlasmesh::mesh::Morpher<D>>,
 }
 
-impl<const D: usize> Held<D> {
-    fn new(atlas: RustAtlas<D>) -> Self {
+impl Held<Cell2, 2> {
+    fn new(atlas: RustAtlas<2>) -> Self {
         Held {
-            atlas,
+            cell: Cell2::new(atlas, |a| {
+                (!a.facets.is_empty()).then(|| atlasmesh::fit::Fitter::new(a))
+            }),
             morpher: OnceLock::new(),
         }
+    }
+}
+
+impl Held<Cell3, 3> {
+    fn new(atlas: RustAtlas<3>) -> Self {
+        Held {
+            cell: Cell3::new(atlas, |a| {
+                (!a.facets.is_empty()).then(|| atlasmesh::fit::Fitter::new(a))
+            }),
+            morpher: OnceLock::new(),
+        }
+    }
+}
+
+impl<C: Cell<D>, const D: usize> Held<C, D> {
+    fn atlas(&self) -> &RustAtlas<D> {
+        self.cell.atlas()
     }
 
     fn morpher(&self, params: &RunParams) -> atlasmesh::Result<&atlasmesh::mesh::Morpher<D>> {
         if let Some(m) = self.morpher.get() {
             return Ok(m);
         }
-        let m = self.atlas.morpher(&params.morph)?;
+        let m = self.atlas().morpher(&params.morph)?;
         Ok(self.morpher.get_or_init(|| m))
+    }
+
+    /// Runs `f` with the atlas's fitter, or refuses an atlas without facets.
+    fn with_fitter<R>(
+        &self,
+        f: impl FnOnce(&atlasmesh::fit::Fitter<'_, D>) -> atlasmesh::Result<R>,
+    ) -> atlasmesh::Result<R> {
+        self.cell.with_fitter(|_, fitter| match fitter {
+            Some(fitter) => f(fitter),
+            None => Err(atlasmesh::Error::Parameter(
+                "this atlas is a model of point sets (no facets): there is no surface to fit"
+                    .into(),
+            )),
+        })
     }
 }
 
 enum Inner {
-    Two(Held<2>),
-    Three(Held<3>),
+    Two(Held<Cell2, 2>),
+    Three(Held<Cell3, 3>),
 }
 
 /// Runs `$body` with `$a` the `Held<D>` of either dimension and `D` its dimension.
@@ -205,22 +292,23 @@ fn run_params(partial: bool, grid: usize, alpha: f64) -> PyResult<RunParams> {
 }
 
 /// The fit of one subject (Algorithm 1, eq. 9, repair), as the Python result.
-fn fit_one<const D: usize>(
-    held: &Held<D>,
+fn fit_one<C: Cell<D>, const D: usize>(
+    held: &Held<C, D>,
     shape: &Shape<D>,
     params: &RunParams,
 ) -> atlasmesh::Result<(atlasmesh::study::SubjectOutcome<D>, String)> {
     let morpher = held.morpher(params)?;
-    let fitter = atlasmesh::fit::Fitter::new(&held.atlas);
-    let o = atlasmesh::study::fit_subject(&held.atlas, &fitter, morpher, shape, params)?;
+    let o = held.with_fitter(|fitter| {
+        atlasmesh::study::fit_subject(held.atlas(), fitter, morpher, shape, params)
+    })?;
     let report = serde_json::to_string(&o.report)
         .map_err(|e| atlasmesh::Error::Numerical(format!("report: {e}")))?;
     Ok((o, report))
 }
 
-fn result<const D: usize>(
+fn result<C: Cell<D>, const D: usize>(
     py: Python<'_>,
-    held: &Held<D>,
+    held: &Held<C, D>,
     o: atlasmesh::study::SubjectOutcome<D>,
     report: String,
 ) -> PyResult<FitResult> {
@@ -231,15 +319,65 @@ fn result<const D: usize>(
             .fit
             .weights
             .iter()
-            .zip(&held.atlas.eigenvalues)
+            .zip(&held.atlas().eigenvalues)
             .map(|(w, l)| w / l.sqrt())
             .collect(),
         scale: t.s,
         rotation: t.r.iter().flatten().copied().collect(),
         translation: t.t.to_vec(),
         surface: o.fit.projected.iter().flat_map(|p| p.point).collect(),
-        facets: held.atlas.facets.iter().flatten().copied().collect(),
-        mesh: Py::new(py, Mesh::of(&o.mesh, &o.quality))?,
+        facets: held.atlas().facets.iter().flatten().copied().collect(),
+        mesh: Some(Py::new(py, Mesh::of(&o.mesh, &o.quality))?),
+        report,
+    })
+}
+
+/// The fit alone (Algorithm 1, eq. 5-8, projected onto the subject), without the morph: its
+/// weights, pose and surface, and its measures (`rms_distance`, `rms_distance_relative`,
+/// `e_d`, `iterations`, `converged`, `fit_seconds`).
+fn fit_only<C: Cell<D>, const D: usize>(
+    py: Python<'_>,
+    held: &Held<C, D>,
+    shape: &Shape<D>,
+    params: &RunParams,
+) -> PyResult<FitResult> {
+    let (fit, seconds, rms) = py
+        .detach(|| -> atlasmesh::Result<_> {
+            let index = atlasmesh::geometry::ClosestPointIndex::from_shape(shape);
+            let start = std::time::Instant::now();
+            let fit = held.with_fitter(|fitter| fitter.fit(shape, &index, &params.fit))?;
+            let seconds = start.elapsed().as_secs_f64();
+            let rms =
+                atlasmesh::eval::two_way_rms(&fit.instance, &held.atlas().facets, shape, &index);
+            Ok((fit, seconds, rms))
+        })
+        .map_err(to_py)?;
+    let diagonal = shape.bbox_diagonal();
+    let report = serde_json::json!({
+        "name": shape.name,
+        "rms_distance": rms,
+        "rms_distance_relative": rms / diagonal,
+        "e_d": fit.e_d_history.last().copied().unwrap_or(f64::NAN),
+        "iterations": fit.iterations,
+        "converged": fit.converged,
+        "fit_seconds": seconds,
+    })
+    .to_string();
+    let t = fit.similarity;
+    Ok(FitResult {
+        dim: D,
+        sd: fit
+            .weights
+            .iter()
+            .zip(&held.atlas().eigenvalues)
+            .map(|(w, l)| w / l.sqrt())
+            .collect(),
+        scale: t.s,
+        rotation: t.r.iter().flatten().copied().collect(),
+        translation: t.t.to_vec(),
+        surface: fit.projected.iter().flat_map(|p| p.point).collect(),
+        facets: held.atlas().facets.iter().flatten().copied().collect(),
+        mesh: None,
         report,
     })
 }
@@ -250,8 +388,12 @@ impl Atlas {
     #[staticmethod]
     fn load(path: PathBuf) -> PyResult<Self> {
         let inner = match atlasmesh::formats::atlas_dimension(&path).map_err(to_py)? {
-            3 => Inner::Three(Held::new(RustAtlas::load(&path).map_err(to_py)?)),
-            _ => Inner::Two(Held::new(RustAtlas::load(&path).map_err(to_py)?)),
+            3 => Inner::Three(Held::<Cell3, 3>::new(
+                RustAtlas::load(&path).map_err(to_py)?,
+            )),
+            _ => Inner::Two(Held::<Cell2, 2>::new(
+                RustAtlas::load(&path).map_err(to_py)?,
+            )),
         };
         Ok(Atlas { inner })
     }
@@ -293,7 +435,7 @@ impl Atlas {
             params: &RunParams,
             register: bool,
             mesh: bool,
-        ) -> PyResult<Held<D>> {
+        ) -> PyResult<RustAtlas<D>> {
             let shapes: Vec<Shape<D>> = list
                 .iter()
                 .enumerate()
@@ -317,21 +459,25 @@ impl Atlas {
                 } else {
                     RustAtlas::build_model(&shapes, &params.atlas)?
                 };
-                Ok(Held::new(atlas))
+                Ok(atlas)
             })
             .map_err(to_py)
         }
         let inner = if dim == 3 {
-            Inner::Three(go::<3>(py, shapes, &params, register, mesh)?)
+            Inner::Three(Held::<Cell3, 3>::new(go::<3>(
+                py, shapes, &params, register, mesh,
+            )?))
         } else {
-            Inner::Two(go::<2>(py, shapes, &params, register, mesh)?)
+            Inner::Two(Held::<Cell2, 2>::new(go::<2>(
+                py, shapes, &params, register, mesh,
+            )?))
         };
         Ok(Atlas { inner })
     }
 
     /// Writes the atlas (safetensors; `atlasmesh` reads it back).
     fn save(&self, path: PathBuf) -> PyResult<()> {
-        each!(&self.inner, a, D => a.atlas.save(&path)).map_err(to_py)
+        each!(&self.inner, a, D => a.atlas().save(&path)).map_err(to_py)
     }
 
     /// 2 or 3.
@@ -343,13 +489,13 @@ impl Atlas {
     /// The mean shape `S_bar`, `(N, D)`, in the data's frame and unit.
     #[getter]
     fn mean<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.mean)))
+        each!(&self.inner, a, D => arrays::of_points::<D>(py, &a.atlas().to_data_frame(&a.atlas().mean)))
     }
 
     /// The facets of the shapes (triangles or segments), `(F, D)` int64.
     #[getter]
     fn facets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::to_i64(py, a.atlas.facets.iter().flatten().copied(), &[a.atlas.facets.len(), D]))
+        each!(&self.inner, a, D => arrays::to_i64(py, a.atlas().facets.iter().flatten().copied(), &[a.atlas().facets.len(), D]))
     }
 
     /// The modes `Psi`, `(m, N, D)`: orthonormal directions of the shape space (the
@@ -357,10 +503,10 @@ impl Atlas {
     #[getter]
     fn modes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         each!(&self.inner, a, D => {
-            let (n, m) = (a.atlas.mean.len(), a.atlas.num_modes());
+            let (n, m) = (a.atlas().mean.len(), a.atlas().num_modes());
             arrays::to_f64(
                 py,
-                (0..m).flat_map(|k| (0..n * D).map(move |r| (k, r))).map(|(k, r)| a.atlas.modes[(r, k)]),
+                (0..m).flat_map(|k| (0..n * D).map(move |r| (k, r))).map(|(k, r)| a.atlas().modes[(r, k)]),
                 &[m, n, D],
             )
         })
@@ -370,8 +516,8 @@ impl Atlas {
     #[getter]
     fn variances<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         each!(&self.inner, a, D => {
-            let s = a.atlas.data_frame.map_or(1.0, |t| t.s);
-            arrays::to_f64(py, a.atlas.eigenvalues.iter().map(|l| l * s * s), &[a.atlas.num_modes()])
+            let s = a.atlas().data_frame.map_or(1.0, |t| t.s);
+            arrays::to_f64(py, a.atlas().eigenvalues.iter().map(|l| l * s * s), &[a.atlas().num_modes()])
         })
     }
 
@@ -379,17 +525,17 @@ impl Atlas {
     /// training PCA's modes).
     #[getter]
     fn cumulative_variance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::to_f64(py, a.atlas.cumulative_variance.iter().copied(), &[a.atlas.cumulative_variance.len()]))
+        each!(&self.inner, a, D => arrays::to_f64(py, a.atlas().cumulative_variance.iter().copied(), &[a.atlas().cumulative_variance.len()]))
     }
 
     /// The atlas's FE mesh of the mean (data's frame and unit), or None (`mesh=False`).
     #[getter]
     fn mean_mesh(&self, py: Python<'_>) -> PyResult<Option<Py<Mesh>>> {
         each!(&self.inner, a, D => {
-            if !a.atlas.has_mesh() {
+            if !a.atlas().has_mesh() {
                 return Ok(None);
             }
-            let m = a.atlas.mesh.with_nodes(a.atlas.to_data_frame(&a.atlas.mesh.nodes));
+            let m = a.atlas().mesh.with_nodes(a.atlas().to_data_frame(&a.atlas().mesh.nodes));
             let q = atlasmesh::mesh::quality::mesh_quality(&m);
             Ok(Some(Py::new(py, Mesh::of(&m, &q))?))
         })
@@ -404,15 +550,15 @@ impl Atlas {
     ) -> PyResult<Bound<'py, PyAny>> {
         let sd = arrays::vector(sd, "sd")?;
         each!(&self.inner, a, D => {
-            let m = a.atlas.num_modes();
+            let m = a.atlas().num_modes();
             if sd.len() > m || sd.iter().any(|v| !v.is_finite()) {
                 return Err(crate::errors::BadInputError::new_err(format!(
                     "{} weights for a model of {m} modes (finite numbers of standard deviations)",
                     sd.len()
                 )));
             }
-            let w: Vec<f64> = (0..m).map(|k| sd.get(k).copied().unwrap_or(0.0) * a.atlas.eigenvalues[k].sqrt()).collect();
-            arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.instance(&w)))
+            let w: Vec<f64> = (0..m).map(|k| sd.get(k).copied().unwrap_or(0.0) * a.atlas().eigenvalues[k].sqrt()).collect();
+            arrays::of_points::<D>(py, &a.atlas().to_data_frame(&a.atlas().instance(&w)))
         })
     }
 
@@ -427,18 +573,18 @@ impl Atlas {
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         each!(&self.inner, a, D => {
             let x = arrays::points::<D>(points, "points")?;
-            if x.len() != a.atlas.mean.len() {
+            if x.len() != a.atlas().mean.len() {
                 return Err(crate::errors::BadInputError::new_err(format!(
                     "{} points for a model of {}",
                     x.len(),
-                    a.atlas.mean.len()
+                    a.atlas().mean.len()
                 )));
             }
-            let t = atlasmesh::model::fit_similarity(&a.atlas.mean, &x, None);
+            let t = atlasmesh::model::fit_similarity(&a.atlas().mean, &x, None);
             let inside: Vec<Point<D>> = x.iter().map(|p| t.apply_inverse(p)).collect();
-            let w = a.atlas.coefficients(&inside);
-            let p: Vec<Point<D>> = a.atlas.instance(&w).iter().map(|q| t.apply(q)).collect();
-            let sd: Vec<f64> = w.iter().zip(&a.atlas.eigenvalues).map(|(w, l)| w / l.sqrt()).collect();
+            let w = a.atlas().coefficients(&inside);
+            let p: Vec<Point<D>> = a.atlas().instance(&w).iter().map(|q| t.apply(q)).collect();
+            let sd: Vec<f64> = w.iter().zip(&a.atlas().eigenvalues).map(|(w, l)| w / l.sqrt()).collect();
             Ok((arrays::of_points::<D>(py, &p)?, arrays::to_f64(py, sd.iter().copied(), &[sd.len()])?))
         })
     }
@@ -455,15 +601,15 @@ impl Atlas {
         max_sd: Option<f64>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         each!(&self.inner, a, D => {
-            let specs = atlasmesh::study::sample_specs(&a.atlas, n, seed, max_sd).map_err(to_py)?;
-            let m = a.atlas.num_modes();
-            let mut pts = Vec::with_capacity(n * a.atlas.mean.len() * D);
+            let specs = atlasmesh::study::sample_specs(a.atlas(), n, seed, max_sd).map_err(to_py)?;
+            let m = a.atlas().num_modes();
+            let mut pts = Vec::with_capacity(n * a.atlas().mean.len() * D);
             for s in &specs {
-                let w: Vec<f64> = (0..m).map(|k| s.sd[k] * a.atlas.eigenvalues[k].sqrt()).collect();
-                pts.extend(a.atlas.to_data_frame(&a.atlas.instance(&w)).iter().flatten().copied());
+                let w: Vec<f64> = (0..m).map(|k| s.sd[k] * a.atlas().eigenvalues[k].sqrt()).collect();
+                pts.extend(a.atlas().to_data_frame(&a.atlas().instance(&w)).iter().flatten().copied());
             }
             Ok((
-                arrays::to_f64(py, pts, &[n, a.atlas.mean.len(), D])?,
+                arrays::to_f64(py, pts, &[n, a.atlas().mean.len(), D])?,
                 arrays::to_f64(py, specs.iter().flat_map(|s| s.sd.clone()), &[n, m])?,
             ))
         })
@@ -473,8 +619,10 @@ impl Atlas {
     /// the model instance that matches it (Algorithm 1, eq. 5-8), projected onto it, and the
     /// mean mesh morphed onto it by the B-spline FFD of eq. 9 (`grid` control points per
     /// axis, smoothing `alpha`), repaired and checked. `partial=True` for a subject that
-    /// misses parts. The GIL is released while it runs.
-    #[pyo3(signature = (subject, facets=None, partial=false, grid=20, alpha=50.0))]
+    /// misses parts; `mesh=False` for the fit alone (no morph: `mesh` is None). The GIL is
+    /// released while it runs.
+    #[pyo3(signature = (subject, facets=None, partial=false, grid=20, alpha=50.0, mesh=true))]
+    #[allow(clippy::too_many_arguments)]
     fn fit(
         &self,
         py: Python<'_>,
@@ -483,6 +631,7 @@ impl Atlas {
         partial: bool,
         grid: usize,
         alpha: f64,
+        mesh: bool,
     ) -> PyResult<FitResult> {
         let params = run_params(partial, grid, alpha)?;
         each!(&self.inner, a, D => {
@@ -490,6 +639,9 @@ impl Atlas {
                 Some(f) => shape_of::<D>(&pyo3::types::PyTuple::new(py, [subject, f])?.into_any(), 0)?,
                 None => shape_of::<D>(subject, 0)?,
             };
+            if !mesh {
+                return fit_only(py, a, &shape, &params);
+            }
             let (o, report) = py.detach(|| fit_one(a, &shape, &params)).map_err(to_py)?;
             result(py, a, o, report)
         })
@@ -550,10 +702,10 @@ impl Atlas {
     fn __repr__(&self) -> String {
         each!(&self.inner, a, D => format!(
             "Atlas({D}D, {} points, {} modes, {})",
-            a.atlas.mean.len(),
-            a.atlas.num_modes(),
-            if a.atlas.has_mesh() {
-                format!("mean mesh of {} {} elements", a.atlas.mesh.num_elements(), a.atlas.mesh.kind.name())
+            a.atlas().mean.len(),
+            a.atlas().num_modes(),
+            if a.atlas().has_mesh() {
+                format!("mean mesh of {} {} elements", a.atlas().mesh.num_elements(), a.atlas().mesh.kind.name())
             } else {
                 "no mesh".to_string()
             }

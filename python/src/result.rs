@@ -157,7 +157,7 @@ pub struct FitResult {
     pub(crate) translation: Vec<f64>,
     pub(crate) surface: Vec<f64>,
     pub(crate) facets: Vec<usize>,
-    pub(crate) mesh: Py<Mesh>,
+    pub(crate) mesh: Option<Py<Mesh>>,
     pub(crate) report: String,
 }
 
@@ -207,10 +207,11 @@ impl FitResult {
         )
     }
 
-    /// The subject's FE mesh: the mean mesh morphed onto it (eq. 9), repaired, checked.
+    /// The subject's FE mesh: the mean mesh morphed onto it (eq. 9), repaired, checked
+    /// (None for a fit made with `mesh=False`).
     #[getter]
-    fn mesh(&self, py: Python<'_>) -> Py<Mesh> {
-        self.mesh.clone_ref(py)
+    fn mesh(&self, py: Python<'_>) -> Option<Py<Mesh>> {
+        self.mesh.as_ref().map(|m| m.clone_ref(py))
     }
 
     /// The measures of `report.json` for this subject, as a dict.

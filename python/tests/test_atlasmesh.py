@@ -134,3 +134,23 @@ def test_a_femur_fit_from_arrays(data, femur_atlas):
     assert r.mesh.nodes.shape == (len(r.mesh.nodes), 3)
     many = femur_atlas.fit_many([(points, facets)], jobs=1)
     assert np.allclose(many[0].mesh.nodes, r.mesh.nodes, atol=1e-9)
+
+
+def test_a_femur_mesh_read_back_by_pyvista(data, femur_atlas, tmp_path):
+    """The hexahedral mesh written from Python, read by PyVista (VTK): the same nodes, cells
+    and scaled Jacobians; the fit alone (`mesh=False`) gives the same surface as the whole."""
+    pv = pytest.importorskip("pyvista")
+    _, points, facets = atlasmesh.read_shapes(
+        str(data / "knee-distal-femur-synthetic-3d/femur/S032_Femur.ply")
+    )[0]
+    r = femur_atlas.fit(points, facets)
+    f = tmp_path / "femur.vtu"
+    r.mesh.write(str(f))
+    grid = pv.read(f)
+    assert grid.n_points == len(r.mesh.nodes) and grid.n_cells == len(r.mesh.elements)
+    assert np.abs(np.asarray(grid.points) - r.mesh.nodes).max() < 1e-9
+    assert np.allclose(grid.cell_data["scaled_jacobian_min"], r.mesh.scaled_jacobian)
+    alone = femur_atlas.fit(points, facets, mesh=False)
+    assert alone.mesh is None
+    assert np.allclose(alone.surface, r.surface, atol=1e-9)
+    assert abs(alone.rms_distance - r.rms_distance) < 1e-9

@@ -306,30 +306,40 @@ fn fit_one<C: Cell<D>, const D: usize>(
     Ok((o, report))
 }
 
+/// The Python result of a fit `fit` of `atlas`, with its mesh and measures (JSON).
+fn fit_result<const D: usize>(
+    atlas: &RustAtlas<D>,
+    fit: &atlasmesh::fit::FitResult<D>,
+    mesh: Option<Py<Mesh>>,
+    report: String,
+) -> FitResult {
+    let t = fit.similarity;
+    FitResult {
+        dim: D,
+        sd: fit
+            .weights
+            .iter()
+            .zip(&atlas.eigenvalues)
+            .map(|(w, l)| w / l.sqrt())
+            .collect(),
+        scale: t.s,
+        rotation: t.r.iter().flatten().copied().collect(),
+        translation: t.t.to_vec(),
+        surface: fit.projected.iter().flat_map(|p| p.point).collect(),
+        facets: atlas.facets.iter().flatten().copied().collect(),
+        mesh,
+        report,
+    }
+}
+
 fn result<C: Cell<D>, const D: usize>(
     py: Python<'_>,
     held: &Held<C, D>,
     o: atlasmesh::study::SubjectOutcome<D>,
     report: String,
 ) -> PyResult<FitResult> {
-    let t = o.fit.similarity;
-    Ok(FitResult {
-        dim: D,
-        sd: o
-            .fit
-            .weights
-            .iter()
-            .zip(&held.atlas().eigenvalues)
-            .map(|(w, l)| w / l.sqrt())
-            .collect(),
-        scale: t.s,
-        rotation: t.r.iter().flatten().copied().collect(),
-        translation: t.t.to_vec(),
-        surface: o.fit.projected.iter().flat_map(|p| p.point).collect(),
-        facets: held.atlas().facets.iter().flatten().copied().collect(),
-        mesh: Some(Py::new(py, Mesh::of(&o.mesh, &o.quality))?),
-        report,
-    })
+    let mesh = Py::new(py, Mesh::of(&o.mesh, &o.quality))?;
+    Ok(fit_result(held.atlas(), &o.fit, Some(mesh), report))
 }
 
 /// The fit alone (Algorithm 1, eq. 5-8, projected onto the subject), without the morph: its
@@ -363,23 +373,7 @@ fn fit_only<C: Cell<D>, const D: usize>(
         "fit_seconds": seconds,
     })
     .to_string();
-    let t = fit.similarity;
-    Ok(FitResult {
-        dim: D,
-        sd: fit
-            .weights
-            .iter()
-            .zip(&held.atlas().eigenvalues)
-            .map(|(w, l)| w / l.sqrt())
-            .collect(),
-        scale: t.s,
-        rotation: t.r.iter().flatten().copied().collect(),
-        translation: t.t.to_vec(),
-        surface: fit.projected.iter().flat_map(|p| p.point).collect(),
-        facets: held.atlas().facets.iter().flatten().copied().collect(),
-        mesh: None,
-        report,
-    })
+    Ok(fit_result(held.atlas(), &fit, None, report))
 }
 
 #[pymethods]

@@ -61,6 +61,19 @@ impl Deck {
             Deck::Feb(d) => d.with_nodes(nodes),
         }
     }
+
+    /// Writes [`Deck::with_nodes`] as `dir/BASE_deck.EXT` (through a temporary and a rename);
+    /// returns the file's name.
+    pub fn write_with_nodes<const D: usize>(
+        &self,
+        nodes: &[Point<D>],
+        dir: &std::path::Path,
+        base: &str,
+    ) -> Result<String> {
+        let name = format!("{base}_deck.{}", self.extension());
+        crate::formats::write_atomic(&dir.join(&name), self.with_nodes(nodes)?.as_bytes())?;
+        Ok(name)
+    }
 }
 
 /// An FEBio 4.0 model: its text and the mesh of its `Mesh` section (`Nodes`, `Elements`).

@@ -6,9 +6,7 @@ use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-}
+use super::schema::f64_or_nan;
 
 /// One subject fitted to its landmarks alone.
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -276,7 +276,10 @@ pub struct Report {
 
 /// JSON has no NaN: serde_json writes it as `null`; read `null` back as NaN (a median of no
 /// subjects, a measure that could not be taken).
-fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+/// A number that `report.json` may hold as `null` (NaN and infinities are written so).
+pub(super) fn f64_or_nan<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 

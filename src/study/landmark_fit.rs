@@ -9,7 +9,7 @@ use super::write_subject::file_name;
 use crate::error::{Error, Result};
 use crate::fit::fit_landmarks;
 use crate::formats::landmarks::{Landmark, NamedLandmark};
-use crate::formats::{ShapeFormat, write_atomic, write_mesh, write_shape};
+use crate::formats::{ShapeFormat, write_mesh, write_shape};
 use crate::geometry::{ClosestPointIndex, Point, Shape};
 use crate::mesh::quality::summarize;
 use crate::mesh::{Correspondence, Morpher, repair_with_quality};
@@ -163,9 +163,7 @@ pub fn write_landmark_fit<const D: usize>(
             files.push(file);
         }
         if let Some(deck) = &params.deck {
-            let file = format!("{base}_deck.{}", deck.extension());
-            write_atomic(&out.join(&file), deck.with_nodes(&mesh.nodes)?.as_bytes())?;
-            files.push(file);
+            files.push(deck.write_with_nodes(&mesh.nodes, out, &base)?);
         }
         (elements, sj, inverted) = (
             mesh.num_elements(),

@@ -205,12 +205,7 @@ pub fn write_subject<const D: usize>(
         files.push(mesh_file);
     }
     if let Some(deck) = &params.deck {
-        let deck_file = format!("{base}_deck.{}", deck.extension());
-        write_atomic(
-            &out.join(&deck_file),
-            deck.with_nodes(&mesh.nodes)?.as_bytes(),
-        )?;
-        files.push(deck_file);
+        files.push(deck.write_with_nodes(&mesh.nodes, out, &base)?);
     }
     let fitted = Shape {
         name: subject.name.clone(),

@@ -154,3 +154,29 @@ def test_a_femur_mesh_read_back_by_pyvista(data, femur_atlas, tmp_path):
     assert alone.mesh is None
     assert np.allclose(alone.surface, r.surface, atol=1e-9)
     assert abs(alone.rms_distance - r.rms_distance) < 1e-9
+
+
+def test_femur_leave_one_out_as_the_rust_test(data):
+    """Section 6.2 as `tests/it/femur.rs` checks it: each of the 30 femurs fitted by the
+    model of the other 29 (shape models alone, `mesh=False`; the fit alone): median two-way
+    RMS within half the median edge (1.85 mm) with 15 modes, within 0.6 mm with 5."""
+    femurs = [
+        atlasmesh.read_shapes(
+            str(data / "knee-distal-femur-synthetic-3d/femur" / f"S{k:03d}_Femur.ply")
+        )[0][1:]
+        for k in range(1, 31)
+    ]
+    points, facets = femurs[0]
+    edge = np.median(np.linalg.norm(points[facets[:, 0]] - points[facets[:, 1]], axis=1))
+    assert abs(edge - 1.85) < 0.1, edge
+    for modes, bound in [(15, 0.5 * edge), (5, 0.6)]:
+        rms = []
+        for i, (p, f) in enumerate(femurs):
+            model = atlasmesh.Atlas.build(femurs[:i] + femurs[i + 1 :], modes=modes, mesh=False)
+            assert model.mean_mesh is None
+            r = model.fit(p, f, mesh=False)
+            assert r.converged
+            rms.append(r.rms_distance)
+        median = float(np.median(rms))
+        print(f"{modes} modes: median two-way RMS {median:.3f} mm (bound {bound:.3f})")
+        assert median <= bound, (modes, median)

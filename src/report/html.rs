@@ -325,7 +325,7 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, p
     if pictures {
         for f in s.files.iter().filter(|f| f.ends_with(".png")) {
             let what = if f.ends_with("_distance.png") {
-                "fitted surface, distance to the subject (blue 0, red 1 % of the diagonal)"
+                "fitted surface, distance to the subject (blue 0, red the 95th percentile of the distances)"
             } else if f.ends_with("_quality.png") {
                 "morphed mesh, scaled Jacobian (red 0, yellow 0.5, green 1)"
             } else {

@@ -97,6 +97,16 @@ fn perr<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
     move |e| Error::io(path, std::io::Error::other(format!("plot: {e}")))
 }
 
+/// A tick label of a count axis (modes, iterations): the integer at an integer position,
+/// nothing between (no "2.5 modes").
+pub(crate) fn integer_label(x: &f64) -> String {
+    if (x - x.round()).abs() < 1e-9 {
+        format!("{}", x.round() as i64)
+    } else {
+        String::new()
+    }
+}
+
 /// Plots the cumulative variance share against the number of modes (fig. 5).
 pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) -> Result<()> {
     let text = font_available();
@@ -112,6 +122,7 @@ pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) ->
                 .configure_mesh()
                 .x_desc("number of modes")
                 .y_desc("share of variance")
+                .x_label_formatter(&integer_label)
                 .draw()
                 .map_err(perr(path))?;
         }
@@ -148,6 +159,11 @@ pub fn plot_shape_model_measures(
     units: &str,
 ) -> Result<()> {
     let text = font_available();
+    let units = if units.is_empty() {
+        "the shapes' unit"
+    } else {
+        units
+    };
     Canvas::new(1200, 400).draw(path, |root| {
         root.fill(&WHITE).map_err(perr(path))?;
         let panels = root.split_evenly((1, 3));
@@ -197,6 +213,7 @@ pub fn plot_shape_model_measures(
                     .configure_mesh()
                     .x_desc("number of modes")
                     .y_desc(ylabel.as_str())
+                    .x_label_formatter(&integer_label)
                     .draw()
                     .map_err(perr(path))?;
             }
@@ -262,23 +279,66 @@ pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
                 .configure_mesh()
                 .x_desc("iteration")
                 .y_desc("E_d")
+                .x_label_formatter(&integer_label)
                 .draw()
                 .map_err(perr(path))?;
         }
+        // The subjects that ended highest are drawn in colour and named; the others grey.
+        let named = highest_last(histories, E_D_NAMED);
+        let points = |h: &[f64]| -> Vec<(f64, f64)> {
+            h.iter()
+                .enumerate()
+                .filter(|(_, v)| **v > 0.0 && v.is_finite())
+                .map(|(i, v)| (i as f64, *v))
+                .collect()
+        };
         for (k, (_, h)) in histories.iter().enumerate() {
-            let color = Palette99::pick(k).to_rgba();
+            if !named.contains(&k) {
+                chart
+                    .draw_series(LineSeries::new(points(h), BLACK.mix(0.25).stroke_width(1)))
+                    .map_err(perr(path))?;
+            }
+        }
+        for (rank, &k) in named.iter().enumerate() {
+            let color = Palette99::pick(rank).to_rgba();
             chart
                 .draw_series(LineSeries::new(
-                    h.iter()
-                        .enumerate()
-                        .filter(|(_, v)| **v > 0.0)
-                        .map(|(i, v)| (i as f64, *v)),
-                    color.stroke_width(1),
+                    points(&histories[k].1),
+                    color.stroke_width(2),
                 ))
+                .map_err(perr(path))?
+                .label(histories[k].0.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        if text && !named.is_empty() {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK.mix(0.4))
+                .label_font(("sans-serif", 12))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
                 .map_err(perr(path))?;
         }
         Ok(())
     })
+}
+
+/// Subjects named in the `E_d` plot: those whose last `E_d` is highest.
+pub const E_D_NAMED: usize = 6;
+
+/// The indices of the (at most) `k` histories whose last finite value is highest, highest
+/// first.
+pub(crate) fn highest_last(histories: &[(String, Vec<f64>)], k: usize) -> Vec<usize> {
+    let mut last: Vec<(usize, f64)> = histories
+        .iter()
+        .enumerate()
+        .filter_map(|(i, h)| h.1.iter().rev().find(|v| v.is_finite()).map(|v| (i, *v)))
+        .collect();
+    last.sort_by(|a, b| b.1.total_cmp(&a.1));
+    last.into_iter().take(k).map(|(i, _)| i).collect()
 }
 
 /// Bins of [`SubjectReport::scaled_jacobian_histogram`].
@@ -641,4 +701,30 @@ pub fn plot_baselines(path: &Path, subjects: &[SubjectReport]) -> Result<()> {
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn count_axes_label_integers_only() {
+        assert_eq!(integer_label(&2.0), "2");
+        assert_eq!(integer_label(&2.5), "");
+        assert_eq!(integer_label(&0.0), "0");
+        assert_eq!(integer_label(&(3.0 + 1e-12)), "3");
+    }
+
+    #[test]
+    fn the_e_d_plot_names_the_subjects_that_ended_highest() {
+        let h: Vec<(String, Vec<f64>)> = (0..10)
+            .map(|k| (format!("s{k}"), vec![100.0, (k * 7 % 10) as f64 + 1.0]))
+            .collect();
+        let named = highest_last(&h, 3);
+        let last: Vec<f64> = named.iter().map(|&i| h[i].1[1]).collect();
+        assert_eq!(last, vec![10.0, 9.0, 8.0]);
+        assert_eq!(highest_last(&h[..2], 6).len(), 2);
+        // A history with no finite value is left out.
+        assert!(highest_last(&[("x".into(), vec![f64::NAN])], 6).is_empty());
+    }
 }

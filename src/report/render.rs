@@ -190,6 +190,23 @@ pub fn render(
     img
 }
 
+/// The top of a distance colour scale: the 95th percentile of `distances` (the colours then
+/// spread over the errors seen), within [1e-4, 5e-2] of `diagonal` (a perfect fit is not all
+/// red, a stray vertex does not wash the rest out). Units of the distances.
+pub fn distance_scale(distances: &[f64], diagonal: f64) -> f64 {
+    let mut d: Vec<f64> = distances
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    d.sort_by(f64::total_cmp);
+    let p95 = d
+        .get(((d.len() as f64 * 0.95) as usize).min(d.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(0.0);
+    p95.clamp(1e-4 * diagonal, 5e-2 * diagonal)
+}
+
 /// Blue (0) through white to red (`max`): a distance.
 pub fn distance_color(max: f64) -> impl Fn(f64) -> [u8; 3] {
     move |v: f64| {
@@ -313,6 +330,16 @@ pub fn boundary_triangles(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_distance_scale_follows_the_errors_within_bounds() {
+        let d: Vec<f64> = (0..100).map(|i| i as f64 * 0.01).collect();
+        // The 95th percentile of 0..0.99: 0.95.
+        assert!((distance_scale(&d, 100.0) - 0.95).abs() < 1e-12);
+        assert!((distance_scale(&[0.0; 10], 100.0) - 0.01).abs() < 1e-12);
+        assert!((distance_scale(&[1e3, f64::NAN], 100.0) - 5.0).abs() < 1e-12);
+        assert!((distance_scale(&[], 100.0) - 0.01).abs() < 1e-12);
+    }
 
     #[test]
     fn a_tetrahedron_is_drawn_in_its_colour() {

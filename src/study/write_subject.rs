@@ -43,14 +43,14 @@ fn pictures_3d<const D: usize>(
         .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
         .collect();
     let view = render::View::fitting(&to3(&subject.points));
-    let far = 0.01 * subject.bbox_diagonal();
+    let far = render::distance_scale(&distance, subject.bbox_diagonal());
     let by_distance = render::distance_color(far);
     let legend = render::Legend {
         color: &by_distance,
         lo: 0.0,
         hi: far,
         lo_label: "0".into(),
-        hi_label: format!("{far:.3} (1 % diag.)"),
+        hi_label: format!("{far:.3} (95th pct.)"),
     };
     let img = render::render(
         &instance,

@@ -266,6 +266,7 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
         "before repair",
         "inverted",
         "E_d per iteration",
+        "files",
         "pictures",
     ]);
     for c in &cols {
@@ -316,12 +317,19 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, p
     }
     let _ = write!(
         h,
-        "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"pics\">",
+        "<td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
         num(s.scaled_jacobian_min, 3),
         num(s.scaled_jacobian_min_before_repair, 3),
         s.inverted_elements,
         sparkline(&s.e_d_history)
     );
+    // Its files, linked (relative to the report's folder).
+    h.push_str("<td class=\"files\">");
+    for f in s.files.iter().filter(|f| !f.ends_with(".png")) {
+        let short = f.rsplit('/').next().unwrap_or(f);
+        let _ = write!(h, "<a href=\"{}\">{}</a> ", escape(f), escape(short));
+    }
+    h.push_str("</td><td class=\"pics\">");
     if pictures {
         for f in s.files.iter().filter(|f| f.ends_with(".png")) {
             let what = if f.ends_with("_distance.png") {

@@ -1,6 +1,6 @@
 //! `report.html` in a real browser (issue 9): the demo's 2D and 3D reports opened in headless
 //! Chromium (Debian `chromium`, installed by `.ci/run`): every image decodes, no script error,
-//! and a screenshot is taken.
+//! every link names a file that exists, and a screenshot is taken.
 
 use crate::common;
 
@@ -75,6 +75,22 @@ fn the_demo_report_opens_in_chromium_with_every_image() {
             "script errors in {}",
             page.display()
         );
+        // Every subject's files are linked, and every link names a file beside the page.
+        let links: Vec<&str> = dom
+            .split("href=\"")
+            .skip(1)
+            .filter_map(|r| r.split('"').next())
+            .collect();
+        assert!(
+            links.len() >= 10,
+            "{} links in {}",
+            links.len(),
+            page.display()
+        );
+        let dir = page.parent().unwrap();
+        for l in &links {
+            assert!(dir.join(l).is_file(), "link {l} of {}", page.display());
+        }
         let log = String::from_utf8_lossy(&o.stderr);
         assert!(
             !log.lines()

@@ -153,95 +153,57 @@ pub struct Atlas {
     inner: Inner,
 }
 
-/// A shape from `(points, facets)` arrays or a file path.
+/// `s` as a shape of `B` dimensions (`A == B` where it is called: the generic `D` of a
+/// caller is known to be 2 or 3 only at run time).
+fn as_dim<const A: usize, const B: usize>(s: Shape<A>) -> Shape<B> {
+    Shape {
+        name: s.name,
+        points: s
+            .points
+            .iter()
+            .map(atlasmesh::geometry::same_dim::<A, B>)
+            .collect(),
+        facets: s
+            .facets
+            .iter()
+            .map(|f| std::array::from_fn(|d| f[d.min(A - 1)]))
+            .collect(),
+        landmarks: s.landmarks,
+    }
+}
+
+/// A shape from `(points, facets)` arrays or a file path; a surface is checked and oriented
+/// as a surface file is.
 fn shape_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Shape<D>> {
     if let Ok(path) = obj.extract::<PathBuf>() {
-        return if D == 3 {
+        if D == 3 {
             let s = atlasmesh::formats::read_surface(&path).map_err(to_py)?;
-            Ok(Shape {
-                name: s.name,
-                points: s
-                    .points
-                    .iter()
-                    .map(atlasmesh::geometry::same_dim::<3, D>)
-                    .collect(),
-                facets: s
-                    .facets
-                    .iter()
-                    .map(|f| std::array::from_fn(|d| f[d]))
-                    .collect(),
-                landmarks: Vec::new(),
-            })
-        } else {
-            let mut v = atlasmesh::formats::read_outlines(&path, true).map_err(to_py)?;
-            if v.len() != 1 {
-                return Err(PyValueError::new_err(format!(
-                    "{}: {} outlines; give one per file, or arrays",
-                    path.display(),
-                    v.len()
-                )));
-            }
-            let s = v.remove(0);
-            Ok(Shape {
-                name: s.name,
-                points: s
-                    .points
-                    .iter()
-                    .map(atlasmesh::geometry::same_dim::<2, D>)
-                    .collect(),
-                facets: s
-                    .facets
-                    .iter()
-                    .map(|f| std::array::from_fn(|d| f[d.min(1)]))
-                    .collect(),
-                landmarks: Vec::new(),
-            })
-        };
+            return Ok(as_dim::<3, D>(s));
+        }
+        let mut v = atlasmesh::formats::read_outlines(&path, true).map_err(to_py)?;
+        if v.len() != 1 {
+            return Err(PyValueError::new_err(format!(
+                "{}: {} outlines; give one per file, or arrays",
+                path.display(),
+                v.len()
+            )));
+        }
+        return Ok(as_dim::<2, D>(v.remove(0)));
     }
     let (points, facets): (Bound<'_, PyAny>, Bound<'_, PyAny>) = obj.extract().map_err(|_| {
         PyValueError::new_err(format!(
             "shape {k}: a (points, facets) pair of arrays or a file path expected"
         ))
     })?;
-    let points = arrays::points::<D>(&points, &format!("shape {k}: points"))?;
-    let facets = arrays::indices::<D>(&facets, &format!("shape {k}: facets"))?;
-    let shape = Shape {
+    let shape = Shape::<D> {
         name: format!("shape{k}"),
-        points,
-        facets,
+        points: arrays::points::<D>(&points, &format!("shape {k}: points"))?,
+        facets: arrays::indices::<D>(&facets, &format!("shape {k}: facets"))?,
         landmarks: Vec::new(),
     };
     let shape = if D == 3 {
-        // Checked and oriented as a surface file is.
-        let s3 = Shape::<3> {
-            name: shape.name.clone(),
-            points: shape
-                .points
-                .iter()
-                .map(atlasmesh::geometry::same_dim::<D, 3>)
-                .collect(),
-            facets: shape
-                .facets
-                .iter()
-                .map(|f| std::array::from_fn(|d| f[d.min(D - 1)]))
-                .collect(),
-            landmarks: Vec::new(),
-        };
-        let s3 = atlasmesh::geometry::prepare_surface(s3).map_err(to_py)?;
-        Shape {
-            name: s3.name,
-            points: s3
-                .points
-                .iter()
-                .map(atlasmesh::geometry::same_dim::<3, D>)
-                .collect(),
-            facets: s3
-                .facets
-                .iter()
-                .map(|f| std::array::from_fn(|d| f[d]))
-                .collect(),
-            landmarks: Vec::new(),
-        }
+        let s3 = atlasmesh::geometry::prepare_surface(as_dim::<D, 3>(shape)).map_err(to_py)?;
+        as_dim::<3, D>(s3)
     } else {
         shape
     };
@@ -306,15 +268,21 @@ fn fit_one<C: Cell<D>, const D: usize>(
     Ok((o, report))
 }
 
-/// The Python result of a fit `fit` of `atlas`, with its mesh and measures (JSON).
+/// The Python result of a fit `fit` of `atlas`, with its mesh and measures (JSON, parsed
+/// here once into a dict).
 fn fit_result<const D: usize>(
+    py: Python<'_>,
     atlas: &RustAtlas<D>,
     fit: &atlasmesh::fit::FitResult<D>,
     mesh: Option<Py<Mesh>>,
     report: String,
-) -> FitResult {
+) -> PyResult<FitResult> {
+    let measures = py
+        .import("json")?
+        .call_method1("loads", (report,))?
+        .unbind();
     let t = fit.similarity;
-    FitResult {
+    Ok(FitResult {
         dim: D,
         sd: fit
             .weights
@@ -328,8 +296,8 @@ fn fit_result<const D: usize>(
         surface: fit.projected.iter().flat_map(|p| p.point).collect(),
         facets: atlas.facets.iter().flatten().copied().collect(),
         mesh,
-        report,
-    }
+        measures,
+    })
 }
 
 fn result<C: Cell<D>, const D: usize>(
@@ -339,7 +307,7 @@ fn result<C: Cell<D>, const D: usize>(
     report: String,
 ) -> PyResult<FitResult> {
     let mesh = Py::new(py, Mesh::of(&o.mesh, &o.quality))?;
-    Ok(fit_result(held.atlas(), &o.fit, Some(mesh), report))
+    fit_result(py, held.atlas(), &o.fit, Some(mesh), report)
 }
 
 /// The fit alone (Algorithm 1, eq. 5-8, projected onto the subject), without the morph: its
@@ -373,7 +341,7 @@ fn fit_only<C: Cell<D>, const D: usize>(
         "fit_seconds": seconds,
     })
     .to_string();
-    Ok(fit_result(held.atlas(), &fit, None, report))
+    fit_result(py, held.atlas(), &fit, None, report)
 }
 
 #[pymethods]

@@ -158,7 +158,8 @@ pub struct FitResult {
     pub(crate) surface: Vec<f64>,
     pub(crate) facets: Vec<usize>,
     pub(crate) mesh: Option<Py<Mesh>>,
-    pub(crate) report: String,
+    /// The measures of `report.json`, a dict parsed once.
+    pub(crate) measures: Py<PyAny>,
 }
 
 #[pymethods]
@@ -214,17 +215,16 @@ impl FitResult {
         self.mesh.as_ref().map(|m| m.clone_ref(py))
     }
 
-    /// The measures of `report.json` for this subject, as a dict.
+    /// The measures of `report.json` for this subject, as a dict (a copy).
     #[getter]
     fn measures<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        py.import("json")?.call_method1("loads", (&self.report,))
+        self.measures.bind(py).call_method0("copy")
     }
 
     /// A measure of `report.json` by name (`rms_distance`, `success`, `scaled_jacobian_min`,
     /// ...).
     fn __getattr__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
-        let m = self.measures(py)?;
-        m.get_item(name).map_err(|_| {
+        self.measures.bind(py).get_item(name).map_err(|_| {
             pyo3::exceptions::PyAttributeError::new_err(format!(
                 "FitResult has no attribute {name:?}"
             ))

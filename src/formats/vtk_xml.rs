@@ -277,15 +277,7 @@ pub fn write_vtu_with_point_data<const D: usize>(
             .flat_map(|(p, o)| [p[0] - o[0], p[1] - o[1], z(p) - z(o)]);
         binary_array(&mut s, "Float64", Some("displacement"), 3, &f64_bytes(d));
     }
-    for (name, values) in fields {
-        binary_array(
-            &mut s,
-            "Float64",
-            Some(name),
-            1,
-            &f64_bytes(values.iter().copied()),
-        );
-    }
+    scalar_arrays(&mut s, fields);
     s.push_str("      </PointData>\n      <CellData Scalars=\"scaled_jacobian_min\">\n");
     for (name, members) in &mesh.sets.element_sets {
         set_mask(&mut s, name, members, ne);
@@ -323,6 +315,19 @@ pub fn write_vtu_with_point_data<const D: usize>(
     );
     s.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
     crate::formats::write_atomic(path, s.as_bytes())
+}
+
+/// One Float64 `DataArray` per field (`(name, values)`).
+fn scalar_arrays(s: &mut String, fields: &[(&str, &[f64])]) {
+    for (name, values) in fields {
+        binary_array(
+            s,
+            "Float64",
+            Some(name),
+            1,
+            &f64_bytes(values.iter().copied()),
+        );
+    }
 }
 
 /// Refuses point data of another length than `n` or with a name that is not plain.
@@ -372,15 +377,7 @@ pub fn write_vtp_with_point_data<const D: usize>(
     );
     if !fields.is_empty() {
         s.push_str("      <PointData>\n");
-        for (name, values) in fields {
-            binary_array(
-                &mut s,
-                "Float64",
-                Some(name),
-                1,
-                &f64_bytes(values.iter().copied()),
-            );
-        }
+        scalar_arrays(&mut s, fields);
         s.push_str("      </PointData>\n");
     }
     points_xml(&mut s, &shape.points);

@@ -163,6 +163,11 @@ impl<const D: usize> FeMesh<D> {
         let k = self.kind.nodes();
         &self.connectivity[e * k..(e + 1) * k]
     }
+    /// The mesh moved by the similarity `t` (e.g. the mean mesh into a subject's frame).
+    pub fn moved(&self, t: &crate::geometry::Similarity<D>) -> Self {
+        self.with_nodes(self.nodes.iter().map(|p| t.apply(p)).collect())
+    }
+
     /// The same connectivity with new node positions.
     #[track_caller]
     pub fn with_nodes(&self, nodes: Vec<Point<D>>) -> Self {

@@ -2,7 +2,7 @@
 //! the shapes of the model made, their weights and their meshes' quality.
 
 use super::FailedSubject;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -155,8 +155,6 @@ pub struct InstancesReport {
 impl InstancesReport {
     /// Writes the report as pretty JSON (through a temporary file and a rename).
     pub fn write(&self, path: &Path) -> Result<()> {
-        let s = serde_json::to_string_pretty(self)
-            .map_err(|e| Error::Numerical(format!("instances report: {e}")))?;
-        crate::formats::write_atomic(path, s.as_bytes())
+        super::schema::write_pretty(path, self, "instances report")
     }
 }

@@ -2,7 +2,7 @@
 //! subject's model given its landmarks, its spread and its mesh.
 
 use super::FailedSubject;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -68,8 +68,6 @@ pub struct PosteriorRunReport {
 impl PosteriorRunReport {
     /// Writes the report as pretty JSON (through a temporary file and a rename).
     pub fn write(&self, path: &Path) -> Result<()> {
-        let s = serde_json::to_string_pretty(self)
-            .map_err(|e| Error::Numerical(format!("posterior report: {e}")))?;
-        crate::formats::write_atomic(path, s.as_bytes())
+        super::schema::write_pretty(path, self, "posterior report")
     }
 }

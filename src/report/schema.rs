@@ -276,6 +276,14 @@ pub struct Report {
 
 /// JSON has no NaN: serde_json writes it as `null`; read `null` back as NaN (a median of no
 /// subjects, a measure that could not be taken).
+/// Writes `value` as pretty JSON to `path` (through a temporary file and a rename); `what`
+/// names it in an error.
+pub(super) fn write_pretty<T: Serialize>(path: &Path, value: &T, what: &str) -> Result<()> {
+    let s = serde_json::to_string_pretty(value)
+        .map_err(|e| Error::Numerical(format!("{what}: {e}")))?;
+    crate::formats::write_atomic(path, s.as_bytes())
+}
+
 /// A number that `report.json` may hold as `null` (NaN and infinities are written so).
 pub(super) fn f64_or_nan<'de, D: serde::Deserializer<'de>>(
     d: D,
@@ -349,9 +357,7 @@ impl Summary {
 impl Report {
     /// Writes the report as pretty JSON (atomically). NaN becomes null.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let s = serde_json::to_string_pretty(self)
-            .map_err(|e| Error::Numerical(format!("report: {e}")))?;
-        crate::formats::write_atomic(path, s.as_bytes())
+        write_pretty(path, self, "report")
     }
 }
 

@@ -139,14 +139,7 @@ pub fn write_landmark_fit<const D: usize>(
                 (0..D).map(|k| c.weights[k] * fit.point_sd[f[k]]).sum()
             })
             .collect();
-        let mean_mesh = atlas.mesh.with_nodes(
-            atlas
-                .mesh
-                .nodes
-                .iter()
-                .map(|p| fit.similarity.apply(p))
-                .collect(),
-        );
+        let mean_mesh = atlas.mesh.moved(&fit.similarity);
         for f in &params.formats {
             let file = format!("{base}_mesh.{}", f.extension());
             if *f == crate::formats::MeshFormat::Vtu {

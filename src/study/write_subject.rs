@@ -186,14 +186,7 @@ pub fn write_subject<const D: usize>(
     } = outcome;
     let base = file_name(&subject.name);
     let mut files = Vec::new();
-    let mean_in_subject = atlas.mesh.with_nodes(
-        atlas
-            .mesh
-            .nodes
-            .iter()
-            .map(|p| fit.similarity.apply(p))
-            .collect(),
-    );
+    let mean_in_subject = atlas.mesh.moved(&fit.similarity);
     for f in &params.formats {
         let mesh_file = format!("{base}_mesh.{}", f.extension());
         write_mesh(

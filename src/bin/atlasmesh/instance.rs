@@ -190,30 +190,25 @@ pub fn run_sample(a: SampleArgs, term: &Terminal) -> anyhow::Result<()> {
         shard,
         resume: !a.no_resume,
     };
+    if atlasmesh::formats::atlas_dimension(&a.atlas)? == 3 {
+        instances::<3>(&out, &|atlas| sampled(&a, atlas), term)
+    } else {
+        instances::<2>(&out, &|atlas| sampled(&a, atlas), term)
+    }
+}
+
+/// The samples `sample` asks of `atlas`, and how they were drawn.
+fn sampled<const D: usize>(
+    a: &SampleArgs,
+    atlas: &Atlas<D>,
+) -> atlasmesh::Result<(Vec<InstanceSpec>, Option<Sampling>)> {
+    let specs = study::sample_specs(atlas, a.n, a.seed, a.max_sd)?;
     let sampling = Sampling {
         n: a.n,
         seed: a.seed,
         max_sd: a.max_sd,
     };
-    if atlasmesh::formats::atlas_dimension(&a.atlas)? == 3 {
-        instances::<3>(
-            &out,
-            &|atlas| {
-                let s = study::sample_specs(atlas, a.n, a.seed, a.max_sd)?;
-                Ok((s, Some(sampling.clone())))
-            },
-            term,
-        )
-    } else {
-        instances::<2>(
-            &out,
-            &|atlas| {
-                let s = study::sample_specs(atlas, a.n, a.seed, a.max_sd)?;
-                Ok((s, Some(sampling.clone())))
-            },
-            term,
-        )
-    }
+    Ok((specs, Some(sampling)))
 }
 
 /// What `instance` and `sample` share: the atlas, the run's options and the outputs.

@@ -297,6 +297,7 @@ fn fit_result<const D: usize>(
         facets: atlas.facets.iter().flatten().copied().collect(),
         mesh,
         measures,
+        pending: std::sync::Mutex::new(None),
     })
 }
 
@@ -311,37 +312,45 @@ fn result<C: Cell<D>, const D: usize>(
 }
 
 /// The fit alone (Algorithm 1, eq. 5-8, projected onto the subject), without the morph: its
-/// weights, pose and surface, and its measures (`rms_distance`, `rms_distance_relative`,
-/// `e_d`, `iterations`, `converged`, `fit_seconds`).
+/// weights, pose and surface, and its measures (`e_d`, `iterations`, `converged`,
+/// `fit_seconds`; `rms_distance` and `rms_distance_relative` computed when first read).
 fn fit_only<C: Cell<D>, const D: usize>(
     py: Python<'_>,
     held: &Held<C, D>,
-    shape: &Shape<D>,
+    shape: Shape<D>,
     params: &RunParams,
 ) -> PyResult<FitResult> {
-    let (fit, seconds, rms) = py
+    let (fit, seconds, index) = py
         .detach(|| -> atlasmesh::Result<_> {
-            let index = atlasmesh::geometry::ClosestPointIndex::from_shape(shape);
+            let index = atlasmesh::geometry::ClosestPointIndex::from_shape(&shape);
             let start = std::time::Instant::now();
-            let fit = held.with_fitter(|fitter| fitter.fit(shape, &index, &params.fit))?;
-            let seconds = start.elapsed().as_secs_f64();
-            let rms =
-                atlasmesh::eval::two_way_rms(&fit.instance, &held.atlas().facets, shape, &index);
-            Ok((fit, seconds, rms))
+            let fit = held.with_fitter(|fitter| fitter.fit(&shape, &index, &params.fit))?;
+            Ok((fit, start.elapsed().as_secs_f64(), index))
         })
         .map_err(to_py)?;
-    let diagonal = shape.bbox_diagonal();
     let report = serde_json::json!({
         "name": shape.name,
-        "rms_distance": rms,
-        "rms_distance_relative": rms / diagonal,
         "e_d": fit.e_d_history.last().copied().unwrap_or(f64::NAN),
         "iterations": fit.iterations,
         "converged": fit.converged,
         "fit_seconds": seconds,
     })
     .to_string();
-    fit_result(py, held.atlas(), &fit, None, report)
+    let r = fit_result(py, held.atlas(), &fit, None, report)?;
+    // The two-way RMS distance (a second index, of the instance, and a query per subject
+    // vertex: a third of the fit's time) when first asked for.
+    let (instance, facets, subject) = (fit.instance, held.atlas().facets.clone(), shape);
+    let job: crate::result::Pending = Box::new(move || {
+        let rms = atlasmesh::eval::two_way_rms(&instance, &facets, &subject, &index);
+        vec![
+            ("rms_distance", rms),
+            ("rms_distance_relative", rms / subject.bbox_diagonal()),
+        ]
+    });
+    *r.pending
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(job);
+    Ok(r)
 }
 
 #[pymethods]
@@ -602,7 +611,7 @@ impl Atlas {
                 None => shape_of::<D>(subject, 0)?,
             };
             if !mesh {
-                return fit_only(py, a, &shape, &params);
+                return fit_only(py, a, shape, &params);
             }
             let (o, report) = py.detach(|| fit_one(a, &shape, &params)).map_err(to_py)?;
             result(py, a, o, report)

@@ -160,6 +160,29 @@ pub struct FitResult {
     pub(crate) mesh: Option<Py<Mesh>>,
     /// The measures of `report.json`, a dict parsed once.
     pub(crate) measures: Py<PyAny>,
+    /// Measures left to compute on first use (a fit alone: its two-way RMS distance).
+    pub(crate) pending: std::sync::Mutex<Option<Pending>>,
+}
+
+/// Measures of a fit computed when first asked for: `(name, value)` pairs.
+pub(crate) type Pending = Box<dyn FnOnce() -> Vec<(&'static str, f64)> + Send>;
+
+impl FitResult {
+    /// The measures dict, with the pending measures computed into it (once, the GIL released).
+    fn measures_dict<'py>(&self, py: Python<'py>) -> PyResult<&Bound<'py, PyAny>> {
+        let job = self
+            .pending
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .take();
+        let dict = self.measures.bind(py);
+        if let Some(job) = job {
+            for (k, v) in py.detach(job) {
+                dict.set_item(k, v)?;
+            }
+        }
+        Ok(dict)
+    }
 }
 
 #[pymethods]
@@ -218,13 +241,13 @@ impl FitResult {
     /// The measures of `report.json` for this subject, as a dict (a copy).
     #[getter]
     fn measures<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        self.measures.bind(py).call_method0("copy")
+        self.measures_dict(py)?.call_method0("copy")
     }
 
     /// A measure of `report.json` by name (`rms_distance`, `success`, `scaled_jacobian_min`,
     /// ...).
     fn __getattr__<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
-        self.measures.bind(py).get_item(name).map_err(|_| {
+        self.measures_dict(py)?.get_item(name).map_err(|_| {
             pyo3::exceptions::PyAttributeError::new_err(format!(
                 "FitResult has no attribute {name:?}"
             ))

@@ -41,7 +41,7 @@ pub use normals::{facet_normal, vertex_normals};
 pub use orientation::{is_closed_surface, prepare_surface, signed_volume};
 pub use point::{
     MAX_COORDINATE, Point, add, bounding_box, centroid, centroid_size, coordinate_problem, dist2,
-    dot, norm, normalize, same_dim, scale, sub,
+    dot, in_3d, norm, normalize, same_dim, scale, sub,
 };
 pub use principal_axes::{principal_axes_of, start_rotations};
 pub use query_memo::QueryMemo;

@@ -89,6 +89,11 @@ pub fn centroid<const D: usize>(points: &[Point<D>]) -> Point<D> {
     scale(c, 1.0 / points.len().max(1) as f64)
 }
 
+/// A point of dimension `D` in dimension 3: 2D points at z = 0.
+pub fn in_3d<const D: usize>(p: &Point<D>) -> Point<3> {
+    std::array::from_fn(|d| if d < D { p[d] } else { 0.0 })
+}
+
 /// Converts between `[f64; D]` and `[f64; E]` when `D == E` (a no-op used to call
 /// dimension-specific code from generic code).
 pub fn same_dim<const D: usize, const E: usize>(p: &Point<D>) -> Point<E> {

@@ -1,10 +1,13 @@
-//! `report.html`: one self-contained page beside `report.json` (every picture embedded as a
-//! PNG data URI, no network, no external script) with the run's parameters, the population's
-//! plots (cumulative variance, compactness/generalization/specificity, the modes at ±2σ,
-//! `E_d` per iteration, the histogram of scaled Jacobians, the baselines' normal
-//! correlations) and a sortable table with a row per subject: its measures, its `E_d` against
-//! the iterations, and its pictures (2D: fig. 9; 3D: the fitted surface coloured by distance
-//! to the subject, the morphed mesh coloured by scaled Jacobian).
+//! `report.html`: the index of a run, beside `report.json` and the subjects' folders (no
+//! network, no external script; the pictures are the PNG files of the run, linked), with the
+//! run's parameters, the population's plots (cumulative variance,
+//! compactness/generalization/specificity, the modes at ±2σ, `E_d` per iteration, the
+//! histogram of scaled Jacobians, the baselines' normal correlations), a link to the model's
+//! page (`model.html`: the mean and its mesh along the modes, in 3D) and a sortable table with
+//! a row per subject: its measures, its `E_d` against the iterations, a thumbnail, and links
+//! to its page (`NAME.html`: its interactive view, measures, worst elements) and its files.
+//! The page stays small whatever the number of subjects: a row and a thumbnail of a few
+//! kilobytes each.
 //!
 //! When the page has loaded, a small script checks that every image decoded and records it
 //! on `<body>` (`data-images`, `data-broken`), and records script errors (`data-errors`): the
@@ -23,16 +26,32 @@ pub struct Pictures {
     pub measures: Option<String>,
     /// The modes at ±2σ.
     pub modes: Option<String>,
+    /// The model's page, or why it was not written.
+    pub model_page: Option<std::result::Result<String, String>>,
 }
 
-/// Subjects whose pictures are embedded (the table lists every subject).
+/// Instances whose pictures are embedded in `instances.html` (the table lists every one).
 pub const MAX_SUBJECT_PICTURES: usize = 100;
 
-fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+/// `<img>` of a PNG file in `dir`, linked (relative to the page); empty when the file is not
+/// there.
+fn linked_img(dir: &Path, file: &str, alt: &str, class: &str) -> String {
+    if dir.join(file).is_file() {
+        format!(
+            "<img class=\"{class}\" alt=\"{}\" src=\"{}\">",
+            escape(alt),
+            escape(file)
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// `<img>` of a PNG file in `dir`, embedded; empty when the file is not there.
@@ -81,7 +100,7 @@ fn sparkline(v: &[f64]) -> String {
     )
 }
 
-fn num(x: f64, digits: usize) -> String {
+pub(crate) fn num(x: f64, digits: usize) -> String {
     if x.is_finite() {
         format!("{x:.digits$}")
     } else {
@@ -210,8 +229,26 @@ fn population(h: &mut String, report: &Report, dir: &Path, pictures: &Pictures) 
             "Normal correlation: SSM fit against the FFD and ICP baselines (fig. 12/20)",
         ));
     }
+    if let Some(page) = &pictures.model_page {
+        match page {
+            Ok(f) => {
+                let _ = writeln!(
+                    h,
+                    "<p><a href=\"{}\">The model in 3D</a>: the mean shape and its FE mesh along each mode, with a slider.</p>",
+                    escape(f)
+                );
+            }
+            Err(why) => {
+                let _ = writeln!(
+                    h,
+                    "<p class=\"hint\">The model's page was not written: {}</p>",
+                    escape(why)
+                );
+            }
+        }
+    }
     for (file, caption) in &figs {
-        let i = img(dir, file, caption, "fig");
+        let i = linked_img(dir, file, caption, "fig");
         if !i.is_empty() {
             let _ = writeln!(
                 h,
@@ -267,29 +304,31 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
         "inverted",
         "E_d per iteration",
         "files",
-        "pictures",
+        "picture",
     ]);
     for c in &cols {
         let _ = write!(h, "<th>{}</th>", escape(c));
     }
     h.push_str("</tr></thead><tbody>\n");
-    for (k, s) in report.subjects.iter().enumerate() {
-        subject_row(h, s, dir, baselines, k < MAX_SUBJECT_PICTURES);
+    for s in &report.subjects {
+        subject_row(h, s, dir, baselines);
     }
     h.push_str("</tbody></table>\n");
-    if report.subjects.len() > MAX_SUBJECT_PICTURES {
-        let _ = writeln!(
-            h,
-            "<p class=\"hint\">Pictures of the first {MAX_SUBJECT_PICTURES} subjects only; every subject's files are in its folder.</p>"
-        );
-    }
 }
 
-fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, pictures: bool) {
+fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
+    let page = s.files.iter().find(|f| f.ends_with(".html"));
+    let name = match page {
+        Some(p) => format!(
+            "<a href=\"{}\" title=\"its page: view, measures, worst elements\">{}</a>",
+            escape(p),
+            escape(&s.name)
+        ),
+        None => escape(&s.name),
+    };
     let _ = write!(
         h,
-        "<tr><td>{}</td><td data-v=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
-        escape(&s.name),
+        "<tr><td>{name}</td><td data-v=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
         u8::from(s.success),
         if s.success { "yes" } else { "<b>no</b>" },
         escape(
@@ -330,33 +369,41 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool, p
         let _ = write!(h, "<a href=\"{}\">{}</a> ", escape(f), escape(short));
     }
     h.push_str("</td><td class=\"pics\">");
-    if pictures {
-        for f in s.files.iter().filter(|f| f.ends_with(".png")) {
-            let what = if f.ends_with("_distance.png") {
-                "fitted surface, distance to the subject (blue 0, red the 95th percentile of the distances)"
-            } else if f.ends_with("_quality.png") {
-                "morphed mesh, scaled Jacobian (red 0, yellow 0.5, green 1)"
-            } else {
-                "mean (red), subject (blue), locus (green); morphed mesh by scaled Jacobian"
-            };
-            let i = img(dir, f, &format!("{}: {what}", s.name), "thumb");
-            if !i.is_empty() {
-                let _ = write!(h, "<a title=\"{}\">{i}</a>", escape(what));
+    if let Some(f) = s.files.iter().find(|f| f.ends_with("_thumb.png")) {
+        let what = if s.files.iter().any(|f| f.ends_with("_quality.png")) {
+            "morphed mesh, scaled Jacobian (red 0, yellow 0.5, green 1)"
+        } else {
+            "mean (red), subject (blue), locus (green); morphed mesh by scaled Jacobian"
+        };
+        let i = linked_img(dir, f, &format!("{}: {what}", s.name), "thumb");
+        if !i.is_empty() {
+            match page {
+                Some(p) => {
+                    let _ = write!(
+                        h,
+                        "<a href=\"{}\" title=\"{}\">{i}</a>",
+                        escape(p),
+                        escape(what)
+                    );
+                }
+                None => h.push_str(&i),
             }
         }
     }
     h.push_str("</td></tr>\n");
 }
 
-const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:1.5em;color:#222}\
+pub(crate) const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:1.5em;color:#222}\
 h1{font-size:1.4em}h2{font-size:1.15em;margin-top:1.6em}\
 table{border-collapse:collapse;font-size:0.9em}th,td{border:1px solid #ccc;padding:3px 6px;text-align:right}\
 th{background:#f0f0f0;cursor:pointer}td:first-child{text-align:left}\
 .figs{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figcaption{font-size:0.85em;color:#555;max-width:640px}\
 img.fig{max-width:640px;border:1px solid #ddd}img.thumb{height:120px;margin:1px;border:1px solid #ddd}\
-img.thumb:hover{height:300px}td.pics{white-space:nowrap}.meta,.hint{color:#555}pre{font-size:0.8em}";
+td.pics{white-space:nowrap}.meta,.hint{color:#555}pre{font-size:0.8em}\
+.verdict.ok{color:#1a7f37}.verdict.bad{color:#b42318;font-weight:bold}tr[data-focus]{cursor:pointer}\
+tr[data-focus]:hover{background:#f6f0ff}table.measures td{text-align:left}";
 
-const SCRIPT: &str = r#"
+pub(crate) const SCRIPT: &str = r#"
 (function () {
   var errors = [];
   window.addEventListener('error', function (e) {

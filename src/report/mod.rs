@@ -7,15 +7,21 @@
 //! | `plots` | PNG plots: variance, `E_d`, measures, modes, Jacobians, subjects |
 //! | `render` | a small rasterizer for 3D surfaces and meshes |
 //! | `html` | `report.html` |
+//! | `subject_page` | a subject's page `NAME.html` |
+//! | `model_page` | the model's page `model.html` |
+//! | `viewer` | the interactive 3D view's scene (`viewer.js`, WebGL) |
 //! | `posterior` | [`PosteriorRunReport`]: the `posterior.json` schema of `fit --landmarks-only` |
 //! | `instances` | [`InstancesReport`]: the `instances.json` schema of `instance` and `sample` |
 
 pub mod html;
 mod instances;
+pub mod model_page;
 mod plots;
 mod posterior;
 pub mod render;
 mod schema;
+pub mod subject_page;
+pub mod viewer;
 
 pub use instances::*;
 pub use plots::*;

@@ -295,6 +295,51 @@ pub fn annotated(img: &Image, title: &str, legend: Option<&Legend>) -> Image {
     out
 }
 
+/// A small copy of the PNG picture `png` (8-bit RGB or RGBA, as this crate writes them), at
+/// most `max_width` pixels wide: each pixel the mean of a square of the original's.
+///
+/// # Errors
+/// [`Error::Numerical`] when `png` does not decode (not a picture of this crate's).
+pub fn thumbnail(png: &[u8], max_width: usize) -> Result<Vec<u8>> {
+    let err = |e: png::DecodingError| Error::Numerical(format!("PNG decoding: {e}"));
+    let mut dec = png::Decoder::new(std::io::Cursor::new(png));
+    dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = dec.read_info().map_err(err)?;
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).map_err(err)?;
+    let channels = match info.color_type {
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Indexed => {
+            return Err(Error::Numerical("PNG decoding: indexed colours".into()));
+        }
+    };
+    let (w, h) = (info.width as usize, info.height as usize);
+    let k = w.div_ceil(max_width.max(1)).max(1);
+    let (tw, th) = ((w / k).max(1), (h / k).max(1));
+    let mut out = Image::new(tw, th);
+    for y in 0..th {
+        for x in 0..tw {
+            let mut sum = [0usize; 3];
+            for dy in 0..k {
+                for dx in 0..k {
+                    let at = ((y * k + dy).min(h - 1) * info.line_size)
+                        + (x * k + dx).min(w - 1) * channels;
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        *s += usize::from(buf[at + if channels >= 3 { c } else { 0 }]);
+                    }
+                }
+            }
+            for c in 0..3 {
+                out.rgb[3 * (y * tw + x) + c] = (sum[c] / (k * k)) as u8;
+            }
+        }
+    }
+    out.png()
+}
+
 /// Red (inverted, ≤ 0) through yellow to green (1): a scaled Jacobian.
 pub fn jacobian_color(s: f64) -> [u8; 3] {
     if s <= 0.0 {

@@ -256,6 +256,7 @@ pub fn fit_batch<const D: usize>(
         out,
         dataset,
         atlas,
+        &morpher,
         params,
         results,
         opts.shard.clone(),
@@ -284,7 +285,7 @@ pub fn fit_shapes<const D: usize>(
     let results: Vec<(Vec<SubjectReport>, Vec<FailedSubject>)> = subjects
         .par_iter()
         .map(|s| {
-            let r = match process_subject(atlas, &fitter, &morpher, s, out, params) {
+            let r = match process_subject(atlas, &fitter, &morpher, s, out, params, "report.html") {
                 Ok(r) => (vec![r], Vec::new()),
                 Err(e) => (Vec::new(), vec![FailedSubject::new(&s.name, "", &e)]),
             };
@@ -293,14 +294,16 @@ pub fn fit_shapes<const D: usize>(
         })
         .collect();
     progress.items_finished(label);
-    finish_batch(out, dataset, atlas, params, results, None, 0)
+    finish_batch(out, dataset, atlas, &morpher, params, results, None, 0)
 }
 
 /// The report of a batch from its subjects' results (see [`finish_report`]).
+#[allow(clippy::too_many_arguments)]
 fn finish_batch<const D: usize>(
     out: &Path,
     dataset: &str,
     atlas: &Atlas<D>,
+    morpher: &crate::mesh::Morpher<D>,
     params: &RunParams,
     results: Vec<(Vec<SubjectReport>, Vec<FailedSubject>)>,
     shard: Option<String>,
@@ -316,6 +319,7 @@ fn finish_batch<const D: usize>(
         out,
         dataset,
         atlas,
+        Some(morpher),
         subjects,
         params,
         // (An atlas of format version 2 does not know the data's unit: a share only.)
@@ -448,7 +452,15 @@ fn fit_file<const D: usize>(
                 // the temporary files of an interrupted run with it.
                 let _ = std::fs::remove_file(dir.join(RECORD));
                 remove_temporaries(&dir);
-                process_subject(atlas, fitter, morpher, &shape, &dir, params)
+                process_subject(
+                    atlas,
+                    fitter,
+                    morpher,
+                    &shape,
+                    &dir,
+                    params,
+                    "../report.html",
+                )
             })
             .and_then(|mut r| {
                 for f in &mut r.files {

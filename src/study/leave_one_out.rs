@@ -122,7 +122,15 @@ pub fn leave_one_out_of<const D: usize>(
                 let atlas = atlas_of(&training, training_meshes.as_deref(), params)?;
                 let fitter = Fitter::new(&atlas);
                 let morpher = atlas.morpher(&params.morph)?;
-                let r = process_subject(&atlas, &fitter, &morpher, &subjects[k], out, params);
+                let r = process_subject(
+                    &atlas,
+                    &fitter,
+                    &morpher,
+                    &subjects[k],
+                    out,
+                    params,
+                    "report.html",
+                );
                 progress.item_done(label, &subjects[k].name);
                 r
             })
@@ -150,6 +158,7 @@ pub fn leave_one_out_of<const D: usize>(
         out,
         dataset,
         &full,
+        None,
         reports,
         params,
         Some(mean_mesh_report(

@@ -16,6 +16,8 @@
 //! | `landmark_fit` | a subject known by a few landmarks: the posterior, its mesh |
 //! | `instance` | shapes of the model (given or sampled weights) as FE models |
 //! | `write_subject` | [`write_subject`]: a subject's meshes, deck, surface, pictures |
+//! | `subject_page` | a subject's page: the scene of its 3D view, its worst elements |
+//! | `model_page` | the model's page: the mean and its mesh along the modes |
 //! | `report_files` | the population plots, `report.json` and `report.html` |
 //! | `leave_one_out` | the leave-one-out experiment |
 //! | `batch` | batches of subjects from files or memory |
@@ -31,6 +33,7 @@ mod instance;
 mod landmark_fit;
 mod leave_one_out;
 mod mesh_file;
+mod model_page;
 mod params;
 mod population;
 mod progress;
@@ -38,6 +41,7 @@ mod register_pair;
 mod report_files;
 mod sets;
 mod subject;
+pub mod subject_page;
 mod write_subject;
 
 pub use baselines::*;

@@ -9,11 +9,14 @@ use crate::report::{
 };
 use std::path::Path;
 
-/// Writes the population-level plots and the report.
+/// Writes the population-level plots and the report; with plots, the model's page too (by
+/// `morpher`, the atlas's; one is made when `None` and the atlas has a mesh).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn finish_report<const D: usize>(
     out: &Path,
     dataset: &str,
     atlas_for_variance: &Atlas<D>,
+    morpher: Option<&crate::mesh::Morpher<D>>,
     subjects: Vec<SubjectReport>,
     params: &RunParams,
     mean_mesh: Option<MeanMeshReport>,
@@ -82,6 +85,25 @@ pub(crate) fn finish_report<const D: usize>(
         if atlas_for_variance.num_modes() > 0 {
             crate::report::plot_modes(&out.join("modes.png"), atlas_for_variance)?;
             pictures.modes = Some("modes.png".into());
+        }
+        if atlas_for_variance.has_mesh() && atlas_for_variance.num_modes() > 0 {
+            let own;
+            let morpher = match morpher {
+                Some(m) => Ok(m),
+                None => {
+                    own = atlas_for_variance.morpher(&params.morph);
+                    own.as_ref().map_err(|e| e.to_string())
+                }
+            };
+            pictures.model_page = Some(morpher.and_then(|m| {
+                super::model_page::write_model_page(
+                    atlas_for_variance,
+                    m,
+                    out,
+                    &["modes.png", "cumulative_variance.png"],
+                )
+                .map_err(|e| e.to_string())
+            }));
         }
         crate::report::html::write(&out.join("report.html"), &report, out, &pictures)?;
     }

@@ -6,7 +6,7 @@ use super::subject::SubjectOutcome;
 use crate::error::Result;
 use crate::fit::{FitResult, Fitter};
 use crate::formats::{write_atomic, write_mesh, write_shape};
-use crate::geometry::{ClosestPointIndex, Point, Shape, same_dim};
+use crate::geometry::{Point, Shape, same_dim};
 use crate::mesh::{ElementQuality, FeMesh, Morpher};
 use crate::model::Atlas;
 use crate::report::{SubjectReport, plot_subject};
@@ -22,7 +22,7 @@ fn pictures_3d<const D: usize>(
     fit: &FitResult<D>,
     mesh: &FeMesh<D>,
     per_element: &[ElementQuality],
-    index: &ClosestPointIndex<D>,
+    distance: &[f64],
     base: &str,
     out: &Path,
 ) -> Result<Vec<String>> {
@@ -32,18 +32,13 @@ fn pictures_3d<const D: usize>(
     use crate::report::render;
     let to3 = |v: &[Point<D>]| -> Vec<Point<3>> { v.iter().map(same_dim::<D, 3>).collect() };
     let instance = to3(&fit.instance);
-    let distance: Vec<f64> = fit
-        .instance
-        .iter()
-        .map(|p| index.closest(p).dist2.sqrt())
-        .collect();
     let tris: Vec<[usize; 3]> = atlas
         .facets
         .iter()
         .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
         .collect();
     let view = render::View::fitting(&to3(&subject.points));
-    let far = render::distance_scale(&distance, subject.bbox_diagonal());
+    let far = render::distance_scale(distance, subject.bbox_diagonal());
     let by_distance = render::distance_color(far);
     let legend = render::Legend {
         color: &by_distance,
@@ -55,7 +50,7 @@ fn pictures_3d<const D: usize>(
     let img = render::render(
         &instance,
         &tris,
-        Some(&distance),
+        Some(distance),
         None,
         legend.color,
         &view,
@@ -160,9 +155,10 @@ pub fn process_subject<const D: usize>(
     subject: &Shape<D>,
     out: &Path,
     params: &RunParams,
+    index_href: &str,
 ) -> Result<SubjectReport> {
     let outcome = super::fit_subject(atlas, fitter, morpher, subject, params)?;
-    write_subject(atlas, subject, outcome, out, params)
+    write_subject(atlas, subject, outcome, out, params, index_href)
 }
 
 /// Writes what [`fit_subject`](super::fit_subject) made of `subject` into `out`: the mesh in
@@ -176,6 +172,7 @@ pub fn write_subject<const D: usize>(
     outcome: SubjectOutcome<D>,
     out: &Path,
     params: &RunParams,
+    index_href: &str,
 ) -> Result<SubjectReport> {
     let SubjectOutcome {
         fit,
@@ -211,20 +208,52 @@ pub fn write_subject<const D: usize>(
         write_shape(&out.join(&fit_file), &fitted, f)?;
         files.push(fit_file);
     }
-    if params.plots && D == 3 {
-        files.extend(pictures_3d(
+    if params.plots {
+        let instance_distance: Vec<f64> = fit
+            .instance
+            .iter()
+            .map(|p| index.closest(p).dist2.sqrt())
+            .collect();
+        if D == 3 {
+            files.extend(pictures_3d(
+                atlas,
+                subject,
+                &fit,
+                &mesh,
+                &per_element,
+                &instance_distance,
+                &base,
+                out,
+            )?);
+        } else {
+            files.push(picture_2d(atlas, subject, &fit, &mesh, &base, out)?);
+        }
+        // The index's thumbnail: the mesh (3D) or the subject's picture (2D), 200 pixels wide.
+        if let Some(f) = files.iter().rev().find(|f| f.ends_with(".png")) {
+            let bytes =
+                std::fs::read(out.join(f)).map_err(|e| crate::Error::io(&out.join(f), e))?;
+            let name = format!("{base}_thumb.png");
+            write_atomic(
+                &out.join(&name),
+                &crate::report::render::thumbnail(&bytes, 200)?,
+            )?;
+            files.push(name);
+        }
+        // The page last: it links every file above.
+        report.files = files;
+        let page = super::subject_page::PageInputs {
             atlas,
             subject,
-            &fit,
-            &mesh,
-            &per_element,
-            &index,
-            &base,
-            out,
-        )?);
-    }
-    if params.plots && D == 2 {
-        files.push(picture_2d(atlas, subject, &fit, &mesh, &base, out)?);
+            fit: &fit,
+            mesh: &mesh,
+            per_element: &per_element,
+            index: &index,
+            mean_in_subject: &mean_in_subject,
+            instance_distance: &instance_distance,
+        };
+        let name = super::subject_page::write_page(&page, &report, &base, out, index_href)?;
+        report.files.push(name);
+        return Ok(report);
     }
     report.files = files;
     Ok(report)

@@ -1,0 +1,591 @@
+// atlasmesh's 3D viewer: WebGL 1, no library, no network. Every `div.am-viewer` of the page
+// names (data-scene) a <script type="application/json"> holding its scene: layers of points
+// (surfaces by triangles, meshes by cells with their faces), values per point or per cell,
+// colour fields, the worst elements, and (on the model page) the modes' displacements. Binary
+// arrays arrive gzip-compressed and base64-encoded (little-endian Float32 / Uint32).
+//
+// The viewer records its state on its container for tests and for the curious:
+// data-state ("drawn", "no-webgl", "error: ..."), data-triangles, data-drawn-pixels (the
+// pixels of the first frame that are not background).
+(function () {
+  'use strict';
+
+  function b64bytes(s) {
+    var bin = atob(s);
+    var out = new Uint8Array(bin.length);
+    for (var i = 0; i < bin.length; i++) out[i] = bin.charCodeAt(i);
+    return out;
+  }
+
+  function gunzip(bytes) {
+    var stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('gzip'));
+    return new Response(stream).arrayBuffer();
+  }
+
+  // Decodes every {"f32": ...} / {"u32": ...} of `obj` in place; resolves when all are done.
+  function decode(obj) {
+    var jobs = [];
+    (function walk(o) {
+      if (!o || typeof o !== 'object') return;
+      Object.keys(o).forEach(function (k) {
+        var v = o[k];
+        if (v && typeof v === 'object' && (typeof v.f32 === 'string' || typeof v.u32 === 'string')) {
+          var f = typeof v.f32 === 'string';
+          jobs.push(gunzip(b64bytes(f ? v.f32 : v.u32)).then(function (buf) {
+            o[k] = f ? new Float32Array(buf) : new Uint32Array(buf);
+          }));
+        } else {
+          walk(v);
+        }
+      });
+    })(obj);
+    return Promise.all(jobs).then(function () { return obj; });
+  }
+
+  // Colour maps, as the PNG pictures draw them (src/report/render.rs).
+  var MAPS = {
+    jacobian: function (s) {
+      if (!(s > 0)) return s <= 0 ? [200 / 255, 0, 0] : [0.6, 0.6, 0.6];
+      var t = Math.min(s, 1);
+      return t < 0.5 ? [1, 2 * t, 60 / 255] : [2 * (1 - t), 1, 60 / 255];
+    },
+    distance: function (t) {
+      if (!isFinite(t)) return [0.6, 0.6, 0.6];
+      t = Math.max(0, Math.min(1, t));
+      if (t < 0.5) { var s = 2 * t; return [(60 + 195 * s) / 255, (110 + 145 * s) / 255, 1]; }
+      var u = 2 * (t - 0.5);
+      return [1, (255 - 200 * u) / 255, (255 - 215 * u) / 255];
+    },
+    magnitude: function (t) {
+      if (!isFinite(t)) return [0.6, 0.6, 0.6];
+      t = Math.max(0, Math.min(1, t));
+      // dark blue, teal, yellow
+      var a = [0.18, 0.16, 0.45], b = [0.13, 0.57, 0.55], c = [0.99, 0.9, 0.15];
+      var p = t < 0.5 ? a : b, q = t < 0.5 ? b : c, w = t < 0.5 ? 2 * t : 2 * t - 1;
+      return [p[0] + (q[0] - p[0]) * w, p[1] + (q[1] - p[1]) * w, p[2] + (q[2] - p[2]) * w];
+    }
+  };
+  function colorOf(field, v) {
+    if (field.map === 'jacobian') return MAPS.jacobian(v);
+    return MAPS[field.map]((v - field.lo) / Math.max(field.hi - field.lo, 1e-300));
+  }
+
+  // 4x4 matrices, column-major as WebGL takes them.
+  function perspective(fovy, aspect, near, far) {
+    var f = 1 / Math.tan(fovy / 2), nf = 1 / (near - far);
+    return [f / aspect, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) * nf, -1, 0, 0, 2 * far * near * nf, 0];
+  }
+  function mul(a, b) {
+    var o = new Array(16);
+    for (var c = 0; c < 4; c++) for (var r = 0; r < 4; r++) {
+      var s = 0;
+      for (var k = 0; k < 4; k++) s += a[k * 4 + r] * b[c * 4 + k];
+      o[c * 4 + r] = s;
+    }
+    return o;
+  }
+  function norm3(v) {
+    var l = Math.hypot(v[0], v[1], v[2]) || 1;
+    return [v[0] / l, v[1] / l, v[2] / l];
+  }
+  function cross(a, b) {
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  }
+
+  var VS = 'attribute vec3 pos; attribute vec3 nrm; attribute vec3 col;' +
+    'uniform mat4 mvp; uniform vec3 eye; uniform vec4 clip; uniform float clipOn;' +
+    'varying vec3 vCol; varying vec3 vN; varying vec3 vV; varying float vClip;' +
+    'void main() { gl_Position = mvp * vec4(pos, 1.0); vCol = col; vN = nrm; vV = eye - pos;' +
+    ' vClip = clipOn * (dot(clip.xyz, pos) - clip.w); }';
+  var FS = 'precision mediump float; varying vec3 vCol; varying vec3 vN; varying vec3 vV;' +
+    'varying float vClip; uniform float lit; uniform float alpha;' +
+    'void main() { if (vClip > 0.0) discard;' +
+    ' float l = 1.0; if (lit > 0.5) { l = 0.3 + 0.7 * abs(dot(normalize(vN), normalize(vV))); }' +
+    ' gl_FragColor = vec4(vCol * l, alpha); }';
+
+  function Viewer(root, scene) {
+    this.root = root;
+    this.scene = scene;
+    this.fieldById = {};
+    var self = this;
+    scene.fields.forEach(function (f) { self.fieldById[f.id] = f; });
+    this.field = scene.fields.length ? scene.fields[0].id : null;
+    this.clip = { on: false, axis: 0, at: 0.5 };
+    this.worst = true;
+    this.mode = { k: 0, w: 0 };
+    this.build();
+    this.prepare();
+    this.camera = null;
+    this.reset(1);
+    this.update();
+  }
+
+  Viewer.prototype.build = function () {
+    var self = this, s = this.scene, root = this.root;
+    root.innerHTML = '';
+    var canvas = document.createElement('canvas');
+    canvas.width = root.getAttribute('data-width') | 0 || 720;
+    canvas.height = root.getAttribute('data-height') | 0 || 480;
+    canvas.className = 'am-canvas';
+    canvas.setAttribute('aria-label', 'interactive 3D view: drag to rotate, right-drag or shift-drag to pan, wheel to zoom');
+    var panel = document.createElement('div');
+    panel.className = 'am-panel';
+    root.appendChild(canvas);
+    root.appendChild(panel);
+    this.canvas = canvas;
+    var gl = canvas.getContext('webgl', { preserveDrawingBuffer: true, antialias: true }) ||
+      canvas.getContext('experimental-webgl', { preserveDrawingBuffer: true });
+    if (!gl) throw new Error('no-webgl');
+    this.gl = gl;
+    function add(html) { var d = document.createElement('div'); d.innerHTML = html; panel.appendChild(d); return d; }
+    // Layers.
+    s.layers.forEach(function (l, i) {
+      var d = add('<label><input type="checkbox"' + (l.visible ? ' checked' : '') + '> ' + esc(l.label) + '</label>');
+      d.querySelector('input').addEventListener('change', function (e) { l.visible = e.target.checked; self.update(); });
+    });
+    // Colour.
+    if (s.fields.length) {
+      var opts = s.fields.map(function (f) { return '<option value="' + esc(f.id) + '">' + esc(f.label) + (f.unit ? ' (' + esc(f.unit) + ')' : '') + '</option>'; }).join('');
+      var d = add('<label>colour by <select>' + opts + '</select></label>');
+      d.querySelector('select').addEventListener('change', function (e) { self.field = e.target.value; self.update(); });
+    }
+    // Clipping plane.
+    var hasCells = s.layers.some(function (l) { return l.cells; });
+    var dc = add('<label><input type="checkbox" class="am-clip"> clip ' + (hasCells ? 'through the volume' : '') +
+      '</label> <select class="am-axis"><option value="0">x</option><option value="1">y</option><option value="2" ' +
+      (s.dimension === 3 ? 'selected' : '') + '>z</option></select>' +
+      ' <input type="range" class="am-at" min="0" max="1000" value="500">');
+    if (s.dimension !== 3) this.clip.axis = 0; else this.clip.axis = 2;
+    dc.querySelector('.am-clip').addEventListener('change', function (e) { self.clip.on = e.target.checked; self.update(); });
+    dc.querySelector('.am-axis').addEventListener('change', function (e) { self.clip.axis = +e.target.value; self.update(); });
+    dc.querySelector('.am-at').addEventListener('input', function (e) { self.clip.at = e.target.value / 1000; self.update(); });
+    if (s.layers.some(function (l) { return l.worst && l.worst.length; })) {
+      var dw = add('<label><input type="checkbox" checked> worst elements (magenta)</label>');
+      dw.querySelector('input').addEventListener('change', function (e) { self.worst = e.target.checked; self.update(); });
+    }
+    // Modes.
+    if (s.modes && s.modes.sd.length) {
+      var mo = s.modes.sd.map(function (_, k) { return '<option value="' + k + '">mode ' + (k + 1) + '</option>'; }).join('');
+      var mx = s.modes.max_sd || 3;
+      var dm = add('<select class="am-mode">' + mo + '</select> <input type="range" class="am-w" min="' + (-mx) + '" max="' + mx +
+        '" step="0.1" value="0"> <span class="am-wv">0.0 σ</span>');
+      dm.querySelector('.am-mode').addEventListener('change', function (e) { self.mode.k = +e.target.value; self.update(); });
+      dm.querySelector('.am-w').addEventListener('input', function (e) {
+        self.mode.w = +e.target.value;
+        dm.querySelector('.am-wv').textContent = (self.mode.w >= 0 ? '+' : '') + self.mode.w.toFixed(1) + ' σ';
+        self.update();
+      });
+      this.modeSlider = dm.querySelector('.am-w');
+    }
+    var dv = add('<button type="button" data-v="1">front</button> <button type="button" data-v="-1">back</button>');
+    dv.querySelectorAll('button').forEach(function (b) {
+      b.addEventListener('click', function () { self.reset(+b.getAttribute('data-v')); self.draw(); });
+    });
+    this.legend = add('');
+    this.legend.className = 'am-legend';
+    this.info = add('');
+    this.info.className = 'am-info';
+    this.mouse();
+  };
+
+  function esc(t) {
+    return String(t).replace(/&/g, '&amp;').replace(/</g, '&lt;').replace(/>/g, '&gt;').replace(/"/g, '&quot;');
+  }
+
+  // Per layer: its faces (a cell layer: every face of every cell, with the one or two cells it
+  // belongs to), and the bounding box of everything.
+  Viewer.prototype.prepare = function () {
+    var lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    this.scene.layers.forEach(function (l) {
+      var p = l.positions;
+      for (var i = 0; i < p.length; i += 3) for (var d = 0; d < 3; d++) {
+        if (p[i + d] < lo[d]) lo[d] = p[i + d];
+        if (p[i + d] > hi[d]) hi[d] = p[i + d];
+      }
+      if (!l.cells) return;
+      var k = l.nodes_per_cell, n = l.cells.length / k, table = l.faces;
+      var faces = [], owners = [];
+      var buckets = new Map();
+      for (var c = 0; c < n; c++) {
+        for (var f = 0; f < table.length; f++) {
+          var ids = table[f].map(function (j) { return l.cells[c * k + j]; });
+          var key = ids.slice().sort(function (a, b) { return a - b; }).join(',');
+          var at = buckets.get(key);
+          if (at === undefined) {
+            buckets.set(key, faces.length);
+            faces.push(ids);
+            owners.push([c, -1]);
+          } else {
+            owners[at][1] = c;
+          }
+        }
+      }
+      l.faceList = faces;
+      l.owners = owners;
+      l.centroids = new Float32Array(n * 3);
+      var corners = l.corners || k;
+      for (var c2 = 0; c2 < n; c2++) {
+        for (var j = 0; j < corners; j++) {
+          var v = l.cells[c2 * k + j];
+          for (var d2 = 0; d2 < 3; d2++) l.centroids[c2 * 3 + d2] += p[v * 3 + d2] / corners;
+        }
+      }
+    });
+    this.lo = lo;
+    this.hi = hi;
+    this.center = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2];
+    this.radius = Math.max(Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2, 1e-9);
+    var gl = this.gl;
+    function shader(type, src) {
+      var sh = gl.createShader(type);
+      gl.shaderSource(sh, src);
+      gl.compileShader(sh);
+      if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(sh));
+      return sh;
+    }
+    var prog = gl.createProgram();
+    gl.attachShader(prog, shader(gl.VERTEX_SHADER, VS));
+    gl.attachShader(prog, shader(gl.FRAGMENT_SHADER, FS));
+    gl.linkProgram(prog);
+    if (!gl.getProgramParameter(prog, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(prog));
+    this.prog = prog;
+    this.loc = {};
+    var self = this;
+    ['pos', 'nrm', 'col'].forEach(function (a) { self.loc[a] = gl.getAttribLocation(prog, a); });
+    ['mvp', 'eye', 'clip', 'clipOn', 'lit', 'alpha'].forEach(function (u) { self.loc[u] = gl.getUniformLocation(prog, u); });
+    this.buffers = [];
+  };
+
+  // The camera: it looks at `target` from `dist` away along the direction given by `yaw` and
+  // `pitch` of the scene's frame; for 2D, straight down the z axis.
+  Viewer.prototype.reset = function (side) {
+    var s = this.scene;
+    var v = s.view || { look: [0, 0, -1], up: [0, 1, 0] };
+    var look = norm3(v.look), up = norm3(v.up);
+    if (side < 0) look = [-look[0], -look[1], -look[2]];
+    // Far enough for the bounding box's corners to fit the canvas, with a margin.
+    var right = norm3(cross(look, up)), lo = this.lo, hi = this.hi, c = this.center;
+    var hx = 0, hy = 0, hz = 0;
+    for (var k = 0; k < 8; k++) {
+      var q = [k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]];
+      var d = [q[0] - c[0], q[1] - c[1], q[2] - c[2]];
+      hx = Math.max(hx, Math.abs(d[0] * right[0] + d[1] * right[1] + d[2] * right[2]));
+      hy = Math.max(hy, Math.abs(d[0] * up[0] + d[1] * up[1] + d[2] * up[2]));
+      hz = Math.max(hz, Math.abs(d[0] * look[0] + d[1] * look[1] + d[2] * look[2]));
+    }
+    var aspect = this.canvas.width / this.canvas.height;
+    var half = Math.max(hy, hx / aspect, 1e-9 * this.radius) * 1.08;
+    this.camera = { target: c.slice(), look: look, up: up, dist: half / Math.tan(Math.PI / 12) + hz };
+  };
+
+  Viewer.prototype.mouse = function () {
+    var self = this, c = this.canvas, last = null, button = 0;
+    c.addEventListener('contextmenu', function (e) { e.preventDefault(); });
+    c.addEventListener('mousedown', function (e) { last = [e.clientX, e.clientY]; button = (e.button === 2 || e.shiftKey) ? 2 : 0; e.preventDefault(); });
+    window.addEventListener('mouseup', function () { last = null; });
+    window.addEventListener('mousemove', function (e) {
+      if (!last) return;
+      var dx = e.clientX - last[0], dy = e.clientY - last[1];
+      last = [e.clientX, e.clientY];
+      var cam = self.camera, right = norm3(cross(cam.look, cam.up));
+      if (button === 2) {
+        var k = 2 * cam.dist * Math.tan(Math.PI / 12) / c.clientHeight;
+        for (var d = 0; d < 3; d++) cam.target[d] += (-dx * right[d] + dy * cam.up[d]) * k;
+      } else {
+        self.rotate(cam.up, -dx * 0.01);
+        self.rotate(right, -dy * 0.01);
+      }
+      self.draw();
+    });
+    c.addEventListener('wheel', function (e) {
+      e.preventDefault();
+      self.camera.dist *= Math.exp(e.deltaY * 0.001);
+      self.draw();
+    }, { passive: false });
+  };
+
+  // Turns the camera by `angle` about `axis` (through the target).
+  Viewer.prototype.rotate = function (axis, angle) {
+    var a = norm3(axis), cs = Math.cos(angle), sn = Math.sin(angle);
+    function rot(v) {
+      var d = a[0] * v[0] + a[1] * v[1] + a[2] * v[2], x = cross(a, v);
+      return [v[0] * cs + x[0] * sn + a[0] * d * (1 - cs), v[1] * cs + x[1] * sn + a[1] * d * (1 - cs), v[2] * cs + x[2] * sn + a[2] * d * (1 - cs)];
+    }
+    this.camera.look = norm3(rot(this.camera.look));
+    this.camera.up = norm3(rot(this.camera.up));
+  };
+
+  // The current positions of a layer (the mean moved along the selected mode, on the model page).
+  Viewer.prototype.positions = function (l) {
+    var m = this.scene.modes;
+    if (!m || !m.displacements || !m.displacements[l.id] || this.mode.w === 0) return l.positions;
+    var d = m.displacements[l.id][this.mode.k], w = this.mode.w, p = l.positions;
+    var out = new Float32Array(p.length);
+    for (var i = 0; i < p.length; i++) out[i] = p[i] + w * d[i];
+    return out;
+  };
+
+  // The value of the current field at a layer's point `i` or cell `c`.
+  Viewer.prototype.values = function (l, p) {
+    var f = this.field && this.fieldById[this.field];
+    if (!f) return null;
+    if (f.id === 'displacement_mode' && this.scene.modes && this.scene.modes.displacements[l.id]) {
+      var d = this.scene.modes.displacements[l.id][this.mode.k], w = Math.abs(this.mode.w);
+      var n = p.length / 3, v = new Float32Array(n);
+      for (var i = 0; i < n; i++) v[i] = w * Math.hypot(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
+      return { point: v, field: f };
+    }
+    if (l.point_values && l.point_values[f.id]) return { point: l.point_values[f.id], field: f };
+    if (l.cell_values && l.cell_values[f.id]) return { cell: l.cell_values[f.id], field: f };
+    return null;
+  };
+
+  Viewer.prototype.update = function () {
+    var gl = this.gl, self = this;
+    this.buffers.forEach(function (b) { gl.deleteBuffer(b.pos); gl.deleteBuffer(b.nrm); gl.deleteBuffer(b.col); });
+    this.buffers = [];
+    var axis = this.clip.axis, at = this.lo[axis] + (this.hi[axis] - this.lo[axis]) * this.clip.at;
+    this.plane = [axis === 0 ? 1 : 0, axis === 1 ? 1 : 0, axis === 2 ? 1 : 0, at];
+    var triangles = 0;
+    this.scene.layers.forEach(function (l) {
+      if (!l.visible) return;
+      var p = self.positions(l), vals = self.values(l, p);
+      var base = l.color || [0.75, 0.75, 0.78];
+      var tri = [], tcol = [], edges = [];
+      function color(pointIds, cell) {
+        if (vals && vals.cell && cell >= 0) return colorOf(vals.field, vals.cell[cell]);
+        if (vals && vals.point) {
+          var s = 0, n = 0;
+          pointIds.forEach(function (i) { var x = vals.point[i]; if (isFinite(x)) { s += x; n++; } });
+          return n ? colorOf(vals.field, s / n) : [0.6, 0.6, 0.6];
+        }
+        return base;
+      }
+      function pointColor(i) {
+        if (vals && vals.point) return colorOf(vals.field, vals.point[i]);
+        return null;
+      }
+      function poly(ids, cell) {
+        // a polygon (triangle or quadrilateral) as a fan, with its edges
+        var flat = color(ids, cell);
+        for (var t = 1; t + 1 < ids.length; t++) {
+          var a = ids[0], b = ids[t], c = ids[t + 1];
+          tri.push(a, b, c);
+          [a, b, c].forEach(function (i) { tcol.push(pointColor(i) || flat); });
+        }
+        if (l.cells) for (var e = 0; e < ids.length; e++) edges.push(ids[e], ids[(e + 1) % ids.length]);
+      }
+      if (l.triangles) {
+        for (var i = 0; i < l.triangles.length; i += 3) poly([l.triangles[i], l.triangles[i + 1], l.triangles[i + 2]], -1);
+      } else if (l.segments) {
+        // an outline: its segments, coloured by the field at their points
+        var ids = Array.prototype.slice.call(l.segments);
+        self.buffers.push(self.lines(p, ids, function (i) { return pointColor(i) || base; }, false, 1));
+        return;
+      } else if (l.cells) {
+        var keep = null;
+        if (self.clip.on) {
+          var n = l.centroids.length / 3, pl = self.plane;
+          keep = new Uint8Array(n);
+          for (var c = 0; c < n; c++) {
+            keep[c] = pl[0] * l.centroids[3 * c] + pl[1] * l.centroids[3 * c + 1] + pl[2] * l.centroids[3 * c + 2] <= pl[3] ? 1 : 0;
+          }
+        }
+        var planar = self.scene.dimension !== 3;
+        for (var f = 0; f < l.faceList.length; f++) {
+          var o = l.owners[f], a0 = keep ? keep[o[0]] : 1, a1 = o[1] >= 0 ? (keep ? keep[o[1]] : 1) : 0;
+          if (planar) {
+            if (!a0) continue;
+          } else if (a0 + a1 !== 1) {
+            continue;
+          }
+          poly(l.faceList[f], a0 ? o[0] : o[1]);
+        }
+      }
+      var b = self.upload(p, tri, tcol, l.opacity == null ? 1 : l.opacity, !!l.cells && self.clip.on);
+      triangles += tri.length / 3;
+      self.buffers.push(b);
+      if (edges.length) self.buffers.push(self.lines(p, edges, [0.15, 0.15, 0.15], false));
+      if (self.worst && l.worst && l.worst.length && l.cells) {
+        var we = [], k = l.nodes_per_cell;
+        l.worst.forEach(function (c) {
+          l.faces.forEach(function (face) {
+            for (var e = 0; e < face.length; e++) we.push(l.cells[c * k + face[e]], l.cells[c * k + face[(e + 1) % face.length]]);
+          });
+        });
+        self.buffers.push(self.lines(p, we, [1, 0, 1], true));
+      }
+    });
+    this.triangles = triangles;
+    this.root.setAttribute('data-triangles', String(triangles));
+    this.showLegend();
+    this.draw();
+  };
+
+  Viewer.prototype.upload = function (p, tri, tcol, alpha, clipped) {
+    var gl = this.gl, n = tri.length;
+    var pos = new Float32Array(n * 3), nrm = new Float32Array(n * 3), col = new Float32Array(n * 3);
+    for (var t = 0; t < n; t += 3) {
+      var a = tri[t] * 3, b = tri[t + 1] * 3, c = tri[t + 2] * 3;
+      var u = [p[b] - p[a], p[b + 1] - p[a + 1], p[b + 2] - p[a + 2]];
+      var v = [p[c] - p[a], p[c + 1] - p[a + 1], p[c + 2] - p[a + 2]];
+      var nn = norm3(cross(u, v));
+      for (var j = 0; j < 3; j++) {
+        var q = tri[t + j] * 3, o = (t + j) * 3, cc = tcol[t + j];
+        pos[o] = p[q]; pos[o + 1] = p[q + 1]; pos[o + 2] = p[q + 2];
+        nrm[o] = nn[0]; nrm[o + 1] = nn[1]; nrm[o + 2] = nn[2];
+        col[o] = cc[0]; col[o + 1] = cc[1]; col[o + 2] = cc[2];
+      }
+    }
+    return { mode: gl.TRIANGLES, count: n, pos: this.buffer(pos), nrm: this.buffer(nrm), col: this.buffer(col), alpha: alpha, lit: 1, clip: !clipped, over: false };
+  };
+
+  // Lines between the pairs of points `ids`, of colour `rgb` (or `rgb(i)` per point), over
+  // everything when `over`; `alpha` defaults to a faint 0.35 (element edges).
+  Viewer.prototype.lines = function (p, ids, rgb, over, alpha) {
+    var n = ids.length, pos = new Float32Array(n * 3), col = new Float32Array(n * 3);
+    for (var i = 0; i < n; i++) {
+      var c = typeof rgb === 'function' ? rgb(ids[i]) : rgb;
+      for (var d = 0; d < 3; d++) { pos[3 * i + d] = p[ids[i] * 3 + d]; col[3 * i + d] = c[d]; }
+    }
+    var a = alpha || (over ? 1 : 0.35);
+    return { mode: this.gl.LINES, count: n, pos: this.buffer(pos), nrm: this.buffer(new Float32Array(n * 3)), col: this.buffer(col), alpha: a, lit: 0, clip: !over && alpha === 1, over: over };
+  };
+
+  Viewer.prototype.buffer = function (data) {
+    var gl = this.gl, b = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, b);
+    gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
+    return b;
+  };
+
+  Viewer.prototype.draw = function () {
+    var gl = this.gl, cam = this.camera, c = this.canvas;
+    var eye = [cam.target[0] - cam.look[0] * cam.dist, cam.target[1] - cam.look[1] * cam.dist, cam.target[2] - cam.look[2] * cam.dist];
+    var z = [-cam.look[0], -cam.look[1], -cam.look[2]], x = norm3(cross(cam.up, z)), y = cross(z, x);
+    var view = [x[0], y[0], z[0], 0, x[1], y[1], z[1], 0, x[2], y[2], z[2], 0,
+      -(x[0] * eye[0] + x[1] * eye[1] + x[2] * eye[2]), -(y[0] * eye[0] + y[1] * eye[1] + y[2] * eye[2]), -(z[0] * eye[0] + z[1] * eye[1] + z[2] * eye[2]), 1];
+    var near = Math.max(cam.dist - 2 * this.radius, cam.dist * 0.01), far = cam.dist + 2 * this.radius;
+    var mvp = mul(perspective(Math.PI / 6, c.width / c.height, near, far), view);
+    gl.viewport(0, 0, c.width, c.height);
+    gl.clearColor(1, 1, 1, 1);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    gl.enable(gl.DEPTH_TEST);
+    // Faces a little behind their edges, so that the edges show.
+    gl.enable(gl.POLYGON_OFFSET_FILL);
+    gl.polygonOffset(1, 1);
+    gl.useProgram(this.prog);
+    gl.uniformMatrix4fv(this.loc.mvp, false, new Float32Array(mvp));
+    gl.uniform3f(this.loc.eye, eye[0], eye[1], eye[2]);
+    gl.uniform4f(this.loc.clip, this.plane[0], this.plane[1], this.plane[2], this.plane[3]);
+    var self = this;
+    var order = this.buffers.filter(function (b) { return b.alpha >= 1 && !b.over; })
+      .concat(this.buffers.filter(function (b) { return b.alpha < 1 && !b.over; }))
+      .concat(this.buffers.filter(function (b) { return b.over; }));
+    order.forEach(function (b) {
+      if (!b.count) return;
+      gl.uniform1f(self.loc.clipOn, b.clip && self.clip.on ? 1 : 0);
+      gl.uniform1f(self.loc.lit, b.lit);
+      gl.uniform1f(self.loc.alpha, b.alpha);
+      if (b.alpha < 1) {
+        gl.enable(gl.BLEND);
+        gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
+        gl.depthMask(false);
+      } else {
+        gl.disable(gl.BLEND);
+        gl.depthMask(true);
+      }
+      if (b.over) gl.disable(gl.DEPTH_TEST); else gl.enable(gl.DEPTH_TEST);
+      [['pos', b.pos], ['nrm', b.nrm], ['col', b.col]].forEach(function (a) {
+        gl.bindBuffer(gl.ARRAY_BUFFER, a[1]);
+        gl.enableVertexAttribArray(self.loc[a[0]]);
+        gl.vertexAttribPointer(self.loc[a[0]], 3, gl.FLOAT, false, 0, 0);
+      });
+      gl.drawArrays(b.mode, 0, b.count);
+    });
+    gl.depthMask(true);
+    if (!this.counted) {
+      this.counted = true;
+      var px = new Uint8Array(c.width * c.height * 4);
+      gl.readPixels(0, 0, c.width, c.height, gl.RGBA, gl.UNSIGNED_BYTE, px);
+      var drawn = 0;
+      for (var i = 0; i < px.length; i += 4) if (px[i] < 250 || px[i + 1] < 250 || px[i + 2] < 250) drawn++;
+      this.root.setAttribute('data-drawn-pixels', String(drawn));
+      this.root.setAttribute('data-state', 'drawn');
+    }
+  };
+
+  Viewer.prototype.showLegend = function () {
+    var f = this.field && this.fieldById[this.field];
+    if (!f) { this.legend.innerHTML = ''; return; }
+    var lo = f.lo, hi = f.hi;
+    if (f.id === 'displacement_mode') {
+      hi = Math.abs(this.mode.w) * (this.scene.modes.max_displacement ? this.scene.modes.max_displacement[this.mode.k] : 1);
+      f.hi = Math.max(hi, 1e-12);
+      hi = f.hi;
+    }
+    var stops = [];
+    for (var i = 0; i <= 10; i++) {
+      var v = lo + (hi - lo) * i / 10, c = colorOf(f, v);
+      stops.push('rgb(' + Math.round(c[0] * 255) + ',' + Math.round(c[1] * 255) + ',' + Math.round(c[2] * 255) + ') ' + (i * 10) + '%');
+    }
+    var unit = f.unit ? ' ' + esc(f.unit) : '';
+    this.legend.innerHTML = '<div class="am-bar" style="background:linear-gradient(to right,' + stops.join(',') + ')"></div>' +
+      '<span>' + (f.lo_label ? esc(f.lo_label) : fmt(lo) + unit) + '</span><span style="float:right">' +
+      (f.hi_label ? esc(f.hi_label) : fmt(hi) + unit) + '</span><div class="am-caption">' + esc(f.label) + '</div>';
+  };
+
+  function fmt(v) {
+    if (!isFinite(v)) return '–';
+    var a = Math.abs(v);
+    return a >= 100 ? v.toFixed(0) : a >= 1 ? v.toFixed(2) : v.toPrecision(2);
+  }
+
+  // Centres the view on a point (a worst element's row, clicked).
+  Viewer.prototype.focus = function (p) {
+    this.camera.target = p.slice();
+    this.camera.dist = Math.max(this.radius * 0.8, 1e-9);
+    this.draw();
+  };
+
+  function start() {
+    var viewers = document.querySelectorAll('div.am-viewer');
+    var pending = viewers.length;
+    document.body.setAttribute('data-viewers', String(viewers.length));
+    viewers.forEach(function (root) {
+      var src = document.getElementById(root.getAttribute('data-scene'));
+      function done(state) {
+        if (state) root.setAttribute('data-state', state);
+        pending--;
+        if (pending === 0) document.body.setAttribute('data-viewers-ready', 'yes');
+      }
+      if (!src) { done('error: no scene'); return; }
+      if (typeof DecompressionStream === 'undefined') {
+        root.textContent = 'This browser cannot show the 3D view (no DecompressionStream); the pictures below show the same.';
+        done('no-decompression');
+        return;
+      }
+      decode(JSON.parse(src.textContent)).then(function (scene) {
+        try {
+          root.viewer = new Viewer(root, scene);
+          done();
+        } catch (e) {
+          if (String(e.message) === 'no-webgl') {
+            root.textContent = 'WebGL is not available in this browser; the pictures below show the same.';
+            done('no-webgl');
+          } else {
+            done('error: ' + e.message);
+            throw e;
+          }
+        }
+      }, function (e) { done('error: ' + e); throw e; });
+    });
+    document.querySelectorAll('[data-focus]').forEach(function (el) {
+      el.addEventListener('click', function () {
+        var v = document.querySelector('div.am-viewer');
+        if (v && v.viewer) v.viewer.focus(el.getAttribute('data-focus').split(',').map(Number));
+      });
+    });
+  }
+  if (document.readyState === 'loading') document.addEventListener('DOMContentLoaded', start); else start();
+})();

@@ -1,0 +1,410 @@
+//! The scene of the report's interactive 3D view: layers of points (surfaces by their
+//! triangles, outlines by their segments, FE meshes by their cells), values to colour them by,
+//! the worst elements, and the modes' displacements of the model page. [`viewer_html`] puts a
+//! scene into a page as JSON beside the viewer (`viewer.js`: WebGL 1, written here, inlined,
+//! no network), which draws it with rotation, zoom, pan, layer toggles, a clipping plane
+//! through the volume (the elements on one side kept whole, the faces between kept and
+//! removed elements drawn) and a mode slider.
+//!
+//! Arrays travel gzip-compressed and base64-encoded (little-endian `f32` positions and values,
+//! `u32` indices); the browser inflates them with its `DecompressionStream`. Positions are
+//! those of the files written (the subject's frame and unit), in single precision: the view
+//! is for looking, the files hold the numbers.
+
+use crate::geometry::Point;
+use crate::mesh::{ElementKind, FeMesh};
+use base64::Engine as _;
+use serde_json::{Value, json};
+use std::io::Write as _;
+
+/// How a field's values become colours (the PNG pictures' maps, `render`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorMap {
+    /// Scaled Jacobian: red (≤ 0) through yellow (0.5) to green (1).
+    Jacobian,
+    /// Distance: blue (low) through white to red (high).
+    Distance,
+    /// A magnitude (displacement): dark blue through teal to yellow.
+    Magnitude,
+}
+
+/// A quantity the layers can be coloured by.
+#[derive(Clone, Debug)]
+pub struct Field {
+    /// Key of the values in the layers (`point_values` / `cell_values`).
+    pub id: String,
+    /// What it is, for the menu and the legend.
+    pub label: String,
+    /// Its unit (empty for none).
+    pub unit: String,
+    /// The values at the colour bar's ends.
+    pub range: (f64, f64),
+    /// The colour map.
+    pub map: ColorMap,
+}
+
+/// What a layer is drawn from.
+#[derive(Clone, Debug)]
+pub enum Geometry {
+    /// Triangles (a surface), by point index.
+    Triangles(Vec<[usize; 3]>),
+    /// Segments (an outline), by point index.
+    Segments(Vec<[usize; 2]>),
+    /// FE cells: the faces between cells are found by the viewer, which draws the boundary
+    /// (and, clipped, the faces between kept and removed cells).
+    Cells {
+        /// Nodes per cell in `cells` (quadratic kinds: corners first).
+        nodes_per_cell: usize,
+        /// Corner nodes per cell.
+        corners: usize,
+        /// The faces drawn of a cell, by local corner (2D: the cell's outline).
+        faces: Vec<Vec<usize>>,
+        /// The cells' nodes, `nodes_per_cell` each.
+        cells: Vec<usize>,
+    },
+}
+
+/// One thing drawn.
+#[derive(Clone, Debug)]
+pub struct Layer {
+    /// Key (the modes' displacements name the layer by it).
+    pub id: String,
+    /// Its name in the layer list.
+    pub label: String,
+    /// Shown at first.
+    pub visible: bool,
+    /// 1 opaque; below 1 drawn after the opaque layers, see-through.
+    pub opacity: f64,
+    /// Colour when no field applies (RGB in 0..1).
+    pub color: [f64; 3],
+    /// Points (3D; 2D points get z = 0).
+    pub points: Vec<Point<3>>,
+    /// What is drawn of the points.
+    pub geometry: Geometry,
+    /// Values per point, by field id.
+    pub point_values: Vec<(String, Vec<f64>)>,
+    /// Values per cell, by field id.
+    pub cell_values: Vec<(String, Vec<f64>)>,
+    /// Cells outlined in magenta over everything (0-based).
+    pub worst: Vec<usize>,
+}
+
+impl Layer {
+    /// A layer of a surface (3D: triangles) or an outline (2D: segments) of `points` and
+    /// `facets`, not shown until [`Layer::shown`].
+    pub fn shape<const D: usize>(
+        id: &str,
+        label: &str,
+        points: &[Point<D>],
+        facets: &[[usize; D]],
+    ) -> Self {
+        let geometry = if D == 3 {
+            Geometry::Triangles(facets.iter().map(|f| [f[0], f[1], f[2]]).collect())
+        } else {
+            Geometry::Segments(facets.iter().map(|f| [f[0], f[1 % D]]).collect())
+        };
+        Layer {
+            id: id.into(),
+            label: label.into(),
+            visible: false,
+            opacity: 1.0,
+            color: [0.75, 0.75, 0.78],
+            points: points.iter().map(crate::geometry::in_3d::<D>).collect(),
+            geometry,
+            point_values: Vec::new(),
+            cell_values: Vec::new(),
+            worst: Vec::new(),
+        }
+    }
+
+    /// A layer of the FE mesh `mesh` (its cells; quadratic kinds drawn by their corners).
+    pub fn mesh<const D: usize>(id: &str, label: &str, mesh: &FeMesh<D>) -> Self {
+        let corners = mesh.kind.linear().nodes();
+        let faces = drawn_faces(mesh.kind);
+        Layer {
+            id: id.into(),
+            label: label.into(),
+            visible: false,
+            opacity: 1.0,
+            color: [0.75, 0.75, 0.78],
+            points: mesh.nodes.iter().map(crate::geometry::in_3d::<D>).collect(),
+            geometry: Geometry::Cells {
+                nodes_per_cell: mesh.kind.nodes(),
+                corners,
+                faces,
+                cells: mesh.connectivity.clone(),
+            },
+            point_values: Vec::new(),
+            cell_values: Vec::new(),
+            worst: Vec::new(),
+        }
+    }
+
+    /// This layer shown at first, with `opacity` and `color`.
+    pub fn shown(mut self, opacity: f64, color: [f64; 3]) -> Self {
+        self.visible = true;
+        self.opacity = opacity;
+        self.color = color;
+        self
+    }
+}
+
+/// The modes of the model page: every layer named moves by `w` times its displacement for
+/// the mode chosen, `w` in standard deviations from the slider.
+#[derive(Clone, Debug)]
+pub struct Modes {
+    /// The modes' standard deviations `sqrt(lambda_k)` (the data's unit), one per mode shown.
+    pub sd: Vec<f64>,
+    /// The slider's reach (standard deviations either way).
+    pub max_sd: f64,
+    /// Per layer id, per mode: the displacement of every point at +1 sd.
+    pub displacements: Vec<(String, Vec<Vec<Point<3>>>)>,
+}
+
+/// A view: the layers, the fields, and where the camera looks from at first.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// 2 or 3 (2D scenes are looked at along -z).
+    pub dimension: usize,
+    /// What is drawn.
+    pub layers: Vec<Layer>,
+    /// What it can be coloured by (the first at first).
+    pub fields: Vec<Field>,
+    /// The model page's modes.
+    pub modes: Option<Modes>,
+    /// The direction the camera looks along and its up direction at first ("front"; "back"
+    /// looks the other way).
+    pub look: ([f64; 3], [f64; 3]),
+}
+
+impl Scene {
+    /// An empty scene of dimension `dimension`, looked at along the smallest principal axis
+    /// of `points` (3D, the largest horizontal, as the PNG pictures) or along -z (2D).
+    pub fn new(dimension: usize, points: &[Point<3>]) -> Self {
+        let look = if dimension == 3 && points.len() >= 3 {
+            let v = crate::report::render::View::fitting(points);
+            let r = v.rotation;
+            ([-r[2][0], -r[2][1], -r[2][2]], r[1])
+        } else {
+            ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0])
+        };
+        Scene {
+            dimension,
+            layers: Vec::new(),
+            fields: Vec::new(),
+            modes: None,
+            look,
+        }
+    }
+}
+
+/// Gzip, then base64: how the page carries an array.
+fn packed(bytes: &[u8]) -> String {
+    let mut z = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::new(6));
+    // Writing into a Vec cannot fail.
+    let _ = z.write_all(bytes);
+    let gz = z.finish().unwrap_or_default();
+    base64::engine::general_purpose::STANDARD.encode(gz)
+}
+
+fn f32s(values: impl Iterator<Item = f64>) -> Value {
+    let bytes: Vec<u8> = values.flat_map(|v| (v as f32).to_le_bytes()).collect();
+    json!({ "f32": packed(&bytes) })
+}
+
+fn u32s(values: impl Iterator<Item = usize>) -> Value {
+    let bytes: Vec<u8> = values.flat_map(|v| (v as u32).to_le_bytes()).collect();
+    json!({ "u32": packed(&bytes) })
+}
+
+fn points_value(points: &[Point<3>]) -> Value {
+    f32s(points.iter().flat_map(|p| p.iter().copied()))
+}
+
+fn layer_value(l: &Layer) -> Value {
+    let mut v = json!({
+        "id": l.id,
+        "label": l.label,
+        "visible": l.visible,
+        "opacity": l.opacity,
+        "color": l.color,
+        "positions": points_value(&l.points),
+        "worst": l.worst,
+    });
+    match &l.geometry {
+        Geometry::Triangles(t) => v["triangles"] = u32s(t.iter().flatten().copied()),
+        Geometry::Segments(s) => v["segments"] = u32s(s.iter().flatten().copied()),
+        Geometry::Cells {
+            nodes_per_cell,
+            corners,
+            faces,
+            cells,
+        } => {
+            v["cells"] = u32s(cells.iter().copied());
+            v["nodes_per_cell"] = json!(nodes_per_cell);
+            v["corners"] = json!(corners);
+            v["faces"] = json!(faces);
+        }
+    }
+    let values = |vals: &[(String, Vec<f64>)]| -> Value {
+        vals.iter()
+            .map(|(k, x)| (k.clone(), f32s(x.iter().copied())))
+            .collect::<serde_json::Map<_, _>>()
+            .into()
+    };
+    v["point_values"] = values(&l.point_values);
+    v["cell_values"] = values(&l.cell_values);
+    v
+}
+
+/// The scene as the JSON `viewer.js` reads.
+pub fn scene_json(scene: &Scene) -> String {
+    let fields: Vec<Value> = scene
+        .fields
+        .iter()
+        .map(|f| {
+            json!({
+                "id": f.id,
+                "label": f.label,
+                "unit": f.unit,
+                "lo": finite_or(f.range.0, 0.0),
+                "hi": finite_or(f.range.1, 1.0),
+                "map": match f.map {
+                    ColorMap::Jacobian => "jacobian",
+                    ColorMap::Distance => "distance",
+                    ColorMap::Magnitude => "magnitude",
+                },
+            })
+        })
+        .collect();
+    let mut v = json!({
+        "dimension": scene.dimension,
+        "layers": scene.layers.iter().map(layer_value).collect::<Vec<_>>(),
+        "fields": fields,
+        "view": { "look": scene.look.0, "up": scene.look.1 },
+    });
+    if let Some(m) = &scene.modes {
+        let displacements: serde_json::Map<String, Value> = m
+            .displacements
+            .iter()
+            .map(|(id, per_mode)| {
+                (
+                    id.clone(),
+                    per_mode
+                        .iter()
+                        .map(|d| points_value(d))
+                        .collect::<Vec<_>>()
+                        .into(),
+                )
+            })
+            .collect();
+        // The largest displacement of any layer at 1 sd, per mode (the colour bar's end).
+        let max_displacement: Vec<f64> = (0..m.sd.len())
+            .map(|k| {
+                m.displacements
+                    .iter()
+                    .filter_map(|(_, d)| d.get(k))
+                    .flat_map(|d| d.iter().map(|p| crate::geometry::norm(*p)))
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        v["modes"] = json!({
+            "sd": m.sd,
+            "max_sd": m.max_sd,
+            "displacements": displacements,
+            "max_displacement": max_displacement,
+        });
+    }
+    // (`<` escaped so that no name can close the script element the JSON sits in.)
+    v.to_string().replace('<', "\\u003c")
+}
+
+fn finite_or(x: f64, or: f64) -> f64 {
+    if x.is_finite() { x } else { or }
+}
+
+/// The viewer's styles, for the page's `<style>`.
+pub const VIEWER_STYLE: &str = ".am-viewer{display:flex;flex-wrap:wrap;gap:10px;align-items:flex-start;margin:0.5em 0}\
+.am-canvas{border:1px solid #ccc;cursor:grab;max-width:100%;background:#fff}\
+.am-panel{font-size:0.9em;min-width:240px;max-width:320px}.am-panel>div{margin:0 0 6px}.am-panel select{max-width:100%}\
+.am-bar{height:12px;border:1px solid #999;margin-top:4px}.am-caption{color:#555;clear:both}\
+.am-info{color:#555}";
+
+/// The viewer's script, once per page, after its viewers.
+pub const VIEWER_SCRIPT: &str = include_str!("viewer.js");
+
+/// A viewer of `scene` for a page: its container (`width × height` pixels of canvas) and the
+/// scene's JSON, named `id` (unique in the page). The page needs [`VIEWER_STYLE`] and, once,
+/// [`VIEWER_SCRIPT`].
+pub fn viewer_html(scene: &Scene, id: &str, width: usize, height: usize) -> String {
+    format!(
+        "<div class=\"am-viewer\" data-scene=\"{id}\" data-width=\"{width}\" data-height=\"{height}\">The 3D view needs JavaScript and WebGL.</div>\n<script type=\"application/json\" id=\"{id}\">{}</script>\n",
+        scene_json(scene)
+    )
+}
+
+/// The mesh's faces drawn of a kind in 3D (its faces) and 2D (the cell itself), by local
+/// corner: what [`Layer::mesh`] gives the viewer.
+pub fn drawn_faces(kind: ElementKind) -> Vec<Vec<usize>> {
+    let linear = kind.linear();
+    if linear.dimension() == 3 {
+        linear.faces().iter().map(|f| f.to_vec()).collect()
+    } else {
+        vec![(0..linear.nodes()).collect()]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Read as _;
+
+    fn unpack(v: &Value, key: &str) -> Vec<u8> {
+        let b = base64::engine::general_purpose::STANDARD
+            .decode(v[key].as_str().unwrap())
+            .unwrap();
+        let mut out = Vec::new();
+        flate2::read::GzDecoder::new(&b[..])
+            .read_to_end(&mut out)
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn a_scene_carries_its_arrays_back_exactly() {
+        let mesh = FeMesh::<2> {
+            nodes: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            kind: ElementKind::Quad4,
+            connectivity: vec![0, 1, 2, 3],
+            sets: Default::default(),
+        };
+        let mut l = Layer::mesh("mesh", "a </script> mesh", &mesh);
+        l.cell_values.push(("sj".into(), vec![0.5]));
+        let mut scene = Scene::new(2, &[]);
+        scene.layers.push(l);
+        let text = scene_json(&scene);
+        assert!(!text.contains("</script>"), "{text}");
+        let v: Value = serde_json::from_str(&text).unwrap();
+        let layer = &v["layers"][0];
+        let cells: Vec<u32> = unpack(&layer["cells"], "u32")
+            .chunks(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(cells, vec![0, 1, 2, 3]);
+        let pos: Vec<f32> = unpack(&layer["positions"], "f32")
+            .chunks(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(pos, vec![0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.]);
+        assert_eq!(layer["faces"], json!([[0, 1, 2, 3]]));
+        let sj = unpack(&layer["cell_values"]["sj"], "f32");
+        assert_eq!(f32::from_le_bytes(sj[..4].try_into().unwrap()), 0.5);
+    }
+
+    #[test]
+    fn hexahedra_show_their_six_faces_and_quadrilaterals_themselves() {
+        assert_eq!(drawn_faces(ElementKind::Hex20).len(), 6);
+        assert_eq!(drawn_faces(ElementKind::Quad4), vec![vec![0, 1, 2, 3]]);
+        assert_eq!(drawn_faces(ElementKind::Tet10).len(), 4);
+    }
+}

@@ -29,8 +29,10 @@ pub fn indices<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<V
             "{what}: an integer array of shape (n, {K}) expected, got {shape:?}"
         )));
     }
-    let bytes: Vec<u8> = a.call_method0("tobytes")?.extract()?;
+    let bytes = a.call_method0("tobytes")?;
     let v: Vec<i64> = bytes
+        .cast::<PyBytes>()?
+        .as_bytes()
         .chunks_exact(8)
         .map(|c| i64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
         .collect();

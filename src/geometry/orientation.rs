@@ -14,10 +14,8 @@ pub fn prepare_surface(mut s: Shape<3>) -> Result<Shape<3>> {
         return Err(Error::shape(&s.name, "has no facets (a surface is needed)"));
     }
     s.validate()?;
-    let scale = norm(crate::geometry::sub(
-        crate::geometry::bounding_box(&s.points).1,
-        crate::geometry::bounding_box(&s.points).0,
-    ));
+    let (lo, hi) = crate::geometry::bounding_box(&s.points);
+    let scale = norm(crate::geometry::sub(hi, lo));
     for (k, f) in s.facets.iter().enumerate() {
         if f[0] == f[1] || f[1] == f[2] || f[0] == f[2] {
             return Err(Error::shape(
@@ -47,17 +45,15 @@ pub fn prepare_surface(mut s: Shape<3>) -> Result<Shape<3>> {
         flip[seed] = Some(false);
         let mut queue = vec![seed];
         while let Some(k) = queue.pop() {
-            let fk = oriented(&s.facets[k], flip[k] == Some(true));
+            let f = s.facets[k];
             for e in 0..3 {
-                let (a, b) = (fk[e], fk[(e + 1) % 3]);
-                // The slot of edge a-b in the facet as listed (a flip turns the order).
-                let slot = (0..3)
-                    .find(|&t| {
-                        let (x, y) = (s.facets[k][t], s.facets[k][(t + 1) % 3]);
-                        (x == a && y == b) || (x == b && y == a)
-                    })
-                    .unwrap_or(e);
-                let Some(j) = across[3 * k + slot] else {
+                // Edge slot e of the facet as listed, directed as the facet now turns.
+                let (a, b) = if flip[k] == Some(true) {
+                    (f[(e + 1) % 3], f[e])
+                } else {
+                    (f[e], f[(e + 1) % 3])
+                };
+                let Some(j) = across[3 * k + e] else {
                     continue;
                 };
                 // A consistent neighbour runs the shared edge from b to a.
@@ -103,49 +99,49 @@ fn facets_across_edges(s: &Shape<3>) -> Result<(Vec<Option<usize>>, bool)> {
     // times faster than a hash map of the edges or a comparison sort of them on a femur's
     // 44 000 slots); within a bucket of a few, slots of the same larger vertex pair up.
     let n = s.points.len();
-    let edge = |slot: usize| {
-        let f = &s.facets[slot / 3];
-        let (a, b) = (f[slot % 3], f[(slot % 3 + 1) % 3]);
-        (a.min(b), a.max(b))
-    };
-    let mut start = vec![0usize; n + 1];
-    for slot in 0..3 * s.facets.len() {
-        start[edge(slot).0 + 1] += 1;
+    let ends: Vec<(u32, u32)> = s
+        .facets
+        .iter()
+        .flat_map(|f| {
+            (0..3).map(move |e| {
+                let (a, b) = (f[e], f[(e + 1) % 3]);
+                (a.min(b) as u32, a.max(b) as u32)
+            })
+        })
+        .collect();
+    let mut start = vec![0u32; n + 1];
+    for &(a, _) in &ends {
+        start[a as usize + 1] += 1;
     }
     for v in 0..n {
         start[v + 1] += start[v];
     }
     let mut fill = start.clone();
-    let mut bucketed = vec![0usize; 3 * s.facets.len()];
-    for slot in 0..3 * s.facets.len() {
-        let a = edge(slot).0;
-        bucketed[fill[a]] = slot;
-        fill[a] += 1;
+    // (larger vertex, slot) per bucket.
+    let mut bucketed = vec![(0u32, 0u32); ends.len()];
+    for (slot, &(a, b)) in ends.iter().enumerate() {
+        let at = &mut fill[a as usize];
+        bucketed[*at as usize] = (b, slot as u32);
+        *at += 1;
     }
-    let mut across = vec![None; bucketed.len()];
+    let mut across = vec![None; ends.len()];
     let mut closed = true;
-    let mut group: Vec<usize> = Vec::new();
     for v in 0..n {
-        let bucket = &bucketed[start[v]..start[v + 1]];
-        for (i, &x) in bucket.iter().enumerate() {
-            let b = edge(x).1;
-            // Each edge once, from its first slot in the bucket.
-            if bucket[..i].iter().any(|&y| edge(y).1 == b) {
-                continue;
-            }
-            group.clear();
-            group.extend(bucket[i..].iter().copied().filter(|&y| edge(y).1 == b));
-            match group[..] {
+        let bucket = &mut bucketed[start[v] as usize..start[v + 1] as usize];
+        bucket.sort_unstable();
+        for group in bucket.chunk_by(|x, y| x.0 == y.0) {
+            match group {
                 [_] => closed = false,
                 [x, y] => {
-                    across[x] = Some(y / 3);
-                    across[y] = Some(x / 3);
+                    across[x.1 as usize] = Some(y.1 as usize / 3);
+                    across[y.1 as usize] = Some(x.1 as usize / 3);
                 }
                 _ => {
                     return Err(Error::shape(
                         &s.name,
                         format!(
-                            "is not edge-manifold: the edge between vertices {v} and {b} is shared by {} facets",
+                            "is not edge-manifold: the edge between vertices {v} and {} is shared by {} facets",
+                            group[0].0,
                             group.len()
                         ),
                     ));

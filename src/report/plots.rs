@@ -464,6 +464,32 @@ pub fn plot_subject(
                     .map_err(perr(path))?;
             }
         }
+        // The mesh panel, with its colour bar under it.
+        let (right, bar) = right.split_vertically(500);
+        {
+            let (x0, x1) = (120i32, 430i32);
+            for x in x0..x1 {
+                let s = f64::from(x - x0) / f64::from(x1 - x0 - 1);
+                bar.draw(&Rectangle::new(
+                    [(x, 6), (x + 1, 18)],
+                    jacobian_color(s.max(1e-6)).filled(),
+                ))
+                .map_err(perr(path))?;
+            }
+            if text {
+                let font = ("sans-serif", 13).into_font().color(&BLACK);
+                bar.draw(&Text::new(
+                    "scaled Jacobian: ≤ 0",
+                    (x0 - 118, 5),
+                    font.clone(),
+                ))
+                .map_err(perr(path))?;
+                bar.draw(&Text::new("0.5", ((x0 + x1) / 2 - 8, 21), font.clone()))
+                    .map_err(perr(path))?;
+                bar.draw(&Text::new("1", (x1 + 6, 5), font))
+                    .map_err(perr(path))?;
+            }
+        }
         {
             let mut b = ChartBuilder::on(&right);
             b.margin(10);

@@ -63,8 +63,9 @@ pub struct View {
     pub rotation: [[f64; 3]; 3],
     /// World point at the picture's centre.
     pub center: Point<3>,
-    /// Half the side of the square window shown (world units).
-    pub half: f64,
+    /// Half the width and half the height of the window shown (world units); a picture of
+    /// another aspect shows more on the longer side.
+    pub half: [f64; 2],
 }
 
 impl View {
@@ -79,18 +80,52 @@ impl View {
         let up: [f64; 3] = std::array::from_fn(|d| co * axes[1][d] + s * axes[2][d]);
         let out: [f64; 3] = std::array::from_fn(|d| -s * axes[1][d] + co * axes[2][d]);
         let rotation = [axes[0], up, out];
-        let mut half = 0.0f64;
+        // The window: the points' extent across and up, centred on them.
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in points {
             let q = sub(*p, c);
-            for row in rotation.iter().take(2) {
-                half = half.max(dot(row, &q).abs());
+            for k in 0..2 {
+                let v = dot(&rotation[k], &q);
+                lo[k] = lo[k].min(v);
+                hi[k] = hi[k].max(v);
             }
         }
+        if points.is_empty() {
+            (lo, hi) = ([-1.0; 2], [1.0; 2]);
+        }
+        let mid: [f64; 2] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+        let center =
+            std::array::from_fn(|d| c[d] + mid[0] * rotation[0][d] + mid[1] * rotation[1][d]);
+        let extent = (0.5 * (hi[0] - lo[0])).max(0.5 * (hi[1] - lo[1]));
+        let half = std::array::from_fn(|k| {
+            (0.5 * (hi[k] - lo[k]))
+                .max(0.02 * extent)
+                .max(f64::MIN_POSITIVE)
+                * 1.05
+        });
         View {
             rotation,
-            center: c,
-            half: half.max(f64::MIN_POSITIVE) * 1.05,
+            center,
+            half,
         }
+    }
+
+    /// The same view from the other side: turned half round about the vertical.
+    pub fn back(&self) -> View {
+        let [r, u, o] = self.rotation;
+        View {
+            rotation: [r.map(|v| -v), u, o.map(|v| -v)],
+            ..*self
+        }
+    }
+
+    /// The height of a picture `width` pixels wide that the view fills (cropped to the
+    /// shape), between 0.3 and 1.25 times the width.
+    pub fn height_for(&self, width: usize) -> usize {
+        let h = width as f64 * self.half[1] / self.half[0];
+        (h.round() as usize)
+            .clamp(width * 3 / 10, width * 5 / 4)
+            .max(1)
     }
 
     fn project(&self, p: &Point<3>, w: usize, h: usize) -> [f64; 3] {
@@ -98,7 +133,7 @@ impl View {
         let x = dot(&self.rotation[0], &q);
         let y = dot(&self.rotation[1], &q);
         let z = dot(&self.rotation[2], &q);
-        let scale = 0.5 * w.min(h) as f64 / self.half;
+        let scale = (0.5 * w as f64 / self.half[0]).min(0.5 * h as f64 / self.half[1]);
         [0.5 * w as f64 + x * scale, 0.5 * h as f64 - y * scale, z]
     }
 }
@@ -188,6 +223,28 @@ pub fn render(
         }
     }
     img
+}
+
+/// [`render`] from the front (`view`) and from the back ([`View::back`]), side by side, each
+/// `width / 2` pixels wide and as high as the shape needs ([`View::height_for`]).
+#[allow(clippy::too_many_arguments)]
+pub fn render_front_back(
+    points: &[Point<3>],
+    facets: &[[usize; 3]],
+    vertex: Option<&[f64]>,
+    face: Option<&[f64]>,
+    color: ColorMap,
+    view: &View,
+    width: usize,
+) -> Image {
+    let w = (width / 2).max(1);
+    let h = view.height_for(w);
+    let mut out = Image::new(2 * w, h);
+    for (k, v) in [*view, view.back()].iter().enumerate() {
+        let img = render(points, facets, vertex, face, color, v, w, h);
+        out.paste(&img, k * w, 0);
+    }
+    out
 }
 
 /// The top of a distance colour scale: the 95th percentile of `distances` (the colours then

@@ -12,6 +12,10 @@ use crate::model::Atlas;
 use crate::report::{SubjectReport, plot_subject};
 use std::path::Path;
 
+/// Width of the 3D pictures (pixels): a front and a back view side by side, each cropped to
+/// the shape.
+const PICTURE_WIDTH: usize = 760;
+
 /// The 3D pictures of a subject (figs. 23 and 27): the fitted surface coloured by its
 /// distance to the subject, and the morphed mesh's surface coloured by scaled Jacobian, seen
 /// alike; written as `NAME_distance.png`, `NAME_quality.png` into `out`. Returns their names.
@@ -47,22 +51,27 @@ fn pictures_3d<const D: usize>(
         lo_label: "0".into(),
         hi_label: format!("{far:.3} (95th pct.)"),
     };
-    let img = render::render(
+    let img = render::render_front_back(
         &instance,
         &tris,
         Some(distance),
         None,
         legend.color,
         &view,
-        480,
-        360,
+        PICTURE_WIDTH,
     );
-    let title = format!("{}: fit, distance to the subject", subject.name);
+    let title = format!(
+        "{}: fit, distance to the subject (front, back)",
+        subject.name
+    );
     let img = render::annotated(&img, &title, Some(&legend));
     let name = format!("{base}_distance.png");
     write_atomic(&out.join(&name), &img.png()?)?;
     files.push(name);
-    let title = format!("{}: morphed mesh, scaled Jacobian", subject.name);
+    let title = format!(
+        "{}: morphed mesh, scaled Jacobian (front, back)",
+        subject.name
+    );
     let name = format!("{base}_quality.png");
     write_atomic(
         &out.join(&name),
@@ -96,15 +105,14 @@ pub(crate) fn quality_picture<const D: usize>(
         lo_label: "≤ 0".into(),
         hi_label: "1".into(),
     };
-    let img = render::render(
+    let img = render::render_front_back(
         &mesh3.nodes,
         &btris,
         None,
         Some(&bvals),
         legend.color,
         view,
-        480,
-        360,
+        PICTURE_WIDTH,
     );
     render::annotated(&img, title, Some(&legend)).png()
 }
@@ -231,7 +239,7 @@ pub fn write_subject<const D: usize>(
         // The index's thumbnail: the mesh (3D) or the subject's picture (2D), 200 pixels wide.
         if let Some(f) = files.iter().rev().find(|f| f.ends_with(".png")) {
             let bytes =
-                std::fs::read(out.join(f)).map_err(|e| crate::Error::io(&out.join(f), e))?;
+                std::fs::read(out.join(f)).map_err(|e| crate::Error::io(out.join(f), e))?;
             let name = format!("{base}_thumb.png");
             write_atomic(
                 &out.join(&name),

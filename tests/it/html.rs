@@ -1,19 +1,30 @@
-//! `report.html` in a real browser (issue 9): the demo's 2D and 3D reports opened in headless
-//! Chromium (Debian `chromium`, installed by `.ci/run`): every image decodes, no script error,
-//! every link names a file that exists, and a screenshot is taken.
+//! The report in a real browser: headless Chromium (Debian `chromium`, installed by `.ci/run`;
+//! WebGL by SwiftShader) opens the demo's 2D and 3D `report.html`, every subject's page and
+//! the model's page, as a user would after `atlasmesh demo`: every image decodes, no script
+//! error, every link names a file that exists, every 3D view draws (pixels on its canvas, and
+//! in a screenshot the mesh's scaled-Jacobian colours), the model page has its mode slider.
+//! With the data, the 40-hand leave-one-out (default options, plots on) keeps its index small.
 
 use crate::common;
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn chromium(args: &[&str], page: &std::path::Path) -> std::process::Output {
+fn chromium(args: &[&str], page: &Path) -> std::process::Output {
     Command::new("chromium")
         .args([
             "--headless=new",
             "--no-sandbox",
             "--disable-gpu",
+            // WebGL in software, as on a machine without a GPU.
+            "--use-angle=swiftshader",
+            "--enable-unsafe-swiftshader",
             "--hide-scrollbars",
-            "--virtual-time-budget=10000",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--virtual-time-budget=15000",
         ])
         .args(args)
         .arg(format!("file://{}", page.display()))
@@ -21,14 +32,148 @@ fn chromium(args: &[&str], page: &std::path::Path) -> std::process::Output {
         .unwrap()
 }
 
-fn attribute(body: &str, name: &str) -> Option<String> {
-    let at = body.find(&format!("{name}=\""))? + name.len() + 2;
-    let end = body[at..].find('"')?;
-    Some(body[at..at + end].to_string())
+fn attribute(tag: &str, name: &str) -> Option<String> {
+    let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+    let end = tag[at..].find('"')?;
+    Some(tag[at..at + end].to_string())
+}
+
+/// The opening tags of the DOM's elements of class `class` (or `<body`).
+fn tags<'a>(dom: &'a str, start: &str) -> Vec<&'a str> {
+    dom.split(start)
+        .skip(1)
+        .filter_map(|t| t.split('>').next())
+        .collect()
+}
+
+/// What a page looks like once loaded: its DOM, checked for images, script errors, console
+/// errors and links (every one resolving to a file beside it).
+fn open(page: &Path, least_images: usize, least_links: usize) -> String {
+    assert!(page.is_file(), "{}", page.display());
+    let o = chromium(&["--enable-logging=stderr", "--v=0", "--dump-dom"], page);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let dom = String::from_utf8_lossy(&o.stdout).to_string();
+    let body = tags(&dom, "<body").first().copied().unwrap_or_default();
+    let images: usize = attribute(body, "data-images")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("the page's check did not run: <body{body}>"));
+    assert!(
+        images >= least_images,
+        "{images} images in {}",
+        page.display()
+    );
+    assert_eq!(
+        attribute(body, "data-broken").as_deref(),
+        Some("0"),
+        "broken images in {}",
+        page.display()
+    );
+    assert_eq!(
+        attribute(body, "data-errors").as_deref(),
+        Some(""),
+        "script errors in {}",
+        page.display()
+    );
+    let links: Vec<&str> = dom
+        .split("href=\"")
+        .skip(1)
+        .filter_map(|r| r.split('"').next())
+        .collect();
+    assert!(
+        links.len() >= least_links,
+        "{} links in {}",
+        links.len(),
+        page.display()
+    );
+    let dir = page.parent().unwrap();
+    for l in &links {
+        assert!(dir.join(l).is_file(), "link {l} of {}", page.display());
+    }
+    let log = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !log.lines()
+            .any(|l| l.contains("CONSOLE") && (l.contains("Uncaught") || l.contains("Error"))),
+        "console errors in {}: {log}",
+        page.display()
+    );
+    dom
+}
+
+/// Checks the page's 3D view drew: its state, its triangles, the pixels on its canvas.
+fn view_drew(dom: &str, page: &Path) {
+    let body = tags(dom, "<body").first().copied().unwrap_or_default();
+    assert_eq!(
+        attribute(body, "data-viewers-ready").as_deref(),
+        Some("yes"),
+        "the views of {} did not start: <body{body}>",
+        page.display()
+    );
+    let viewers = tags(dom, "<div class=\"am-viewer\"");
+    assert_eq!(viewers.len(), 1, "{}", page.display());
+    let v = viewers[0];
+    assert_eq!(
+        attribute(v, "data-state").as_deref(),
+        Some("drawn"),
+        "{}: <div{v}>",
+        page.display()
+    );
+    let triangles: usize = attribute(v, "data-triangles").unwrap().parse().unwrap();
+    assert!(
+        triangles >= 100,
+        "{triangles} triangles in {}",
+        page.display()
+    );
+    // More than a twentieth of the 760 × 520 canvas is drawn on.
+    let drawn: usize = attribute(v, "data-drawn-pixels").unwrap().parse().unwrap();
+    assert!(
+        drawn > 760 * 520 / 20,
+        "{drawn} pixels drawn in {}",
+        page.display()
+    );
+}
+
+/// A screenshot of `page`: its pixels (RGB rows).
+fn screenshot(page: &Path, shot: &Path) -> (usize, usize, Vec<u8>) {
+    let _ = std::fs::remove_file(shot);
+    let o = chromium(
+        &[
+            "--window-size=1200,900",
+            &format!("--screenshot={}", shot.display()),
+        ],
+        page,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(shot).unwrap()));
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let ch = info.color_type.samples();
+    let rgb: Vec<u8> = buf[..info.buffer_size()]
+        .chunks(ch)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    (info.width as usize, info.height as usize, rgb)
+}
+
+/// Pixels coloured as the scaled Jacobian's good end (green, shaded), in the screenshot.
+fn greens(rgb: &[u8]) -> usize {
+    rgb.chunks(3)
+        .filter(|p| p[1] > 90 && i32::from(p[1]) > i32::from(p[0]) + 30 && p[1] > p[2] + 60)
+        .count()
+}
+
+fn pages(dir: &Path, ext: &str) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == ext))
+        .collect();
+    v.sort();
+    v
 }
 
 #[test]
-fn the_demo_report_opens_in_chromium_with_every_image() {
+fn the_demo_report_opens_in_chromium_and_every_view_draws() {
     if !common::tool("chromium", "report.html in headless Chromium") {
         return;
     }
@@ -45,71 +190,76 @@ fn the_demo_report_opens_in_chromium_with_every_image() {
         stdout.trim_end().ends_with("report.html"),
         "the demo ends with the path of its report.html: {stdout}"
     );
-    for (page, least) in [
-        (out.join("report.html"), 10),
-        (out.join("3d/report.html"), 10),
-    ] {
-        assert!(page.is_file(), "{}", page.display());
-        let o = chromium(&["--enable-logging=stderr", "--v=0", "--dump-dom"], &page);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let dom = String::from_utf8_lossy(&o.stdout);
-        let body = dom
-            .split("<body")
-            .nth(1)
-            .and_then(|b| b.split('>').next())
-            .unwrap_or_default()
-            .to_string();
-        let images: usize = attribute(&body, "data-images")
-            .and_then(|v| v.parse().ok())
-            .unwrap_or_else(|| panic!("the page's check did not run: <body{body}>"));
-        assert!(images >= least, "{images} images in {}", page.display());
-        assert_eq!(
-            attribute(&body, "data-broken").as_deref(),
-            Some("0"),
-            "broken images in {}",
-            page.display()
-        );
-        assert_eq!(
-            attribute(&body, "data-errors").as_deref(),
-            Some(""),
-            "script errors in {}",
-            page.display()
-        );
-        // Every subject's files are linked, and every link names a file beside the page.
-        let links: Vec<&str> = dom
-            .split("href=\"")
-            .skip(1)
-            .filter_map(|r| r.split('"').next())
+    for dir in [out.clone(), out.join("3d")] {
+        // The index: population plots and a thumbnail per subject, linked, not embedded.
+        let index = dir.join("report.html");
+        let dom = open(&index, 10, 10);
+        assert!(!dom.contains("data:image/png"), "{}", index.display());
+        assert!(dom.contains("href=\"model.html\""), "{}", index.display());
+        let subject_pages: Vec<PathBuf> = pages(&dir, "html")
+            .into_iter()
+            .filter(|p| !p.ends_with("report.html") && !p.ends_with("model.html"))
             .collect();
-        assert!(
-            links.len() >= 10,
-            "{} links in {}",
-            links.len(),
-            page.display()
-        );
-        let dir = page.parent().unwrap();
-        for l in &links {
-            assert!(dir.join(l).is_file(), "link {l} of {}", page.display());
+        assert_eq!(subject_pages.len(), 6, "{}", dir.display());
+        for p in &subject_pages {
+            let name = p.file_name().unwrap().to_str().unwrap();
+            assert!(dom.contains(&format!("href=\"{name}\"")), "{name} linked");
+            let page = open(p, 1, 3);
+            view_drew(&page, p);
+            assert!(page.contains("scaled Jacobian"), "{}", p.display());
         }
-        let log = String::from_utf8_lossy(&o.stderr);
+        let model = dir.join("model.html");
+        let page = open(&model, 1, 1);
+        view_drew(&page, &model);
         assert!(
-            !log.lines()
-                .any(|l| l.contains("CONSOLE") && (l.contains("Uncaught") || l.contains("Error"))),
-            "console errors: {log}"
+            page.contains("class=\"am-w\"") && page.contains("mode 1"),
+            "the model page has its mode slider"
         );
-        let shot = d.join("shot.png");
-        let _ = std::fs::remove_file(&shot);
-        let o = chromium(
-            &[
-                "--window-size=1400,1800",
-                &format!("--screenshot={}", shot.display()),
-            ],
-            &page,
+        // Seen as a user sees it: the view of the mesh, coloured by scaled Jacobian.
+        let (w, h, rgb) = screenshot(&subject_pages[0], &d.join("shot.png"));
+        let g = greens(&rgb);
+        assert!(
+            g > w * h / 50,
+            "{g} green pixels of {w} × {h} in the screenshot of {}",
+            subject_pages[0].display()
         );
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let png = std::fs::read(&shot).unwrap();
-        assert_eq!(&png[1..4], b"PNG");
-        assert!(png.len() > 50_000, "screenshot of {} bytes", png.len());
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn the_forty_hands_leave_one_out_index_stays_small() {
+    let Some(data) = common::data_dir("the_forty_hands_leave_one_out_index_stays_small") else {
+        return;
+    };
+    let d = common::temp_dir("html-hands");
+    let out = d.join("loo");
+    let o = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+        .args(["loo", "--quiet", "--shapes"])
+        .arg(data.join("imm-hands-2d/hands_long.csv"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    // What the index loads: itself and its pictures.
+    let mut bytes = html.len();
+    for src in html.split("src=\"").skip(1) {
+        let f = src.split('"').next().unwrap();
+        bytes += std::fs::metadata(out.join(f)).unwrap().len() as usize;
+    }
+    assert!(
+        bytes < 5 << 20,
+        "the index and its pictures weigh {bytes} bytes"
+    );
+    let pages = pages(&out, "html");
+    assert_eq!(pages.len(), 42, "40 subjects, the model and the index");
+    if common::tool("chromium", "the hands' report in headless Chromium") {
+        open(&out.join("report.html"), 40, 40);
+        let page = out.join("0.html");
+        let dom = open(&page, 1, 3);
+        view_drew(&dom, &page);
     }
     std::fs::remove_dir_all(&d).ok();
 }

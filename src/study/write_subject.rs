@@ -238,8 +238,7 @@ pub fn write_subject<const D: usize>(
         }
         // The index's thumbnail: the mesh (3D) or the subject's picture (2D), 200 pixels wide.
         if let Some(f) = files.iter().rev().find(|f| f.ends_with(".png")) {
-            let bytes =
-                std::fs::read(out.join(f)).map_err(|e| crate::Error::io(out.join(f), e))?;
+            let bytes = std::fs::read(out.join(f)).map_err(|e| crate::Error::io(out.join(f), e))?;
             let name = format!("{base}_thumb.png");
             write_atomic(
                 &out.join(&name),

@@ -56,7 +56,9 @@ class FitResult:
     """A subject fitted (Algorithm 1, eq. 5-8) with its morphed mesh (eq. 9) and measures.
 
     The measures of report.json are attributes too (rms_distance, success,
-    scaled_jacobian_min, inverted_elements, ...)."""
+    scaled_jacobian_min, inverted_elements, ...). For a fit made with mesh=False,
+    rms_distance and rms_distance_relative (the two-way RMS distance, which needs an index
+    of the instance) are computed when first read."""
 
     @property
     def weights(self) -> FloatArray:

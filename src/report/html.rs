@@ -15,7 +15,6 @@
 
 use super::{Report, SubjectReport};
 use crate::error::Result;
-use base64::Engine as _;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -29,9 +28,6 @@ pub struct Pictures {
     /// The model's page, or why it was not written.
     pub model_page: Option<std::result::Result<String, String>>,
 }
-
-/// Instances whose pictures are embedded in `instances.html` (the table lists every one).
-pub const MAX_SUBJECT_PICTURES: usize = 100;
 
 pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -51,18 +47,6 @@ fn linked_img(dir: &Path, file: &str, alt: &str, class: &str) -> String {
         )
     } else {
         String::new()
-    }
-}
-
-/// `<img>` of a PNG file in `dir`, embedded; empty when the file is not there.
-fn img(dir: &Path, file: &str, alt: &str, class: &str) -> String {
-    match std::fs::read(dir.join(file)) {
-        Ok(bytes) if bytes.starts_with(b"\x89PNG") => format!(
-            "<img class=\"{class}\" alt=\"{}\" src=\"data:image/png;base64,{}\">",
-            escape(alt),
-            base64::engine::general_purpose::STANDARD.encode(bytes)
-        ),
-        _ => String::new(),
     }
 }
 
@@ -441,7 +425,7 @@ pub(crate) const SCRIPT: &str = r#"
 "#;
 
 /// Writes `instances.html` for the instances of `report` (`atlasmesh instance` or `sample`),
-/// embedding their pictures found in `dir`: the summary, the weights of the first two modes
+/// with the thumbnails of their pictures found in `dir` (linked to the pictures): the summary, the weights of the first two modes
 /// against each other (a sampled population's spread), and a sortable table with a row per
 /// instance (its weights, its mesh's quality and distance to its surface, its files).
 pub fn write_instances(path: &Path, report: &super::InstancesReport, dir: &Path) -> Result<()> {
@@ -504,7 +488,7 @@ pub fn write_instances(path: &Path, report: &super::InstancesReport, dir: &Path)
         let _ = write!(h, "<th>mode {k} (sd)</th>");
     }
     h.push_str("<th>elements</th><th>SJ min</th><th>SJ min before repair</th><th>below repair bound</th><th>boundary RMS</th><th>RMS / element</th><th>boundary p95</th><th>element size</th><th>files</th><th>picture</th></tr></thead><tbody>\n");
-    for (k, r) in report.instances.iter().enumerate() {
+    for r in &report.instances {
         let _ = write!(
             h,
             "<tr><td>{}</td><td>{}</td>",
@@ -535,10 +519,13 @@ pub fn write_instances(path: &Path, report: &super::InstancesReport, dir: &Path)
             let _ = write!(h, "<a href=\"{}\">{}</a> ", escape(f), escape(short));
         }
         h.push_str("</td><td class=\"pics\">");
-        if k < MAX_SUBJECT_PICTURES {
-            for f in r.files.iter().filter(|f| f.ends_with(".png")) {
-                h.push_str(&img(dir, f, &format!("{}: its mesh", r.name), "thumb"));
-            }
+        let full = r
+            .files
+            .iter()
+            .find(|f| f.ends_with(".png") && !f.ends_with("_thumb.png"));
+        if let (Some(t), Some(full)) = (r.files.iter().find(|f| f.ends_with("_thumb.png")), full) {
+            let i = linked_img(dir, t, &format!("{}: its mesh", r.name), "thumb");
+            let _ = write!(h, "<a href=\"{}\">{i}</a>", escape(full));
         }
         h.push_str("</td></tr>\n");
     }

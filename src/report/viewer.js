@@ -6,7 +6,8 @@
 //
 // The viewer records its state on its container for tests and for the curious:
 // data-state ("drawn", "no-webgl", "error: ..."), data-triangles, data-drawn-pixels (the
-// pixels of the first frame that are not background).
+// pixels of the first frame that are not background), data-ready-ms (when the first frame
+// was drawn, from the page's start).
 (function () {
   'use strict';
 
@@ -110,15 +111,36 @@
     var self = this;
     scene.fields.forEach(function (f) { self.fieldById[f.id] = f; });
     this.field = scene.fields.length ? scene.fields[0].id : null;
-    this.clip = { on: false, axis: 0, at: 0.5 };
+    this.clip = { on: false, axis: scene.dimension === 3 ? 2 : 0, at: 0.5 };
     this.worst = true;
     this.mode = { k: 0, w: 0 };
+    var side = this.fromHash();
     this.build();
     this.prepare();
     this.camera = null;
-    this.reset(1);
+    this.reset(side);
     this.update();
   }
+
+  // A view named in the page's address: #clip=AXIS,AT (axis 0-2, AT in 0..1 of the extent),
+  // color=FIELD, mode=K,W (mode K from 1, W in sd), side=back; e.g.
+  // NAME.html#clip=2,0.5&color=distance. Returns the side to look from.
+  Viewer.prototype.fromHash = function () {
+    var side = 1, self = this;
+    (location.hash || '').replace(/^#/, '').split('&').forEach(function (kv) {
+      var p = kv.split('='), v = (p[1] || '').split(',');
+      if (p[0] === 'clip' && v.length === 2) {
+        self.clip = { on: true, axis: Math.max(0, Math.min(2, v[0] | 0)), at: Math.max(0, Math.min(1, +v[1] || 0)) };
+      } else if (p[0] === 'color' && self.fieldById[p[1]]) {
+        self.field = p[1];
+      } else if (p[0] === 'mode' && v.length === 2 && self.scene.modes) {
+        self.mode = { k: Math.max(0, Math.min(self.scene.modes.sd.length - 1, (v[0] | 0) - 1)), w: +v[1] || 0 };
+      } else if (p[0] === 'side' && p[1] === 'back') {
+        side = -1;
+      }
+    });
+    return side;
+  };
 
   Viewer.prototype.build = function () {
     var self = this, s = this.scene, root = this.root;
@@ -147,6 +169,7 @@
     if (s.fields.length) {
       var opts = s.fields.map(function (f) { return '<option value="' + esc(f.id) + '">' + esc(f.label) + (f.unit ? ' (' + esc(f.unit) + ')' : '') + '</option>'; }).join('');
       var d = add('<label>colour by <select>' + opts + '</select></label>');
+      d.querySelector('select').value = this.field;
       d.querySelector('select').addEventListener('change', function (e) { self.field = e.target.value; self.update(); });
     }
     // Clipping plane.
@@ -155,7 +178,9 @@
       '</label> <select class="am-axis"><option value="0">x</option><option value="1">y</option><option value="2" ' +
       (s.dimension === 3 ? 'selected' : '') + '>z</option></select>' +
       ' <input type="range" class="am-at" min="0" max="1000" value="500">');
-    if (s.dimension !== 3) this.clip.axis = 0; else this.clip.axis = 2;
+    dc.querySelector('.am-clip').checked = this.clip.on;
+    dc.querySelector('.am-axis').value = String(this.clip.axis);
+    dc.querySelector('.am-at').value = String(Math.round(this.clip.at * 1000));
     dc.querySelector('.am-clip').addEventListener('change', function (e) { self.clip.on = e.target.checked; self.update(); });
     dc.querySelector('.am-axis').addEventListener('change', function (e) { self.clip.axis = +e.target.value; self.update(); });
     dc.querySelector('.am-at').addEventListener('input', function (e) { self.clip.at = e.target.value / 1000; self.update(); });
@@ -176,6 +201,9 @@
         self.update();
       });
       this.modeSlider = dm.querySelector('.am-w');
+      dm.querySelector('.am-mode').value = String(this.mode.k);
+      this.modeSlider.value = String(this.mode.w);
+      dm.querySelector('.am-wv').textContent = (this.mode.w >= 0 ? '+' : '') + this.mode.w.toFixed(1) + ' σ';
     }
     var dv = add('<button type="button" data-v="1">front</button> <button type="button" data-v="-1">back</button>');
     dv.querySelectorAll('button').forEach(function (b) {
@@ -263,19 +291,28 @@
     var v = s.view || { look: [0, 0, -1], up: [0, 1, 0] };
     var look = norm3(v.look), up = norm3(v.up);
     if (side < 0) look = [-look[0], -look[1], -look[2]];
-    // Far enough for the bounding box's corners to fit the canvas, with a margin.
-    var right = norm3(cross(look, up)), lo = this.lo, hi = this.hi, c = this.center;
-    var hx = 0, hy = 0, hz = 0;
-    for (var k = 0; k < 8; k++) {
-      var q = [k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]];
-      var d = [q[0] - c[0], q[1] - c[1], q[2] - c[2]];
-      hx = Math.max(hx, Math.abs(d[0] * right[0] + d[1] * right[1] + d[2] * right[2]));
-      hy = Math.max(hy, Math.abs(d[0] * up[0] + d[1] * up[1] + d[2] * up[2]));
-      hz = Math.max(hz, Math.abs(d[0] * look[0] + d[1] * look[1] + d[2] * look[2]));
-    }
+    // Centred on the shown layers' points as seen, far enough for all of them to fit the
+    // canvas, with a margin.
+    var right = norm3(cross(look, up)), axes = [right, up, look];
+    var lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    var layers = this.scene.layers.filter(function (l) { return l.visible; });
+    if (!layers.length) layers = this.scene.layers;
+    layers.forEach(function (l) {
+      var p = l.positions, n = p.length / 3, step = Math.max(1, Math.floor(n / 20000));
+      for (var i = 0; i < n; i += step) {
+        for (var a = 0; a < 3; a++) {
+          var v = p[3 * i] * axes[a][0] + p[3 * i + 1] * axes[a][1] + p[3 * i + 2] * axes[a][2];
+          if (v < lo[a]) lo[a] = v;
+          if (v > hi[a]) hi[a] = v;
+        }
+      }
+    });
+    var mid = [0, 1, 2].map(function (a) { return isFinite(lo[a]) ? (lo[a] + hi[a]) / 2 : 0; });
+    var c = [0, 1, 2].map(function (d) { return mid[0] * right[d] + mid[1] * up[d] + mid[2] * look[d]; });
+    var hx = (hi[0] - lo[0]) / 2 || 0, hy = (hi[1] - lo[1]) / 2 || 0, hz = (hi[2] - lo[2]) / 2 || 0;
     var aspect = this.canvas.width / this.canvas.height;
     var half = Math.max(hy, hx / aspect, 1e-9 * this.radius) * 1.08;
-    this.camera = { target: c.slice(), look: look, up: up, dist: half / Math.tan(Math.PI / 12) + hz };
+    this.camera = { target: c, look: look, up: up, dist: half / Math.tan(Math.PI / 12) + hz };
   };
 
   Viewer.prototype.mouse = function () {
@@ -342,6 +379,9 @@
 
   Viewer.prototype.update = function () {
     var gl = this.gl, self = this;
+    // The mode's displacement: the colour bar ends at its largest for the slider's weight.
+    var fm = this.fieldById.displacement_mode, md = this.scene.modes;
+    if (fm && md) fm.hi = Math.max(Math.abs(this.mode.w) * (md.max_displacement ? md.max_displacement[this.mode.k] : 1), 1e-12);
     this.buffers.forEach(function (b) { gl.deleteBuffer(b.pos); gl.deleteBuffer(b.nrm); gl.deleteBuffer(b.col); });
     this.buffers = [];
     var axis = this.clip.axis, at = this.lo[axis] + (this.hi[axis] - this.lo[axis]) * this.clip.at;
@@ -511,6 +551,7 @@
       var drawn = 0;
       for (var i = 0; i < px.length; i += 4) if (px[i] < 250 || px[i + 1] < 250 || px[i + 2] < 250) drawn++;
       this.root.setAttribute('data-drawn-pixels', String(drawn));
+      this.root.setAttribute('data-ready-ms', String(Math.round(performance.now())));
       this.root.setAttribute('data-state', 'drawn');
     }
   };
@@ -519,11 +560,6 @@
     var f = this.field && this.fieldById[this.field];
     if (!f) { this.legend.innerHTML = ''; return; }
     var lo = f.lo, hi = f.hi;
-    if (f.id === 'displacement_mode') {
-      hi = Math.abs(this.mode.w) * (this.scene.modes.max_displacement ? this.scene.modes.max_displacement[this.mode.k] : 1);
-      f.hi = Math.max(hi, 1e-12);
-      hi = f.hi;
-    }
     var stops = [];
     for (var i = 0; i <= 10; i++) {
       var v = lo + (hi - lo) * i / 10, c = colorOf(f, v);

@@ -379,6 +379,14 @@ fn write_instance<const D: usize>(
             )?;
         }
         files.push(format!("{base}/{name}"));
+        // The thumbnail `instances.html` shows.
+        let bytes = std::fs::read(dir.join(&name)).map_err(|e| Error::io(dir.join(&name), e))?;
+        let thumb = format!("{base}_thumb.png");
+        write_atomic(
+            &dir.join(&thumb),
+            &crate::report::render::thumbnail(&bytes, 200)?,
+        )?;
+        files.push(format!("{base}/{thumb}"));
     }
     let nan = f64::NAN;
     let rms = |v: &[f64]| (v.iter().map(|d| d * d).sum::<f64>() / v.len().max(1) as f64).sqrt();

@@ -11,6 +11,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn chromium(args: &[&str], page: &Path) -> std::process::Output {
+    chromium_url(args, &format!("file://{}", page.display()))
+}
+
+fn chromium_url(args: &[&str], url: &str) -> std::process::Output {
     Command::new("chromium")
         .args([
             "--headless=new",
@@ -27,9 +31,28 @@ fn chromium(args: &[&str], page: &Path) -> std::process::Output {
             "--virtual-time-budget=15000",
         ])
         .args(args)
-        .arg(format!("file://{}", page.display()))
+        .arg(url)
         .output()
         .unwrap()
+}
+
+/// The number of triangles the view of `page` draws, seen from the address `hash`.
+fn triangles(page: &Path, hash: &str) -> usize {
+    let o = chromium_url(
+        &["--dump-dom"],
+        &format!("file://{}#{hash}", page.display()),
+    );
+    let dom = String::from_utf8_lossy(&o.stdout);
+    let v = tags(&dom, "<div class=\"am-viewer\"");
+    assert_eq!(
+        v.first()
+            .and_then(|v| attribute(v, "data-state"))
+            .as_deref(),
+        Some("drawn"),
+        "{}#{hash}",
+        page.display()
+    );
+    attribute(v[0], "data-triangles").unwrap().parse().unwrap()
 }
 
 fn attribute(tag: &str, name: &str) -> Option<String> {
@@ -214,6 +237,15 @@ fn the_demo_report_opens_in_chromium_and_every_view_draws() {
         assert!(
             page.contains("class=\"am-w\"") && page.contains("mode 1"),
             "the model page has its mode slider"
+        );
+        // Clipped through the middle, the view draws half the boundary and the faces of the
+        // cut (3D), half the cells (2D): something, and less than the whole.
+        let whole = triangles(&subject_pages[0], "");
+        let clipped = triangles(&subject_pages[0], "clip=0,0.5");
+        assert!(
+            clipped > 0 && clipped < whole,
+            "{clipped} triangles clipped, {whole} whole, in {}",
+            subject_pages[0].display()
         );
         // Seen as a user sees it: the view of the mesh, coloured by scaled Jacobian.
         let (w, h, rgb) = screenshot(&subject_pages[0], &d.join("shot.png"));

@@ -30,8 +30,7 @@ pub fn prepare_surface(mut s: Shape<3>) -> Result<Shape<3>> {
             ));
         }
     }
-    // Facets across every edge: the edges sorted by their two vertices (a sort is several
-    // times faster than a hash map of edges on a femur's 44 000 edge slots).
+    // The facet across every edge.
     let nf = s.facets.len();
     let (across, closed) = facets_across_edges(&s)?;
     // Consistent orientation, component by component (breadth-first over shared edges).
@@ -99,6 +98,15 @@ fn facets_across_edges(s: &Shape<3>) -> Result<(Vec<Option<usize>>, bool)> {
     // times faster than a hash map of the edges or a comparison sort of them on a femur's
     // 44 000 slots); within a bucket of a few, slots of the same larger vertex pair up.
     let n = s.points.len();
+    if n >= u32::MAX as usize || 3 * s.facets.len() >= u32::MAX as usize {
+        return Err(Error::shape(
+            &s.name,
+            format!(
+                "has {n} vertices and {} facets: more than a surface can have here (4 billion edges)",
+                s.facets.len()
+            ),
+        ));
+    }
     let ends: Vec<(u32, u32)> = s
         .facets
         .iter()

@@ -103,6 +103,11 @@ impl Layer {
         } else {
             Geometry::Segments(facets.iter().map(|f| [f[0], f[1 % D]]).collect())
         };
+        Layer::of(id, label, points, geometry)
+    }
+
+    /// A hidden grey layer of `geometry` on `points`, without values.
+    fn of<const D: usize>(id: &str, label: &str, points: &[Point<D>], geometry: Geometry) -> Self {
         Layer {
             id: id.into(),
             label: label.into(),
@@ -119,25 +124,13 @@ impl Layer {
 
     /// A layer of the FE mesh `mesh` (its cells; quadratic kinds drawn by their corners).
     pub fn mesh<const D: usize>(id: &str, label: &str, mesh: &FeMesh<D>) -> Self {
-        let corners = mesh.kind.linear().nodes();
-        let faces = drawn_faces(mesh.kind);
-        Layer {
-            id: id.into(),
-            label: label.into(),
-            visible: false,
-            opacity: 1.0,
-            color: [0.75, 0.75, 0.78],
-            points: mesh.nodes.iter().map(crate::geometry::in_3d::<D>).collect(),
-            geometry: Geometry::Cells {
-                nodes_per_cell: mesh.kind.nodes(),
-                corners,
-                faces,
-                cells: mesh.connectivity.clone(),
-            },
-            point_values: Vec::new(),
-            cell_values: Vec::new(),
-            worst: Vec::new(),
-        }
+        let geometry = Geometry::Cells {
+            nodes_per_cell: mesh.kind.nodes(),
+            corners: mesh.kind.linear().nodes(),
+            faces: drawn_faces(mesh.kind),
+            cells: mesh.connectivity.clone(),
+        };
+        Layer::of(id, label, &mesh.nodes, geometry)
     }
 
     /// This layer shown at first, with `opacity` and `color`.

@@ -2,7 +2,8 @@
 // names (data-scene) a <script type="application/json"> holding its scene: layers of points
 // (surfaces by triangles, meshes by cells with their faces), values per point or per cell,
 // colour fields, the worst elements, and (on the model page) the modes' displacements. Binary
-// arrays arrive gzip-compressed and base64-encoded (little-endian Float32 / Uint32).
+// arrays arrive gzip-compressed and base64-encoded (little-endian Float32 / Uint32, or Int16
+// times a scale).
 //
 // The viewer records its state on its container for tests and for the curious:
 // data-state ("drawn", "no-webgl", "error: ..."), data-triangles, data-drawn-pixels (the
@@ -30,7 +31,13 @@
       if (!o || typeof o !== 'object') return;
       Object.keys(o).forEach(function (k) {
         var v = o[k];
-        if (v && typeof v === 'object' && (typeof v.f32 === 'string' || typeof v.u32 === 'string')) {
+        if (v && typeof v === 'object' && typeof v.i16 === 'string') {
+          jobs.push(gunzip(b64bytes(v.i16)).then(function (buf) {
+            var q = new Int16Array(buf), out = new Float32Array(q.length), s = v.scale;
+            for (var i = 0; i < q.length; i++) out[i] = q[i] * s;
+            o[k] = out;
+          }));
+        } else if (v && typeof v === 'object' && (typeof v.f32 === 'string' || typeof v.u32 === 'string')) {
           var f = typeof v.f32 === 'string';
           jobs.push(gunzip(b64bytes(f ? v.f32 : v.u32)).then(function (buf) {
             o[k] = f ? new Float32Array(buf) : new Uint32Array(buf);

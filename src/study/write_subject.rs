@@ -172,8 +172,10 @@ pub fn process_subject<const D: usize>(
 /// Writes what [`fit_subject`](super::fit_subject) made of `subject` into `out`: the mesh in
 /// every `params.formats` (`NAME_mesh.EXT`, with the mean mesh in the subject's frame beside
 /// it for the displacement), the deck (`NAME_deck.inp`), the fitted surface or outline
-/// (`NAME_fit.EXT` in every `params.surface_formats`) and, with `params.plots`, its pictures. Returns the subject's report with
-/// the files written (relative to `out`).
+/// (`NAME_fit.EXT` in every `params.surface_formats`) and, with `params.plots`, its pictures,
+/// its thumbnail (`NAME_thumb.png`) and its page (`NAME.html`, linking back to the run's
+/// report at `index_href`, relative to `out`). Returns the subject's report with the files
+/// written (relative to `out`).
 pub fn write_subject<const D: usize>(
     atlas: &Atlas<D>,
     subject: &Shape<D>,

@@ -44,6 +44,19 @@ pub struct Field {
     pub map: ColorMap,
 }
 
+impl Field {
+    /// The scaled Jacobian (cell values `sj`), 0 to 1, labelled `label`.
+    pub fn scaled_jacobian(label: &str) -> Self {
+        Field {
+            id: "sj".into(),
+            label: label.into(),
+            unit: String::new(),
+            range: (0.0, 1.0),
+            map: ColorMap::Jacobian,
+        }
+    }
+}
+
 /// What a layer is drawn from.
 #[derive(Clone, Debug)]
 pub enum Geometry {

@@ -86,13 +86,7 @@ pub fn model_scene<const D: usize>(atlas: &Atlas<D>, morpher: &Morpher<D>) -> Re
         displacements: vec![("mean".into(), surface_d), ("mesh".into(), mesh_d)],
     });
     scene.fields = vec![
-        Field {
-            id: "sj".into(),
-            label: "scaled Jacobian of the mean mesh".into(),
-            unit: String::new(),
-            range: (0.0, 1.0),
-            map: ColorMap::Jacobian,
-        },
+        Field::scaled_jacobian("scaled Jacobian of the mean mesh"),
         Field {
             id: "displacement_mode".into(),
             label: "displacement from the mean along the mode".into(),

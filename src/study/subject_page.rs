@@ -90,8 +90,8 @@ pub(crate) struct PageInputs<'a, const D: usize> {
     pub instance_distance: &'a [f64],
 }
 
-/// The scene of a subject's view.
-pub(crate) fn subject_scene<const D: usize>(p: &PageInputs<D>) -> Scene {
+/// The scene of a subject's view, with `worst` outlined.
+pub(crate) fn subject_scene<const D: usize>(p: &PageInputs<D>, worst: &[WorstElement]) -> Scene {
     let to3 = |v: &[Point<D>]| -> Vec<Point<3>> { v.iter().map(in_3d::<D>).collect() };
     let mut scene = Scene::new(D, &to3(&p.subject.points));
     let diagonal = p.subject.bbox_diagonal();
@@ -152,19 +152,10 @@ pub(crate) fn subject_scene<const D: usize>(p: &PageInputs<D>) -> Scene {
         .fold(0.0, f64::max);
     mesh.point_values
         .push(("displacement".into(), displacement));
-    mesh.worst = worst_elements(p.mesh, p.per_element, WORST_ELEMENTS)
-        .iter()
-        .map(|w| w.id - 1)
-        .collect();
+    mesh.worst = worst.iter().map(|w| w.id - 1).collect();
     scene.layers.push(mesh);
     scene.fields = vec![
-        Field {
-            id: "sj".into(),
-            label: "scaled Jacobian".into(),
-            unit: String::new(),
-            range: (0.0, 1.0),
-            map: ColorMap::Jacobian,
-        },
+        Field::scaled_jacobian("scaled Jacobian"),
         Field {
             id: "distance".into(),
             label: "distance to the subject (blue 0, red the 95th percentile)".into(),
@@ -192,8 +183,8 @@ pub(crate) fn write_page<const D: usize>(
     out: &Path,
     index_href: &str,
 ) -> Result<String> {
-    let scene = subject_scene(p);
     let worst = worst_elements(p.mesh, p.per_element, WORST_ELEMENTS);
+    let scene = subject_scene(p, &worst);
     let name = format!("{base}.html");
     write_subject_page(
         &out.join(&name),

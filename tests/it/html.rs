@@ -185,6 +185,92 @@ fn greens(rgb: &[u8]) -> usize {
         .count()
 }
 
+/// Each element's smallest scaled Jacobian, of nodes and cells as meshio gives them.
+fn sj_of<const D: usize>(
+    points: &[Vec<f64>],
+    cells: &[Vec<usize>],
+    kind: atlasmesh::mesh::ElementKind,
+) -> Vec<f64> {
+    let m = atlasmesh::mesh::FeMesh::<D> {
+        nodes: points
+            .iter()
+            .map(|p| std::array::from_fn(|d| p[d]))
+            .collect(),
+        kind,
+        connectivity: cells.iter().flatten().copied().collect(),
+        sets: Default::default(),
+    };
+    atlasmesh::mesh::mesh_quality(&m)
+        .iter()
+        .map(|e| e.scaled_jacobian_min)
+        .collect()
+}
+
+/// The worst elements a subject's page lists are those of its mesh file, read back by meshio:
+/// the first is the element of the smallest scaled Jacobian of the mesh as written (number
+/// 1-based, value to the page's 3 decimals), at the mean of its corners.
+fn worst_elements_match_the_mesh_file(page: &Path, dim: usize) {
+    let mesh_file = page.with_extension("").with_file_name(format!(
+        "{}_mesh.vtu",
+        page.file_stem().unwrap().to_str().unwrap()
+    ));
+    let Some(meshes) = common::meshio_meshes(std::slice::from_ref(&mesh_file)) else {
+        return;
+    };
+    let (points, cells) = &meshes[0];
+    let html = std::fs::read_to_string(page).unwrap();
+    let row = html
+        .split("<tr data-focus=\"")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no worst elements in {}", page.display()));
+    let position: Vec<f64> = row
+        .split('"')
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let cols: Vec<&str> = row
+        .split("<td>")
+        .skip(1)
+        .map(|c| c.split("</td>").next().unwrap())
+        .collect();
+    let (id, sj): (usize, f64) = (cols[0].parse().unwrap(), cols[1].parse().unwrap());
+    // The scaled Jacobians of the mesh as meshio reads it, by atlasmesh's measure.
+    let q = if dim == 3 {
+        sj_of::<3>(points, cells, atlasmesh::mesh::ElementKind::Hex8)
+    } else {
+        sj_of::<2>(points, cells, atlasmesh::mesh::ElementKind::Quad4)
+    };
+    let (k, worst) = q
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    assert!(
+        (sj - worst).abs() <= 5e-4,
+        "{}: the page's worst {sj}, the file's {worst}",
+        page.display()
+    );
+    // Ties aside, the same element.
+    assert!(
+        id == k + 1 || (q[id - 1] - worst).abs() < 1e-12,
+        "{}: element {id} listed, {} in the file",
+        page.display(),
+        k + 1
+    );
+    let corners = &cells[id - 1];
+    for d in 0..3 {
+        let c = corners.iter().map(|&n| points[n][d]).sum::<f64>() / corners.len() as f64;
+        assert!(
+            (c - position[d]).abs() < 1e-5,
+            "{}: element {id} at {position:?}",
+            page.display()
+        );
+    }
+}
+
 fn pages(dir: &Path, ext: &str) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
@@ -230,6 +316,7 @@ fn the_demo_report_opens_in_chromium_and_every_view_draws() {
             let page = open(p, 1, 3);
             view_drew(&page, p);
             assert!(page.contains("scaled Jacobian"), "{}", p.display());
+            worst_elements_match_the_mesh_file(p, if dir == out { 2 } else { 3 });
         }
         let model = dir.join("model.html");
         let page = open(&model, 1, 1);

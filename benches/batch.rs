@@ -8,7 +8,8 @@
 use atlasmesh::geometry::{Shape, Similarity};
 use atlasmesh::model::{Atlas, AtlasParams, ModeSelection};
 use atlasmesh::study::RunParams;
-use atlasmesh::study::batch::{BatchOptions, fit_batch};
+use atlasmesh::study::batch::fit_batch;
+use atlasmesh::study::{RunContext, RunPlace, SubjectReading};
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{RngExt, SeedableRng};
 
@@ -63,9 +64,10 @@ fn bench(c: &mut Criterion) {
         plots: false,
         ..RunParams::default()
     };
-    let load = |p: &std::path::Path| -> atlasmesh::Result<Vec<Shape<3>>> {
-        Ok(vec![atlasmesh::formats::read_surface(p)?])
-    };
+    let mut ctx = RunContext::new(atlas, params, RunPlace::default()).expect("run");
+    // The fitter and the morph made once, outside the timing, as a run does before its items.
+    ctx.fitter().expect("fitter");
+    ctx.morpher().expect("morpher");
     let mut g = c.benchmark_group("batch");
     g.sample_size(10);
     let mut run = 0;
@@ -73,18 +75,12 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             run += 1;
             let out = dir.join(format!("out{run}"));
+            ctx.place.out = out.clone();
             let r = fit_batch(
-                &atlas,
+                &ctx,
                 &files,
-                &load,
+                &SubjectReading::default(),
                 label,
-                &params,
-                0,
-                &out,
-                &BatchOptions {
-                    resume: false,
-                    shard: None,
-                },
                 &atlasmesh::study::Silent,
             )
             .expect("batch");

@@ -44,7 +44,7 @@ fn bench(c: &mut Criterion) {
     };
     // S001, fitted with the atlas of the other 29 (one leave-one-out fold).
     let atlas = Atlas::build(&shapes[1..], &params).expect("atlas");
-    let fitter = Fitter::new(&atlas);
+    let fitter = Fitter::new(std::sync::Arc::new(atlas.clone()));
     let subject = &shapes[0];
     let index = ClosestPointIndex::from_shape(subject);
     let mut g = c.benchmark_group("femur");
@@ -92,7 +92,7 @@ fn bench(c: &mut Criterion) {
     };
     g.bench_function("femur_subject_fit_morph_repair", |b| {
         b.iter(|| {
-            let fitter = Fitter::new(&atlas);
+            let fitter = Fitter::new(std::sync::Arc::new(atlas.clone()));
             atlasmesh::study::fit_subject(&atlas, &fitter, &morpher, subject, &run)
                 .expect("subject")
         })

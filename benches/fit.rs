@@ -44,7 +44,7 @@ fn bench(c: &mut Criterion) {
     };
     // Subject 0, fitted with the atlas of the other 39 (one leave-one-out fold).
     let atlas = Atlas::build(&shapes[1..], &params).expect("atlas");
-    let fitter = Fitter::new(&atlas);
+    let fitter = Fitter::new(std::sync::Arc::new(atlas.clone()));
     let subject = &shapes[0];
     let index = ClosestPointIndex::from_shape(subject);
     let mut g = c.benchmark_group("hands");
@@ -67,7 +67,7 @@ fn bench(c: &mut Criterion) {
         &params,
     )
     .expect("atlas");
-    let fitter37 = Fitter::new(&atlas37);
+    let fitter37 = Fitter::new(std::sync::Arc::new(atlas37.clone()));
     let index37 = ClosestPointIndex::from_shape(&shapes[37]);
     g.bench_function(format!("hand_fit_outlier_37_{label}"), |b| {
         b.iter(|| {

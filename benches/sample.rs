@@ -6,7 +6,7 @@
 //! surfaces of the 3D demo stand in.
 
 use atlasmesh::model::{Atlas, AtlasParams};
-use atlasmesh::study::{InstanceRun, RunParams, sample_specs, write_instances};
+use atlasmesh::study::{RunContext, RunParams, RunPlace, sample_specs, write_instances};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn population() -> (Vec<atlasmesh::geometry::Shape<3>>, &'static str) {
@@ -37,9 +37,10 @@ fn bench(c: &mut Criterion) {
         },
     )
     .expect("atlas");
-    let params = RunParams::default();
-    let morpher = atlas.morpher(&params.morph).expect("morpher");
     let specs = sample_specs(&atlas, 100, 7, Some(3.0)).expect("samples");
+    let mut ctx = RunContext::new(atlas, RunParams::default(), RunPlace::default()).expect("run");
+    // The morph factorized once, outside the timing, as a run does before its items.
+    ctx.morpher().expect("morpher");
     let dir = std::env::temp_dir().join(format!("atlasmesh-bench-sample-{}", std::process::id()));
     let mut g = c.benchmark_group("sample");
     g.sample_size(10);
@@ -48,16 +49,9 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             run += 1;
             let out = dir.join(format!("out{run}"));
-            let r = write_instances(
-                &atlas,
-                Some(&morpher),
-                &specs,
-                &params,
-                &out,
-                &InstanceRun::default(),
-                &atlasmesh::study::Silent,
-            )
-            .expect("samples");
+            ctx.place.out = out.clone();
+            let r =
+                write_instances(&ctx, &specs, None, &atlasmesh::study::Silent).expect("samples");
             assert_eq!(r.summary.written, 100);
             let _ = std::fs::remove_dir_all(&out);
             r.summary.written

@@ -158,12 +158,18 @@ fn bench(c: &mut Criterion) {
     for (family, shapes) in &populations {
         // Subject 0 fitted with the atlas of the other 20, 10 modes.
         let atlas = atlas_of(&shapes[1..], 10);
-        bench_fit(&mut g, &mut sizes, family, &Fitter::new(&atlas), &shapes[0]);
+        bench_fit(
+            &mut g,
+            &mut sizes,
+            family,
+            &Fitter::new(std::sync::Arc::new(atlas.clone())),
+            &shapes[0],
+        );
     }
     // The subject alone.
     if let Some((training, subjects)) = femurs.as_deref().map(subjects) {
         let atlas = atlas_of(&training, 10);
-        let fitter = Fitter::new(&atlas);
+        let fitter = Fitter::new(std::sync::Arc::new(atlas.clone()));
         for subject in &subjects {
             bench_fit(&mut g, &mut sizes, "femur subject", &fitter, subject);
         }
@@ -190,7 +196,7 @@ fn bench(c: &mut Criterion) {
             continue;
         }
         let atlas = atlas_of(&shapes[1..], m);
-        let fitter = Fitter::new(&atlas);
+        let fitter = Fitter::new(std::sync::Arc::new(atlas.clone()));
         let index = ClosestPointIndex::from_shape(&shapes[0]);
         measured_modes.push(m);
         g.bench_with_input(BenchmarkId::new(family, m), &m, |b, _| {

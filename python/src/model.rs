@@ -5,130 +5,21 @@ use crate::errors::to_py;
 use crate::result::{FitResult, Mesh};
 use atlasmesh::geometry::{Point, Shape};
 use atlasmesh::model::Atlas as RustAtlas;
-use atlasmesh::study::RunParams;
+use atlasmesh::study::{RunContext, RunParams, Subject};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use rayon::prelude::*;
 use std::path::PathBuf;
-use std::sync::OnceLock;
 
-type Fitter2<'a> = Option<atlasmesh::fit::Fitter<'a, 2>>;
-type Fitter3<'a> = Option<atlasmesh::fit::Fitter<'a, 3>>;
-
-self_cell::self_cell!(
-    /// A 2D atlas with its fitter (which borrows it), made once for every fit.
-    struct Cell2 {
-        owner: RustAtlas<2>,
-        #[not_covariant]
-        dependent: Fitter2,
-    }
-);
-
-self_cell::self_cell!(
-    /// A 3D atlas with its fitter (which borrows it), made once for every fit.
-    struct Cell3 {
-        owner: RustAtlas<3>,
-        #[not_covariant]
-        dependent: Fitter3,
-    }
-);
-
-/// An atlas with its fitter (none for a model of point sets, which has no surface to fit).
-trait Cell<const D: usize>: Send + Sync {
-    fn atlas(&self) -> &RustAtlas<D>;
-    fn with_fitter<R>(
-        &self,
-        f: impl FnOnce(&RustAtlas<D>, Option<&atlasmesh::fit::Fitter<'_, D>>) -> R,
-    ) -> R;
-}
-
-impl Cell<2> for Cell2 {
-    fn atlas(&self) -> &RustAtlas<2> {
-        self.borrow_owner()
-    }
-    fn with_fitter<R>(
-        &self,
-        f: impl FnOnce(&RustAtlas<2>, Option<&atlasmesh::fit::Fitter<'_, 2>>) -> R,
-    ) -> R {
-        self.with_dependent(|a, fitter| f(a, fitter.as_ref()))
-    }
-}
-
-impl Cell<3> for Cell3 {
-    fn atlas(&self) -> &RustAtlas<3> {
-        self.borrow_owner()
-    }
-    fn with_fitter<R>(
-        &self,
-        f: impl FnOnce(&RustAtlas<3>, Option<&atlasmesh::fit::Fitter<'_, 3>>) -> R,
-    ) -> R {
-        self.with_dependent(|a, fitter| f(a, fitter.as_ref()))
-    }
-}
-
-/// An atlas of one dimension with its fitter and its morph, factorized on first use.
-struct Held<C, const D: usize> {
-    cell: C,
-    morpher: OnceLock<atlasmesh::mesh::Morpher<D>>,
-}
-
-impl Held<Cell2, 2> {
-    fn new(atlas: RustAtlas<2>) -> Self {
-        Held {
-            cell: Cell2::new(atlas, |a| {
-                (!a.facets.is_empty()).then(|| atlasmesh::fit::Fitter::new(a))
-            }),
-            morpher: OnceLock::new(),
-        }
-    }
-}
-
-impl Held<Cell3, 3> {
-    fn new(atlas: RustAtlas<3>) -> Self {
-        Held {
-            cell: Cell3::new(atlas, |a| {
-                (!a.facets.is_empty()).then(|| atlasmesh::fit::Fitter::new(a))
-            }),
-            morpher: OnceLock::new(),
-        }
-    }
-}
-
-impl<C: Cell<D>, const D: usize> Held<C, D> {
-    fn atlas(&self) -> &RustAtlas<D> {
-        self.cell.atlas()
-    }
-
-    fn morpher(&self, params: &RunParams) -> atlasmesh::Result<&atlasmesh::mesh::Morpher<D>> {
-        if let Some(m) = self.morpher.get() {
-            return Ok(m);
-        }
-        let m = self.atlas().morpher(&params.morph)?;
-        Ok(self.morpher.get_or_init(|| m))
-    }
-
-    /// Runs `f` with the atlas's fitter, or refuses an atlas without facets.
-    fn with_fitter<R>(
-        &self,
-        f: impl FnOnce(&atlasmesh::fit::Fitter<'_, D>) -> atlasmesh::Result<R>,
-    ) -> atlasmesh::Result<R> {
-        self.cell.with_fitter(|_, fitter| match fitter {
-            Some(fitter) => f(fitter),
-            None => Err(atlasmesh::Error::Parameter(
-                "this atlas is a model of point sets (no facets): there is no surface to fit"
-                    .into(),
-            )),
-        })
-    }
-}
-
+/// An atlas of either dimension, held as the run engine holds it (the dimension is chosen
+/// once, where the atlas is loaded or built).
 enum Inner {
-    Two(Held<Cell2, 2>),
-    Three(Held<Cell3, 3>),
+    Two(RunContext<2>),
+    Three(RunContext<3>),
 }
 
-/// Runs `$body` with `$a` the `Held<D>` of either dimension and `D` its dimension.
+/// Runs `$body` with `$a` the `RunContext<D>` of either dimension and `D` its dimension.
 macro_rules! each {
     ($inner:expr, $a:ident, $d:ident => $body:expr) => {
         match $inner {
@@ -146,6 +37,16 @@ macro_rules! each {
     };
 }
 
+/// The run of `atlas` from Python: the library's defaults without pictures (a call writes
+/// no files).
+fn context<const D: usize>(atlas: RustAtlas<D>) -> PyResult<RunContext<D>> {
+    let params = RunParams {
+        plots: false,
+        ..RunParams::default()
+    };
+    RunContext::new(atlas, params, Default::default()).map_err(to_py)
+}
+
 /// A statistical atlas (sections 2.2-2.4): the shape model of a population (mean, modes,
 /// variances, eq. 4) and the FE mesh of its mean, in the population's unit.
 #[pyclass(frozen, module = "atlasmesh")]
@@ -153,45 +54,24 @@ pub struct Atlas {
     inner: Inner,
 }
 
-/// `s` as a shape of `B` dimensions (`A == B` where it is called: the generic `D` of a
-/// caller is known to be 2 or 3 only at run time).
-fn as_dim<const A: usize, const B: usize>(s: Shape<A>) -> Shape<B> {
-    Shape {
-        name: s.name,
-        points: s
-            .points
-            .iter()
-            .map(atlasmesh::geometry::same_dim::<A, B>)
-            .collect(),
-        facets: s
-            .facets
-            .iter()
-            .map(|f| std::array::from_fn(|d| f[d.min(A - 1)]))
-            .collect(),
-        landmarks: s.landmarks,
-    }
-}
-
-/// A shape from `(points, facets)` arrays or a file path; a surface is checked and oriented
-/// as a surface file is.
-fn shape_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Shape<D>> {
+/// A subject from `(points, facets)` arrays or a file path, read and cleaned as the command
+/// line reads it ([`atlasmesh::study::read_subjects`], [`atlasmesh::study::prepare_subject`]);
+/// a surface given as arrays is checked and oriented as a surface file is.
+fn subject_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Subject<D>> {
     if let Ok(path) = obj.extract::<PathBuf>() {
-        if D == 3 {
-            let s = atlasmesh::formats::read_surface(&path).map_err(to_py)?;
-            return Ok(as_dim::<3, D>(s));
-        }
-        let mut v = atlasmesh::formats::read_outlines(&path, true).map_err(to_py)?;
+        let mut v =
+            atlasmesh::study::read_subjects::<D>(&path, &Default::default()).map_err(to_py)?;
         if v.len() != 1 {
-            return Err(PyValueError::new_err(format!(
+            return Err(crate::errors::BadInputError::new_err(format!(
                 "{}: {} outlines; give one per file, or arrays",
                 path.display(),
                 v.len()
             )));
         }
-        return Ok(as_dim::<2, D>(v.remove(0)));
+        return Ok(v.remove(0));
     }
     let (points, facets): (Bound<'_, PyAny>, Bound<'_, PyAny>) = obj.extract().map_err(|_| {
-        PyValueError::new_err(format!(
+        crate::errors::BadInputError::new_err(format!(
             "shape {k}: a (points, facets) pair of arrays or a file path expected"
         ))
     })?;
@@ -202,13 +82,14 @@ fn shape_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Shape<
         landmarks: Vec::new(),
     };
     let shape = if D == 3 {
-        let s3 = atlasmesh::geometry::prepare_surface(as_dim::<D, 3>(shape)).map_err(to_py)?;
-        as_dim::<3, D>(s3)
+        atlasmesh::geometry::prepare_surface(shape.into_dim::<3>())
+            .map_err(to_py)?
+            .into_dim::<D>()
     } else {
         shape
     };
-    shape.validate().map_err(to_py)?;
-    Ok(shape)
+    atlasmesh::study::prepare_subject(shape, std::path::Path::new(&format!("shape {k}")))
+        .map_err(to_py)
 }
 
 /// The dimension of `(points, facets)` or a file.
@@ -236,33 +117,29 @@ fn dimension_of(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
     }
 }
 
-/// Options of a fit or a build, from keyword arguments.
-fn run_params(partial: bool, grid: usize, alpha: f64) -> PyResult<RunParams> {
-    if !((4..=32).contains(&grid) && alpha.is_finite() && alpha > 0.0) {
-        return Err(crate::errors::BadInputError::new_err(format!(
-            "grid {grid} (4 to 32) and alpha {alpha} (positive) expected"
-        )));
-    }
-    let mut p = RunParams {
-        plots: false,
-        ..RunParams::default()
-    };
+/// The run's parameters with a call's options, checked as the command line's are
+/// ([`RunParams::validate`]).
+fn call_params<const D: usize>(
+    ctx: &RunContext<D>,
+    partial: bool,
+    grid: usize,
+    alpha: f64,
+) -> PyResult<RunParams> {
+    let mut p = ctx.params.clone();
     p.fit.partial = partial;
     p.morph.grid = grid;
     p.morph.alpha = alpha;
+    p.validate(D).map_err(to_py)?;
     Ok(p)
 }
 
-/// The fit of one subject (Algorithm 1, eq. 9, repair), as the Python result.
-fn fit_one<C: Cell<D>, const D: usize>(
-    held: &Held<C, D>,
-    shape: &Shape<D>,
+/// The fit of one subject (Algorithm 1, eq. 9, repair), with its report as JSON.
+fn fit_one<const D: usize>(
+    ctx: &RunContext<D>,
+    subject: &Subject<D>,
     params: &RunParams,
 ) -> atlasmesh::Result<(atlasmesh::study::SubjectOutcome<D>, String)> {
-    let morpher = held.morpher(params)?;
-    let o = held.with_fitter(|fitter| {
-        atlasmesh::study::fit_subject(held.atlas(), fitter, morpher, shape, params)
-    })?;
+    let o = ctx.fit(subject, params)?;
     let report = serde_json::to_string(&o.report)
         .map_err(|e| atlasmesh::Error::Numerical(format!("report: {e}")))?;
     Ok((o, report))
@@ -301,30 +178,31 @@ fn fit_result<const D: usize>(
     })
 }
 
-fn result<C: Cell<D>, const D: usize>(
+fn result<const D: usize>(
     py: Python<'_>,
-    held: &Held<C, D>,
+    ctx: &RunContext<D>,
     o: atlasmesh::study::SubjectOutcome<D>,
     report: String,
 ) -> PyResult<FitResult> {
     let mesh = Py::new(py, Mesh::of(&o.mesh, &o.quality))?;
-    fit_result(py, held.atlas(), &o.fit, Some(mesh), report)
+    fit_result(py, &ctx.atlas, &o.fit, Some(mesh), report)
 }
 
 /// The fit alone (Algorithm 1, eq. 5-8, projected onto the subject), without the morph: its
 /// weights, pose and surface, and its measures (`e_d`, `iterations`, `converged`,
 /// `fit_seconds`; `rms_distance` and `rms_distance_relative` computed when first read).
-fn fit_only<C: Cell<D>, const D: usize>(
+fn fit_only<const D: usize>(
     py: Python<'_>,
-    held: &Held<C, D>,
-    shape: Shape<D>,
+    ctx: &RunContext<D>,
+    subject: Subject<D>,
     params: &RunParams,
 ) -> PyResult<FitResult> {
+    let shape = subject.shape;
     let (fit, seconds, index) = py
         .detach(|| -> atlasmesh::Result<_> {
             let index = atlasmesh::geometry::ClosestPointIndex::from_shape(&shape);
             let start = std::time::Instant::now();
-            let fit = held.with_fitter(|fitter| fitter.fit(&shape, &index, &params.fit))?;
+            let fit = ctx.fitter()?.fit(&shape, &index, &params.fit)?;
             Ok((fit, start.elapsed().as_secs_f64(), index))
         })
         .map_err(to_py)?;
@@ -336,10 +214,10 @@ fn fit_only<C: Cell<D>, const D: usize>(
         "fit_seconds": seconds,
     })
     .to_string();
-    let r = fit_result(py, held.atlas(), &fit, None, report)?;
+    let r = fit_result(py, &ctx.atlas, &fit, None, report)?;
     // The two-way RMS distance (a second index, of the instance, and a query per subject
     // vertex: a third of the fit's time) when first asked for.
-    let (instance, facets, subject) = (fit.instance, held.atlas().facets.clone(), shape);
+    let (instance, facets, subject) = (fit.instance, ctx.atlas.facets.clone(), shape);
     let job: crate::result::Pending = Box::new(move || {
         let rms = atlasmesh::eval::two_way_rms(&instance, &facets, &subject, &index);
         vec![
@@ -359,12 +237,8 @@ impl Atlas {
     #[staticmethod]
     fn load(path: PathBuf) -> PyResult<Self> {
         let inner = match atlasmesh::formats::atlas_dimension(&path).map_err(to_py)? {
-            3 => Inner::Three(Held::<Cell3, 3>::new(
-                RustAtlas::load(&path).map_err(to_py)?,
-            )),
-            _ => Inner::Two(Held::<Cell2, 2>::new(
-                RustAtlas::load(&path).map_err(to_py)?,
-            )),
+            3 => Inner::Three(context(RustAtlas::load(&path).map_err(to_py)?)?),
+            _ => Inner::Two(context(RustAtlas::load(&path).map_err(to_py)?)?),
         };
         Ok(Atlas { inner })
     }
@@ -392,7 +266,10 @@ impl Atlas {
             return Err(crate::errors::BadInputError::new_err("no shape given"));
         }
         let dim = dimension_of(&shapes.get_item(0)?)?;
-        let mut params = run_params(false, 20, 50.0)?;
+        let mut params = RunParams {
+            plots: false,
+            ..RunParams::default()
+        };
         params.atlas.modes = match modes {
             Some(m) => atlasmesh::model::ModeSelection::Count(m),
             None => atlasmesh::model::ModeSelection::Variance(variance),
@@ -407,10 +284,11 @@ impl Atlas {
             register: bool,
             mesh: bool,
         ) -> PyResult<RustAtlas<D>> {
+            // Read and cleaned as the command line reads a population (islands dropped).
             let shapes: Vec<Shape<D>> = list
                 .iter()
                 .enumerate()
-                .map(|(k, o)| shape_of::<D>(&o, k))
+                .map(|(k, o)| subject_of::<D>(&o, k).map(|s| s.shape))
                 .collect::<PyResult<_>>()?;
             py.detach(|| {
                 let shapes = if register {
@@ -435,20 +313,16 @@ impl Atlas {
             .map_err(to_py)
         }
         let inner = if dim == 3 {
-            Inner::Three(Held::<Cell3, 3>::new(go::<3>(
-                py, shapes, &params, register, mesh,
-            )?))
+            Inner::Three(context(go::<3>(py, shapes, &params, register, mesh)?)?)
         } else {
-            Inner::Two(Held::<Cell2, 2>::new(go::<2>(
-                py, shapes, &params, register, mesh,
-            )?))
+            Inner::Two(context(go::<2>(py, shapes, &params, register, mesh)?)?)
         };
         Ok(Atlas { inner })
     }
 
     /// Writes the atlas (safetensors; `atlasmesh` reads it back).
     fn save(&self, path: PathBuf) -> PyResult<()> {
-        each!(&self.inner, a, D => a.atlas().save(&path)).map_err(to_py)
+        each!(&self.inner, a, D => a.atlas.save(&path)).map_err(to_py)
     }
 
     /// 2 or 3.
@@ -460,13 +334,13 @@ impl Atlas {
     /// The mean shape `S_bar`, `(N, D)`, in the data's frame and unit.
     #[getter]
     fn mean<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::of_points::<D>(py, &a.atlas().to_data_frame(&a.atlas().mean)))
+        each!(&self.inner, a, D => arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.mean)))
     }
 
     /// The facets of the shapes (triangles or segments), `(F, D)` int64.
     #[getter]
     fn facets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::to_i64(py, a.atlas().facets.iter().flatten().copied(), &[a.atlas().facets.len(), D]))
+        each!(&self.inner, a, D => arrays::to_i64(py, a.atlas.facets.iter().flatten().copied(), &[a.atlas.facets.len(), D]))
     }
 
     /// The modes `Psi`, `(m, N, D)`: orthonormal directions of the shape space (the
@@ -474,10 +348,10 @@ impl Atlas {
     #[getter]
     fn modes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         each!(&self.inner, a, D => {
-            let (n, m) = (a.atlas().mean.len(), a.atlas().num_modes());
+            let (n, m) = (a.atlas.mean.len(), a.atlas.num_modes());
             arrays::to_f64(
                 py,
-                (0..m).flat_map(|k| (0..n * D).map(move |r| (k, r))).map(|(k, r)| a.atlas().modes[(r, k)]),
+                (0..m).flat_map(|k| (0..n * D).map(move |r| (k, r))).map(|(k, r)| a.atlas.modes[(r, k)]),
                 &[m, n, D],
             )
         })
@@ -487,8 +361,8 @@ impl Atlas {
     #[getter]
     fn variances<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         each!(&self.inner, a, D => {
-            let s = a.atlas().data_frame.map_or(1.0, |t| t.s);
-            arrays::to_f64(py, a.atlas().eigenvalues.iter().map(|l| l * s * s), &[a.atlas().num_modes()])
+            let s = a.atlas.data_frame.map_or(1.0, |t| t.s);
+            arrays::to_f64(py, a.atlas.eigenvalues.iter().map(|l| l * s * s), &[a.atlas.num_modes()])
         })
     }
 
@@ -496,17 +370,17 @@ impl Atlas {
     /// training PCA's modes).
     #[getter]
     fn cumulative_variance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::to_f64(py, a.atlas().cumulative_variance.iter().copied(), &[a.atlas().cumulative_variance.len()]))
+        each!(&self.inner, a, D => arrays::to_f64(py, a.atlas.cumulative_variance.iter().copied(), &[a.atlas.cumulative_variance.len()]))
     }
 
     /// The atlas's FE mesh of the mean (data's frame and unit), or None (`mesh=False`).
     #[getter]
     fn mean_mesh(&self, py: Python<'_>) -> PyResult<Option<Py<Mesh>>> {
         each!(&self.inner, a, D => {
-            if !a.atlas().has_mesh() {
+            if !a.atlas.has_mesh() {
                 return Ok(None);
             }
-            let m = a.atlas().mesh.with_nodes(a.atlas().to_data_frame(&a.atlas().mesh.nodes));
+            let m = a.atlas.mesh.with_nodes(a.atlas.to_data_frame(&a.atlas.mesh.nodes));
             let q = atlasmesh::mesh::quality::mesh_quality(&m);
             Ok(Some(Py::new(py, Mesh::of(&m, &q))?))
         })
@@ -521,15 +395,15 @@ impl Atlas {
     ) -> PyResult<Bound<'py, PyAny>> {
         let sd = arrays::vector(sd, "sd")?;
         each!(&self.inner, a, D => {
-            let m = a.atlas().num_modes();
+            let m = a.atlas.num_modes();
             if sd.len() > m || sd.iter().any(|v| !v.is_finite()) {
                 return Err(crate::errors::BadInputError::new_err(format!(
                     "{} weights for a model of {m} modes (finite numbers of standard deviations)",
                     sd.len()
                 )));
             }
-            let w: Vec<f64> = (0..m).map(|k| sd.get(k).copied().unwrap_or(0.0) * a.atlas().eigenvalues[k].sqrt()).collect();
-            arrays::of_points::<D>(py, &a.atlas().to_data_frame(&a.atlas().instance(&w)))
+            let w: Vec<f64> = (0..m).map(|k| sd.get(k).copied().unwrap_or(0.0) * a.atlas.eigenvalues[k].sqrt()).collect();
+            arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.instance(&w)))
         })
     }
 
@@ -544,18 +418,18 @@ impl Atlas {
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         each!(&self.inner, a, D => {
             let x = arrays::points::<D>(points, "points")?;
-            if x.len() != a.atlas().mean.len() {
+            if x.len() != a.atlas.mean.len() {
                 return Err(crate::errors::BadInputError::new_err(format!(
                     "{} points for a model of {}",
                     x.len(),
-                    a.atlas().mean.len()
+                    a.atlas.mean.len()
                 )));
             }
-            let t = atlasmesh::model::fit_similarity(&a.atlas().mean, &x, None);
+            let t = atlasmesh::model::fit_similarity(&a.atlas.mean, &x, None);
             let inside: Vec<Point<D>> = x.iter().map(|p| t.apply_inverse(p)).collect();
-            let w = a.atlas().coefficients(&inside);
-            let p: Vec<Point<D>> = a.atlas().instance(&w).iter().map(|q| t.apply(q)).collect();
-            let sd: Vec<f64> = w.iter().zip(&a.atlas().eigenvalues).map(|(w, l)| w / l.sqrt()).collect();
+            let w = a.atlas.coefficients(&inside);
+            let p: Vec<Point<D>> = a.atlas.instance(&w).iter().map(|q| t.apply(q)).collect();
+            let sd: Vec<f64> = w.iter().zip(&a.atlas.eigenvalues).map(|(w, l)| w / l.sqrt()).collect();
             Ok((arrays::of_points::<D>(py, &p)?, arrays::to_f64(py, sd.iter().copied(), &[sd.len()])?))
         })
     }
@@ -572,15 +446,15 @@ impl Atlas {
         max_sd: Option<f64>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         each!(&self.inner, a, D => {
-            let specs = atlasmesh::study::sample_specs(a.atlas(), n, seed, max_sd).map_err(to_py)?;
-            let m = a.atlas().num_modes();
-            let mut pts = Vec::with_capacity(n * a.atlas().mean.len() * D);
+            let specs = atlasmesh::study::sample_specs(&a.atlas, n, seed, max_sd).map_err(to_py)?;
+            let m = a.atlas.num_modes();
+            let mut pts = Vec::with_capacity(n * a.atlas.mean.len() * D);
             for s in &specs {
-                let w: Vec<f64> = (0..m).map(|k| s.sd[k] * a.atlas().eigenvalues[k].sqrt()).collect();
-                pts.extend(a.atlas().to_data_frame(&a.atlas().instance(&w)).iter().flatten().copied());
+                let w: Vec<f64> = (0..m).map(|k| s.sd[k] * a.atlas.eigenvalues[k].sqrt()).collect();
+                pts.extend(a.atlas.to_data_frame(&a.atlas.instance(&w)).iter().flatten().copied());
             }
             Ok((
-                arrays::to_f64(py, pts, &[n, a.atlas().mean.len(), D])?,
+                arrays::to_f64(py, pts, &[n, a.atlas.mean.len(), D])?,
                 arrays::to_f64(py, specs.iter().flat_map(|s| s.sd.clone()), &[n, m])?,
             ))
         })
@@ -604,16 +478,16 @@ impl Atlas {
         alpha: f64,
         mesh: bool,
     ) -> PyResult<FitResult> {
-        let params = run_params(partial, grid, alpha)?;
         each!(&self.inner, a, D => {
-            let shape = match facets {
-                Some(f) => shape_of::<D>(&pyo3::types::PyTuple::new(py, [subject, f])?.into_any(), 0)?,
-                None => shape_of::<D>(subject, 0)?,
+            let params = call_params(a, partial, grid, alpha)?;
+            let subject = match facets {
+                Some(f) => subject_of::<D>(&pyo3::types::PyTuple::new(py, [subject, f])?.into_any(), 0)?,
+                None => subject_of::<D>(subject, 0)?,
             };
             if !mesh {
-                return fit_only(py, a, shape, &params);
+                return fit_only(py, a, subject, &params);
             }
-            let (o, report) = py.detach(|| fit_one(a, &shape, &params)).map_err(to_py)?;
+            let (o, report) = py.detach(|| fit_one(a, &subject, &params)).map_err(to_py)?;
             result(py, a, o, report)
         })
     }
@@ -631,16 +505,16 @@ impl Atlas {
         alpha: f64,
         jobs: usize,
     ) -> PyResult<Vec<Py<PyAny>>> {
-        let params = run_params(partial, grid, alpha)?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
             .build()
             .map_err(|e| crate::errors::Error::new_err(format!("thread pool: {e}")))?;
         each!(&self.inner, a, D => {
-            let shapes: Vec<PyResult<Shape<D>>> = subjects
+            let params = call_params(a, partial, grid, alpha)?;
+            let shapes: Vec<PyResult<Subject<D>>> = subjects
                 .iter()
                 .enumerate()
-                .map(|(k, o)| shape_of::<D>(&o, k))
+                .map(|(k, o)| subject_of::<D>(&o, k))
                 .collect();
             let outcomes: Vec<atlasmesh::Result<(atlasmesh::study::SubjectOutcome<D>, String)>> =
                 py.detach(|| {
@@ -673,10 +547,10 @@ impl Atlas {
     fn __repr__(&self) -> String {
         each!(&self.inner, a, D => format!(
             "Atlas({D}D, {} points, {} modes, {})",
-            a.atlas().mean.len(),
-            a.atlas().num_modes(),
-            if a.atlas().has_mesh() {
-                format!("mean mesh of {} {} elements", a.atlas().mesh.num_elements(), a.atlas().mesh.kind.name())
+            a.atlas.mean.len(),
+            a.atlas.num_modes(),
+            if a.atlas.has_mesh() {
+                format!("mean mesh of {} {} elements", a.atlas.mesh.num_elements(), a.atlas.mesh.kind.name())
             } else {
                 "no mesh".to_string()
             }

@@ -93,8 +93,8 @@ pub(super) fn spread(n: usize, k: usize) -> Vec<usize> {
 
 /// The atlas prepared for fitting: the model at full resolution and a coarse one for the
 /// first stages (see [`Fitter::fit`]), `Lambda^{-1}`. Build once, fit many.
-pub struct Fitter<'a, const D: usize> {
-    pub(super) atlas: &'a Atlas<D>,
+pub struct Fitter<const D: usize> {
+    pub(super) atlas: std::sync::Arc<Atlas<D>>,
     pub(super) m: usize,
     pub(super) lambda_inv: Vec<f64>,
     pub(super) full: Model<D>,
@@ -117,24 +117,29 @@ pub(super) enum Level {
     Full,
 }
 
-impl<'a, const D: usize> Fitter<'a, D> {
+impl<const D: usize> Fitter<D> {
     /// A fitter of `atlas`: its model at full and coarse resolution, precomputed once for every subject.
     ///
     /// # Panics
     /// For an atlas without facets (a model of point sets, [`Atlas::build_model`]), which has
     /// no surface to fit: check [`Atlas::has_mesh`] or [`Atlas::morpher`] first.
-    pub fn new(atlas: &'a Atlas<D>) -> Self {
+    pub fn new(atlas: std::sync::Arc<Atlas<D>>) -> Self {
         let n = atlas.mean.len();
         let coarse_points = FitParams::default().coarse_points;
         Fitter {
-            atlas,
             m: atlas.num_modes(),
             lambda_inv: atlas.eigenvalues.iter().map(|l| 1.0 / l).collect(),
-            full: Model::new(atlas, (0..n).collect(), atlas.facets.clone()),
-            coarse: Model::coarse(atlas, COARSE_MODEL_FACTOR * coarse_points),
+            full: Model::new(&atlas, (0..n).collect(), atlas.facets.clone()),
+            coarse: Model::coarse(&atlas, COARSE_MODEL_FACTOR * coarse_points),
             coarse_points,
             spare: std::sync::Mutex::new(Vec::new()),
+            atlas,
         }
+    }
+
+    /// The atlas this fitter fits.
+    pub fn atlas(&self) -> &std::sync::Arc<Atlas<D>> {
+        &self.atlas
     }
 
     /// Buffers for a fit with `params`: spare ones if there are any, else new ones.

@@ -75,7 +75,7 @@ fn the_tolerance_means_the_same_at_every_resolution() {
         let w = weights_at(&a, [1.2, -0.8, 0.5]);
         let s = subject(&a, &w, &sim);
         let idx = ClosestPointIndex::from_shape(&s);
-        let r = Fitter::new(&a)
+        let r = Fitter::new(std::sync::Arc::new(a.clone()))
             .fit(&s, &idx, &FitParams::default())
             .unwrap();
         assert!(r.converged);
@@ -106,7 +106,7 @@ fn fit_recovers_the_weights_and_pose_of_a_model_instance() {
     sim.t = [100.0, -20.0];
     let s = subject(&a, &w, &sim);
     let idx = ClosestPointIndex::from_shape(&s);
-    let r = Fitter::new(&a)
+    let r = Fitter::new(std::sync::Arc::new(a.clone()))
         .fit(&s, &idx, &FitParams::default())
         .unwrap();
     for (k, (got, want)) in r.weights.iter().zip(&w).enumerate() {
@@ -130,7 +130,7 @@ fn fit_is_invariant_to_the_subject_units() {
     small.s = 1.0;
     let mut big = small;
     big.s = 1000.0;
-    let fa = Fitter::new(&a);
+    let fa = Fitter::new(std::sync::Arc::new(a.clone()));
     let s1 = subject(&a, &w, &small);
     let s2 = subject(&a, &w, &big);
     let r1 = fa
@@ -161,7 +161,7 @@ fn symmetric_fit_recovers_a_far_instance() {
     let w = weights_at(&a, [2.8, -2.5, 2.5]);
     let s = subject(&a, &w, &Similarity::identity());
     let idx = ClosestPointIndex::from_shape(&s);
-    let r = Fitter::new(&a)
+    let r = Fitter::new(std::sync::Arc::new(a.clone()))
         .fit(&s, &idx, &FitParams::default())
         .unwrap();
     let err: f64 = r

@@ -34,7 +34,7 @@ pub(super) fn generator<const D: usize>(k: usize, x: &Point<D>) -> Point<D> {
     out
 }
 
-impl<const D: usize> Fitter<'_, D> {
+impl<const D: usize> Fitter<D> {
     /// One correspondence update: (i) closest points at the current state, (ii) one
     /// Gauss-Newton step of eq. 5 (all pose parameters, and `w` unless `gamma` is `None`),
     /// (iii) the new state.

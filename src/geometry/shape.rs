@@ -49,6 +49,31 @@ impl Shape<2> {
 }
 
 impl<const D: usize> Shape<D> {
+    /// This shape as a `Shape<E>`, where `E == D`: the one conversion between the generic
+    /// dimension of a caller and the dimension a file or an array was found to have, chosen
+    /// where data comes in.
+    ///
+    /// # Panics
+    /// When `E != D` (a broken caller contract).
+    #[track_caller]
+    pub fn into_dim<const E: usize>(self) -> Shape<E> {
+        assert_eq!(D, E, "a {D}D shape taken as {E}D");
+        Shape {
+            name: self.name,
+            points: self
+                .points
+                .iter()
+                .map(|p| std::array::from_fn(|d| p[d]))
+                .collect(),
+            facets: self
+                .facets
+                .iter()
+                .map(|f| std::array::from_fn(|d| f[d]))
+                .collect(),
+            landmarks: self.landmarks,
+        }
+    }
+
     /// Checks that the shape can be used: at least `D + 1` points, finite coordinates, facet
     /// indices in range, non-zero extent.
     pub fn validate(&self) -> Result<()> {

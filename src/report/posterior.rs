@@ -61,6 +61,12 @@ pub struct PosteriorRunReport {
     /// Subjects that failed, with the reason.
     #[serde(default)]
     pub failed: Vec<FailedSubject>,
+    /// Subjects skipped because their outputs were complete.
+    #[serde(default)]
+    pub resumed: usize,
+    /// The shard (`I/N`) this report covers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<String>,
     /// The version of atlasmesh that made it.
     pub atlasmesh_version: String,
 }

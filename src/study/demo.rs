@@ -4,6 +4,8 @@ use super::batch::fit_shapes;
 use super::build::build;
 use super::params::RunParams;
 use super::progress::Progress;
+use super::run::{RunContext, RunPlace};
+use super::subject_file::prepare_subject;
 use crate::error::{Error, Result};
 use crate::formats::create_dir;
 use crate::geometry::{Point, Shape, Similarity};
@@ -107,12 +109,19 @@ pub fn demo_3d(out: &Path, progress: &dyn Progress) -> Result<Report> {
     params.atlas.modes = crate::model::ModeSelection::Variance(0.99);
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<3>::load(&out.join("atlas.safetensors"))?;
+    let place = RunPlace {
+        out: out.to_path_buf(),
+        ..RunPlace::default()
+    };
+    let ctx = RunContext::new(loaded, params, place)?;
+    let subjects = test
+        .iter()
+        .map(|s| prepare_subject(s.clone(), Path::new(&s.name)))
+        .collect::<Result<Vec<_>>>()?;
     let report = fit_shapes(
-        &loaded,
-        test,
+        &ctx,
+        &subjects,
         "demo 3D (synthetic, seed 20261122)",
-        &params,
-        out,
         progress,
     )?;
     demo_succeeded(report)
@@ -131,14 +140,16 @@ pub fn demo(out: &Path, progress: &dyn Progress) -> Result<Report> {
     };
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<2>::load(&out.join("atlas.safetensors"))?;
-    let report = fit_shapes(
-        &loaded,
-        test,
-        "demo (synthetic, seed 20261122)",
-        &params,
-        out,
-        progress,
-    )?;
+    let place = RunPlace {
+        out: out.to_path_buf(),
+        ..RunPlace::default()
+    };
+    let ctx = RunContext::new(loaded, params, place)?;
+    let subjects = test
+        .iter()
+        .map(|s| prepare_subject(s.clone(), Path::new(&s.name)))
+        .collect::<Result<Vec<_>>>()?;
+    let report = fit_shapes(&ctx, &subjects, "demo (synthetic, seed 20261122)", progress)?;
     demo_succeeded(report)
 }
 

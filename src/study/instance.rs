@@ -4,13 +4,14 @@
 //! `atlasmesh instance` asks for the weights, `atlasmesh sample` draws them from the model's
 //! prior ([`sample_specs`]).
 //!
-//! Like a batch of subjects ([`super::batch`]), the instances are made in parallel, each into
-//! its own folder `OUT/NAME/` whose record `instance.json` is written last: a re-run skips
-//! the complete ones (same atlas, parameters and weights), and a shard takes every `N`-th
-//! instance of the list.
+//! Like a batch of subjects ([`super::batch`]), the instances are a [`Job`] of the run
+//! engine: made in parallel, each into its own folder `OUT/NAME/` whose record
+//! `instance.json` is written last; a re-run skips the complete ones (same atlas, parameters
+//! and weights), and a shard takes every `N`-th instance of the list.
 
 use super::params::RunParams;
 use super::progress::Progress;
+use super::run::{Job, Origin, RunContext, RunOutcome, Units, check_folders, run_items};
 use super::subject::{check_valid, delivered_distances};
 use super::write_subject::{file_name, quality_picture};
 use crate::error::{Error, Result};
@@ -20,9 +21,8 @@ use crate::mesh::quality::summarize;
 use crate::mesh::{Correspondence, Morpher, repair_with_quality};
 use crate::model::Atlas;
 use crate::report::{FailedSubject, InstanceReport, InstancesReport, InstancesSummary, Sampling};
-use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 use std::path::Path;
+use std::sync::Arc;
 
 /// File name of an instance's record in its folder.
 pub const INSTANCE_RECORD: &str = "instance.json";
@@ -37,28 +37,13 @@ pub struct InstanceSpec {
     pub sd: Vec<f64>,
 }
 
-/// How a run of instances goes.
-#[derive(Clone, Debug, Default)]
-pub struct InstanceRun {
-    /// Skip instances whose outputs are complete.
-    pub resume: bool,
-    /// The shard `(i, n)`: only the instances `k` with `k mod n == i`.
-    pub shard: Option<(usize, usize)>,
-    /// How the weights were drawn (`sample`).
-    pub sampling: Option<Sampling>,
-    /// The atlas file (for the report).
-    pub atlas_file: String,
-    /// CRC-32 of the atlas file (part of an instance's completeness).
-    pub atlas_crc: u32,
-}
-
-/// An instance's record `NAME/instance.json`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct InstanceRecord {
-    /// CRC-32 of the atlas, the parameters and the weights.
-    run_crc32: u32,
-    /// The instance's report (files relative to the output folder).
-    report: InstanceReport,
+impl super::run::UnitReport for InstanceReport {
+    fn files(&self) -> &[String] {
+        &self.files
+    }
+    fn files_mut(&mut self) -> &mut Vec<String> {
+        &mut self.files
+    }
 }
 
 /// `n` instances of weights drawn from the model's prior (eq. 4, `w ~ N(0, Lambda)`, each
@@ -95,27 +80,27 @@ pub fn sample_specs<const D: usize>(
         .collect()
 }
 
-/// Makes and writes the instances of `specs` (those of the shard of `run`) into `out/NAME/`
-/// (without a `morpher`, for an atlas without a mesh, their surfaces alone):
-/// the surface (`NAME.EXT` in every `params.surface_formats`), the FE mesh (`NAME_mesh.EXT`
-/// in every `params.formats`, with the displacement from the mean mesh as point data), the
-/// deck (`NAME_deck.inp|feb`) and, with `params.plots`, a picture (`NAME.png`), in the data's
+/// Makes and writes the instances of `specs` (those of the run's shard) with the atlas of
+/// `ctx` into `OUT/NAME/` (without a mean mesh, their surfaces alone): the surface
+/// (`NAME.EXT` in every `params.surface_formats`), the FE mesh (`NAME_mesh.EXT` in every
+/// `params.formats`, with the displacement from the mean mesh as point data), the deck
+/// (`NAME_deck.inp|feb`) and, with `params.plots`, a picture (`NAME.png`), in the data's
 /// frame and unit (the reference frame for an atlas of format version 2), with the atlas's
-/// sets; then `out/instances.json` over all of them. An instance that fails (its mesh stays
-/// invalid) is in the report's `failed`, the others go on.
+/// sets; then `OUT/instances.json` over all of them (`sampling`: how the weights were
+/// drawn). An instance that fails (its mesh stays invalid) is in the report's `failed`, the
+/// others go on.
 ///
 /// # Errors
-/// [`Error::Parameter`] for more weights than modes, a weight that is not finite or two
-/// instances of one folder name; the errors of the output folder and of the report.
+/// [`Error::Parameter`] for more weights than modes or a weight that is not finite;
+/// [`Error::Population`] for two instances of one folder name; the errors of the output
+/// folder and of the report.
 pub fn write_instances<const D: usize>(
-    atlas: &Atlas<D>,
-    morpher: Option<&Morpher<D>>,
+    ctx: &RunContext<D>,
     specs: &[InstanceSpec],
-    params: &RunParams,
-    out: &Path,
-    run: &InstanceRun,
+    sampling: Option<Sampling>,
     progress: &dyn Progress,
 ) -> Result<InstancesReport> {
+    let atlas = &ctx.atlas;
     let m = atlas.num_modes();
     if let Some(spec) = specs
         .iter()
@@ -127,25 +112,9 @@ pub fn write_instances<const D: usize>(
             spec.sd.len()
         )));
     }
-    let mut folders: Vec<String> = specs.iter().map(|s| file_name(&s.name)).collect();
-    folders.sort();
-    if let Some(w) = folders.windows(2).find(|w| w[0] == w[1]) {
-        return Err(Error::Parameter(format!(
-            "two instances would share the folder {}/",
-            w[0]
-        )));
-    }
-    let shard_label = run.shard.map(|(i, n)| format!("{i}/{n}"));
-    crate::formats::create_dir(out)?;
-    let _lock = crate::formats::lock_dir(out)?;
-    super::batch::check_report_shard(&out.join("instances.json"), shard_label.as_deref())?;
-    let mine: Vec<&InstanceSpec> = specs
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| run.shard.is_none_or(|(i, n)| k % n == i))
-        .map(|(_, s)| s)
-        .collect();
-    let parameters = serde_json::to_value(params).unwrap_or_default();
+    check_folders(specs.iter().map(|s| (s.name.clone(), "another instance")))?;
+    // An atlas without a mean mesh (build --no-mesh): the shapes alone.
+    let morpher = atlas.has_mesh().then(|| ctx.morpher()).transpose()?;
     // The same view of every instance (3D pictures): the mean in the data's frame, widened.
     let view = (D == 3 && morpher.is_some()).then(|| {
         let mean: Vec<Point<3>> = atlas
@@ -155,55 +124,88 @@ pub fn write_instances<const D: usize>(
             .collect();
         crate::report::render::View::fitting(&widened(&mean, 1.15))
     });
-    let label = "instance";
-    progress.items_started(label, mine.len());
-    let resumed = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<std::result::Result<InstanceReport, FailedSubject>> = mine
-        .par_iter()
-        .map(|spec| {
-            let crc = run_crc(run.atlas_crc, &parameters, spec);
-            let folder = file_name(&spec.name);
-            let r = if let Some(r) = run.resume.then(|| complete(out, &folder, crc)).flatten() {
-                resumed.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                Ok(r)
-            } else {
-                write_instance(atlas, morpher, spec, params, view.as_ref(), out, crc)
-                    .map_err(|e| FailedSubject::new(&spec.name, "", &e))
-            };
-            progress.item_done(label, &spec.name);
-            r
-        })
-        .collect();
-    progress.items_finished(label);
-    let mut instances = Vec::new();
-    let mut failed = Vec::new();
-    for r in results {
-        match r {
-            Ok(r) => instances.push(r),
-            Err(f) => failed.push(f),
-        }
-    }
-    let mut summary = InstancesSummary::of(&instances, failed.len());
-    summary.resumed = resumed.into_inner();
-    let report = InstancesReport {
-        atlas: run.atlas_file.clone(),
-        dimension: D,
-        modes: m,
-        eigenvalues: atlas.eigenvalues.clone(),
-        data_unit: atlas.data_frame.is_some(),
-        sampling: run.sampling.clone(),
-        shard: shard_label,
-        parameters,
-        summary,
-        failed,
-        instances,
-        atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
+    let job = Instances {
+        ctx,
+        morpher,
+        view,
+        parameters: serde_json::to_value(&ctx.params).unwrap_or_default(),
+        sampling,
     };
-    report.write(&out.join("instances.json"))?;
-    if params.plots {
-        crate::report::html::write_instances(&out.join("instances.html"), &report, out)?;
+    run_items(&job, specs, ctx.looping(INSTANCE_RECORD), progress)
+}
+
+/// The instances of a run.
+struct Instances<'a, const D: usize> {
+    ctx: &'a RunContext<D>,
+    morpher: Option<Arc<Morpher<D>>>,
+    view: Option<crate::report::render::View>,
+    parameters: serde_json::Value,
+    sampling: Option<Sampling>,
+}
+
+impl<const D: usize> Job for Instances<'_, D> {
+    type Item = InstanceSpec;
+    type Key = usize;
+    type Report = InstanceReport;
+    type Output = InstancesReport;
+    const LABEL: &'static str = "instance";
+    const REPORT: &'static str = "instances.json";
+
+    fn name(&self, spec: &InstanceSpec) -> String {
+        spec.name.clone()
     }
-    Ok(report)
+
+    fn key(&self, k: usize, _: &InstanceSpec) -> usize {
+        k
+    }
+
+    fn run(
+        &self,
+        spec: &InstanceSpec,
+        units: &Units<'_>,
+    ) -> Vec<std::result::Result<InstanceReport, FailedSubject>> {
+        let origin = Origin {
+            input: "",
+            input_crc32: 0,
+            run_crc32: run_crc(self.ctx.atlas_crc, &self.parameters, spec),
+        };
+        vec![
+            units
+                .make(&file_name(&spec.name), origin, |dir| self.write(spec, dir))
+                .map_err(|e| FailedSubject::new(&spec.name, "", &e)),
+        ]
+    }
+
+    fn finish(&self, outcome: RunOutcome<InstanceReport>) -> Result<InstancesReport> {
+        let RunOutcome {
+            reports: instances,
+            failed,
+            resumed,
+        } = outcome;
+        let ctx = self.ctx;
+        let mut summary = InstancesSummary::of(&instances, failed.len());
+        summary.resumed = resumed;
+        let report = InstancesReport {
+            atlas: ctx.atlas_file.clone(),
+            dimension: D,
+            modes: ctx.atlas.num_modes(),
+            eigenvalues: ctx.atlas.eigenvalues.clone(),
+            data_unit: ctx.atlas.data_frame.is_some(),
+            sampling: self.sampling.clone(),
+            shard: ctx.place.shard.map(|s| s.label()),
+            parameters: self.parameters.clone(),
+            summary,
+            failed,
+            instances,
+            atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
+        };
+        let out = &ctx.place.out;
+        report.write(&out.join("instances.json"))?;
+        if ctx.params.plots {
+            crate::report::html::write_instances(&out.join("instances.html"), &report, out)?;
+        }
+        Ok(report)
+    }
 }
 
 /// `points` scaled by `k` about their bounding box's centre.
@@ -225,15 +227,6 @@ fn run_crc(atlas_crc: u32, parameters: &serde_json::Value, spec: &InstanceSpec) 
         h.update(&v.to_le_bytes());
     }
     h.finalize()
-}
-
-/// The report of a complete instance in `out/folder`: its record made from the same run,
-/// with every file it lists present.
-fn complete(out: &Path, folder: &str, crc: u32) -> Option<InstanceReport> {
-    let text = std::fs::read(out.join(folder).join(INSTANCE_RECORD)).ok()?;
-    let rec: InstanceRecord = serde_json::from_slice(&text).ok()?;
-    (rec.run_crc32 == crc && rec.report.files.iter().all(|f| out.join(f).is_file()))
-        .then_some(rec.report)
 }
 
 /// The FE mesh of one instance: the mean mesh morphed onto it, repaired, checked, measured.
@@ -291,141 +284,127 @@ fn instance_mesh<const D: usize>(
     })
 }
 
-/// One instance of [`write_instances`], written into `out/NAME/` with its record last; the
-/// surface alone without a `morpher` (an atlas without a mesh).
-#[allow(clippy::too_many_arguments)]
-fn write_instance<const D: usize>(
-    atlas: &Atlas<D>,
-    morpher: Option<&Morpher<D>>,
-    spec: &InstanceSpec,
-    params: &RunParams,
-    view: Option<&crate::report::render::View>,
-    out: &Path,
-    crc: u32,
-) -> Result<InstanceReport> {
-    let m = atlas.num_modes();
-    let w: Vec<f64> = (0..m)
-        .map(|k| spec.sd.get(k).copied().unwrap_or(0.0) * atlas.eigenvalues[k].sqrt())
-        .collect();
-    let frame = atlas.data_frame.unwrap_or_else(Similarity::identity);
-    let surface = Shape {
-        name: spec.name.clone(),
-        points: atlas.to_data_frame(&atlas.instance(&w)),
-        facets: atlas.facets.clone(),
-        landmarks: atlas.landmarks.clone(),
-    };
-    let made = morpher
-        .map(|m| instance_mesh(m, &surface, frame, params))
-        .transpose()?;
-    let base = file_name(&spec.name);
-    let dir = out.join(&base);
-    crate::formats::create_dir(&dir)?;
-    let _ = std::fs::remove_file(dir.join(INSTANCE_RECORD));
-    let mut files = Vec::new();
-    if let Some(im) = &made {
-        let mean_mesh = atlas
-            .mesh
-            .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes));
-        for f in &params.formats {
-            let name = format!("{base}_mesh.{}", f.extension());
-            write_mesh(&dir.join(&name), &im.mesh, Some(&mean_mesh), &im.quality)?;
-            files.push(format!("{base}/{name}"));
+impl<const D: usize> Instances<'_, D> {
+    /// One instance of [`write_instances`], written into `dir` (files named relative to it);
+    /// the surface alone without a morph (an atlas without a mesh).
+    fn write(&self, spec: &InstanceSpec, dir: &Path) -> Result<InstanceReport> {
+        let (atlas, params) = (&*self.ctx.atlas, &self.ctx.params);
+        let (morpher, view) = (self.morpher.as_deref(), self.view.as_ref());
+        let m = atlas.num_modes();
+        let w: Vec<f64> = (0..m)
+            .map(|k| spec.sd.get(k).copied().unwrap_or(0.0) * atlas.eigenvalues[k].sqrt())
+            .collect();
+        let frame = atlas.data_frame.unwrap_or_else(Similarity::identity);
+        let surface = Shape {
+            name: spec.name.clone(),
+            points: atlas.to_data_frame(&atlas.instance(&w)),
+            facets: atlas.facets.clone(),
+            landmarks: atlas.landmarks.clone(),
+        };
+        let made = morpher
+            .map(|m| instance_mesh(m, &surface, frame, params))
+            .transpose()?;
+        let base = file_name(&spec.name);
+        let mut files = Vec::new();
+        if let Some(im) = &made {
+            let mean_mesh = atlas
+                .mesh
+                .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes));
+            for f in &params.formats {
+                let name = format!("{base}_mesh.{}", f.extension());
+                write_mesh(&dir.join(&name), &im.mesh, Some(&mean_mesh), &im.quality)?;
+                files.push(name);
+            }
+            if let Some(deck) = &params.deck {
+                let name = format!("{base}_deck.{}", deck.extension());
+                write_atomic(
+                    &dir.join(&name),
+                    deck.with_nodes(&im.mesh.nodes)?.as_bytes(),
+                )?;
+                files.push(name);
+            }
         }
-        if let Some(deck) = &params.deck {
-            let name = format!("{base}_deck.{}", deck.extension());
-            write_atomic(
-                &dir.join(&name),
-                deck.with_nodes(&im.mesh.nodes)?.as_bytes(),
-            )?;
-            files.push(format!("{base}/{name}"));
-        }
-    }
-    // A point set (no facets) is written as VTP points only.
-    let surface_formats: &[crate::formats::ShapeFormat] = if surface.facets.is_empty() {
-        &[crate::formats::ShapeFormat::Vtp]
-    } else {
-        &params.surface_formats
-    };
-    for &f in surface_formats {
-        let name = format!("{base}.{}", f.extension());
-        write_shape(&dir.join(&name), &surface, f)?;
-        files.push(format!("{base}/{name}"));
-    }
-    if let (true, Some(im)) = (params.plots, &made) {
-        let name = format!("{base}.png");
-        if let Some(view) = view {
-            let title = format!("{}: mesh, scaled Jacobian", spec.name);
-            write_atomic(
-                &dir.join(&name),
-                &quality_picture(&im.mesh, &im.quality, view, &title)?,
-            )?;
+        // A point set (no facets) is written as VTP points only.
+        let surface_formats: &[crate::formats::ShapeFormat] = if surface.facets.is_empty() {
+            &[crate::formats::ShapeFormat::Vtp]
         } else {
-            let to2 =
-                |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
-            let mesh2 = crate::mesh::FeMesh {
-                nodes: to2(&im.mesh.nodes),
-                kind: im.mesh.kind,
-                connectivity: im.mesh.connectivity.clone(),
-                sets: Default::default(),
-            };
-            crate::report::plot_subject(
-                &dir.join(&name),
-                &spec.name,
-                &to2(&atlas.to_data_frame(&atlas.mean)),
-                &to2(&surface.points),
-                &[],
-                &mesh2,
-                atlas.facets.len() == atlas.mean.len(),
-            )?;
+            &params.surface_formats
+        };
+        for &f in surface_formats {
+            let name = format!("{base}.{}", f.extension());
+            write_shape(&dir.join(&name), &surface, f)?;
+            files.push(name);
         }
-        files.push(format!("{base}/{name}"));
-        // The thumbnail `instances.html` shows.
-        let bytes = std::fs::read(dir.join(&name)).map_err(|e| Error::io(dir.join(&name), e))?;
-        let thumb = format!("{base}_thumb.png");
-        write_atomic(
-            &dir.join(&thumb),
-            &crate::report::render::thumbnail(&bytes, 200)?,
-        )?;
-        files.push(format!("{base}/{thumb}"));
+        if let (true, Some(im)) = (params.plots, &made) {
+            let name = format!("{base}.png");
+            if let Some(view) = view {
+                let title = format!("{}: mesh, scaled Jacobian", spec.name);
+                write_atomic(
+                    &dir.join(&name),
+                    &quality_picture(&im.mesh, &im.quality, view, &title)?,
+                )?;
+            } else {
+                let to2 =
+                    |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
+                let mesh2 = crate::mesh::FeMesh {
+                    nodes: to2(&im.mesh.nodes),
+                    kind: im.mesh.kind,
+                    connectivity: im.mesh.connectivity.clone(),
+                    sets: Default::default(),
+                };
+                crate::report::plot_subject(
+                    &dir.join(&name),
+                    &spec.name,
+                    &to2(&atlas.to_data_frame(&atlas.mean)),
+                    &to2(&surface.points),
+                    &[],
+                    &mesh2,
+                    atlas.facets.len() == atlas.mean.len(),
+                )?;
+            }
+            // The thumbnail `instances.html` shows.
+            let bytes =
+                std::fs::read(dir.join(&name)).map_err(|e| Error::io(dir.join(&name), e))?;
+            files.push(name);
+            let thumb = format!("{base}_thumb.png");
+            write_atomic(
+                &dir.join(&thumb),
+                &crate::report::render::thumbnail(&bytes, 200)?,
+            )?;
+            files.push(thumb);
+        }
+        let nan = f64::NAN;
+        let rms = |v: &[f64]| (v.iter().map(|d| d * d).sum::<f64>() / v.len().max(1) as f64).sqrt();
+        let report = InstanceReport {
+            name: spec.name.clone(),
+            sd: spec.sd.clone(),
+            mahalanobis: spec.sd.iter().map(|v| v * v).sum::<f64>().sqrt(),
+            elements: made.as_ref().map_or(0, |im| im.mesh.num_elements()),
+            scaled_jacobian_min: made.as_ref().map_or(nan, |im| im.after.scaled_jacobian_min),
+            scaled_jacobian_min_before_repair: made
+                .as_ref()
+                .map_or(nan, |im| im.before.scaled_jacobian_min),
+            inverted_elements: made.as_ref().map_or(0, |im| im.after.inverted_elements),
+            repair_bound: made.as_ref().map_or(0.0, |im| im.repair_bound),
+            elements_below_repair_bound: made.as_ref().map_or(0, |im| {
+                im.quality
+                    .iter()
+                    .filter(|e| e.scaled_jacobian_min < im.repair_bound)
+                    .count()
+            }),
+            elements_below_bound: made.as_ref().map_or(0, |im| im.elements_below_bound),
+            mesh_rms_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.rms),
+            mesh_p95_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.p95),
+            mesh_max_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.max),
+            boundary_node_rms_distance: made.as_ref().map_or(nan, |im| rms(&im.node_distances)),
+            boundary_node_max_distance: made.as_ref().map_or(nan, |im| {
+                im.node_distances.iter().fold(0.0, |a, &d| a.max(d))
+            }),
+            element_size: made.as_ref().map_or(nan, |im| im.delivered.element_size),
+            files,
+        };
+        Ok(report)
     }
-    let nan = f64::NAN;
-    let rms = |v: &[f64]| (v.iter().map(|d| d * d).sum::<f64>() / v.len().max(1) as f64).sqrt();
-    let report = InstanceReport {
-        name: spec.name.clone(),
-        sd: spec.sd.clone(),
-        mahalanobis: spec.sd.iter().map(|v| v * v).sum::<f64>().sqrt(),
-        elements: made.as_ref().map_or(0, |im| im.mesh.num_elements()),
-        scaled_jacobian_min: made.as_ref().map_or(nan, |im| im.after.scaled_jacobian_min),
-        scaled_jacobian_min_before_repair: made
-            .as_ref()
-            .map_or(nan, |im| im.before.scaled_jacobian_min),
-        inverted_elements: made.as_ref().map_or(0, |im| im.after.inverted_elements),
-        repair_bound: made.as_ref().map_or(0.0, |im| im.repair_bound),
-        elements_below_repair_bound: made.as_ref().map_or(0, |im| {
-            im.quality
-                .iter()
-                .filter(|e| e.scaled_jacobian_min < im.repair_bound)
-                .count()
-        }),
-        elements_below_bound: made.as_ref().map_or(0, |im| im.elements_below_bound),
-        mesh_rms_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.rms),
-        mesh_p95_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.p95),
-        mesh_max_distance: made.as_ref().map_or(nan, |im| im.delivered.distances.max),
-        boundary_node_rms_distance: made.as_ref().map_or(nan, |im| rms(&im.node_distances)),
-        boundary_node_max_distance: made.as_ref().map_or(nan, |im| {
-            im.node_distances.iter().fold(0.0, |a, &d| a.max(d))
-        }),
-        element_size: made.as_ref().map_or(nan, |im| im.delivered.element_size),
-        files,
-    };
-    let rec = InstanceRecord {
-        run_crc32: crc,
-        report,
-    };
-    let text = serde_json::to_vec_pretty(&rec)
-        .map_err(|e| Error::Numerical(format!("instance record: {e}")))?;
-    write_atomic(&dir.join(INSTANCE_RECORD), &text)?;
-    Ok(rec.report)
 }
 
 /// Joins the `instances.json` of several shards of one sampled population (or runs of one
@@ -437,48 +416,5 @@ fn write_instance<const D: usize>(
 /// [`Error::Parse`] for a file that is not an instances report; [`Error::Population`] for
 /// reports that do not belong together.
 pub fn merge_instances(paths: &[std::path::PathBuf]) -> Result<InstancesReport> {
-    let mut merged: Option<InstancesReport> = None;
-    for p in paths {
-        let text = crate::formats::read_input(p)?;
-        let r: InstancesReport = serde_json::from_slice(&text).map_err(|e| {
-            Error::parse(
-                p,
-                e.line(),
-                format!("not an atlasmesh instances report: {e}"),
-            )
-        })?;
-        match &mut merged {
-            None => merged = Some(r),
-            Some(m) => {
-                if m.dimension != r.dimension
-                    || m.eigenvalues != r.eigenvalues
-                    || m.parameters != r.parameters
-                    || m.sampling != r.sampling
-                {
-                    return Err(Error::Population(format!(
-                        "{}: made with another atlas, sampling or parameters than {}",
-                        p.display(),
-                        paths[0].display()
-                    )));
-                }
-                m.summary.resumed += r.summary.resumed;
-                m.instances.extend(r.instances);
-                m.failed.extend(r.failed);
-            }
-        }
-    }
-    let mut m = merged.ok_or_else(|| Error::Population("no report to merge".into()))?;
-    m.instances.sort_by(|a, b| a.name.cmp(&b.name));
-    if let Some(w) = m.instances.windows(2).find(|w| w[0].name == w[1].name) {
-        return Err(Error::Population(format!(
-            "instance {} is in two of the reports (overlapping shards?)",
-            w[0].name
-        )));
-    }
-    m.failed.sort_by(|a, b| a.name.cmp(&b.name));
-    let resumed = m.summary.resumed;
-    m.summary = InstancesSummary::of(&m.instances, m.failed.len());
-    m.summary.resumed = resumed;
-    m.shard = None;
-    Ok(m)
+    super::run::merge(paths)
 }

@@ -37,10 +37,12 @@ pub fn leave_one_out<const D: usize>(
     progress: &dyn Progress,
 ) -> Result<Report> {
     leave_one_out_of(
-        shapes,
-        shapes,
-        None,
-        &Default::default(),
+        Folds {
+            corresponded: shapes,
+            subjects: shapes,
+            meshes: None,
+            population: &Default::default(),
+        },
         dataset,
         params,
         out,
@@ -49,24 +51,38 @@ pub fn leave_one_out<const D: usize>(
     )
 }
 
-/// Leave-one-out where the atlas of fold `k` is built from `corresponded` without entry `k`
-/// (with `meshes`, one template volume mesh per shape, the mean of the training ones as its
-/// FE mesh), and `subjects[k]` (the same shape as given, before registration) is the one
-/// fitted; `population` (the shapes as read, the registration's template) goes into the
-/// report.
-#[allow(clippy::too_many_arguments)]
+/// The folds of a leave-one-out: the atlas of fold `k` is built from `corresponded` without
+/// entry `k` (with `meshes`, one template volume mesh per shape, the mean of the training
+/// ones as its FE mesh), and `subjects[k]` (the same shape as given, before registration) is
+/// the one fitted; `population` (the shapes as read, the registration's template) goes into
+/// the report.
+#[derive(Clone, Copy)]
+pub struct Folds<'a, const D: usize> {
+    /// The shapes in correspondence.
+    pub corresponded: &'a [Shape<D>],
+    /// The shapes as given, one per corresponded shape.
+    pub subjects: &'a [Shape<D>],
+    /// Template volume meshes, one per shape.
+    pub meshes: Option<&'a [FeMesh<D>]>,
+    /// What the report says about the population.
+    pub population: &'a PopulationFacts,
+}
+
+/// Leave-one-out over `folds` (see [`Folds`] and [`leave_one_out`]).
 pub fn leave_one_out_of<const D: usize>(
-    corresponded: &[Shape<D>],
-    subjects: &[Shape<D>],
-    meshes: Option<&[FeMesh<D>]>,
-    population: &PopulationFacts,
+    folds: Folds<'_, D>,
     dataset: &str,
     params: &RunParams,
     out: &Path,
     jobs: usize,
     progress: &dyn Progress,
 ) -> Result<Report> {
-    let shapes = corresponded;
+    let Folds {
+        corresponded: shapes,
+        subjects,
+        meshes,
+        population,
+    } = folds;
     if subjects.len() != shapes.len() {
         return Err(Error::Population(format!(
             "{} subjects for {} corresponded shapes",
@@ -119,8 +135,9 @@ pub fn leave_one_out_of<const D: usize>(
                         .map(|(_, x)| x.clone())
                         .collect()
                 });
-                let atlas = atlas_of(&training, training_meshes.as_deref(), params)?;
-                let fitter = Fitter::new(&atlas);
+                let atlas =
+                    std::sync::Arc::new(atlas_of(&training, training_meshes.as_deref(), params)?);
+                let fitter = Fitter::new(atlas.clone());
                 let morpher = atlas.morpher(&params.morph)?;
                 let r = process_subject(
                     &atlas,
@@ -154,18 +171,19 @@ pub fn leave_one_out_of<const D: usize>(
     } else {
         None
     };
+    let mean_mesh = Some(mean_mesh_report(
+        &full,
+        data_per_mean(shapes, &full.mean_shape()),
+    ));
     finish_report(
         out,
-        dataset,
         &full,
         None,
         reports,
         params,
-        Some(mean_mesh_report(
-            &full,
-            data_per_mean(shapes, &full.mean_shape()),
-        )),
         crate::study::batch::BatchFacts {
+            dataset: dataset.to_string(),
+            mean_mesh,
             measures,
             failed,
             inputs: population.inputs.clone(),

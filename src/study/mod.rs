@@ -6,11 +6,13 @@
 //!
 //! | file | what it does |
 //! |---|---|
-//! | `params` | [`RunParams`]: every parameter of a run |
+//! | `run` | the run engine: [`run::RunContext`], the item loop, shards, merge |
+//! | `params` | [`RunParams`]: every parameter of a run, and their ranges |
 //! | `progress` | [`Progress`]: the callback through which long work reports progress |
 //! | `population` | loading outlines and surfaces, landmarks, registration to a template |
 //! | `build` | the atlas of a population, written with its mean mesh |
 //! | `sets` | sets and decks on the atlas's mean mesh |
+//! | `subject_file` | [`read_subjects`]: a subject read and cleaned, for every front end |
 //! | `subject` | [`fit_subject`]: one subject's fit, morph, repair and measures |
 //! | `baselines` | the paper's ICP and FFD baselines (fig. 12/20) |
 //! | `landmark_fit` | a subject known by a few landmarks: the posterior, its mesh |
@@ -20,7 +22,7 @@
 //! | `model_page` | the model's page: the mean and its mesh along the modes |
 //! | `report_files` | the population plots, `report.json` and `report.html` |
 //! | `leave_one_out` | the leave-one-out experiment |
-//! | `batch` | batches of subjects from files or memory |
+//! | `batch` | batches of subjects from files or memory (a job of the engine) |
 //! | `mesh_file` | quality, conversion and repair of mesh files |
 //! | `register_pair` | one registration, written out |
 //! | `demo` | the built-in demo |
@@ -39,13 +41,15 @@ mod population;
 mod progress;
 mod register_pair;
 mod report_files;
+pub mod run;
 mod sets;
 mod subject;
+mod subject_file;
 pub mod subject_page;
 mod write_subject;
 
 pub use baselines::*;
-pub use batch::{BatchFacts, BatchOptions, fit_batch, fit_shapes};
+pub use batch::{BatchFacts, fit_batch, fit_shapes};
 pub use build::*;
 pub use demo::*;
 pub use instance::*;
@@ -56,6 +60,8 @@ pub use params::*;
 pub use population::*;
 pub use progress::{Progress, Silent};
 pub use register_pair::{PairRegistration, register_pair};
+pub use run::{RunContext, RunPlace, Shard};
 pub use sets::*;
 pub use subject::*;
+pub use subject_file::*;
 pub use write_subject::*;

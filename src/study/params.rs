@@ -82,3 +82,58 @@ impl Default for RunParams {
         }
     }
 }
+
+impl RunParams {
+    /// Checks every parameter's range for shapes of dimension `dim` (every front end calls
+    /// it, so that each gets the same bounds).
+    ///
+    /// # Errors
+    /// [`Error::Parameter`](crate::Error::Parameter) naming the parameter, its value and its range.
+    pub fn validate(&self, dim: usize) -> crate::Result<()> {
+        let bad = |what: String| Err(crate::Error::Parameter(what));
+        let m = &self.morph;
+        if !(4..=32).contains(&m.grid) {
+            return bad(format!(
+                "grid {}: 4 to 32 FFD control points per axis",
+                m.grid
+            ));
+        }
+        if !(m.alpha.is_finite() && m.alpha > 0.0) {
+            return bad(format!(
+                "alpha {}: a finite positive smoothing weight",
+                m.alpha
+            ));
+        }
+        if !(1..=64).contains(&self.fit.starts) {
+            return bad(format!(
+                "starts {}: 1 to 64 starting rotations",
+                self.fit.starts
+            ));
+        }
+        for (name, v) in [
+            ("max_misfit", self.max_misfit),
+            ("max_instance_distance", self.max_instance_distance),
+            ("max_mesh_distance", self.max_mesh_distance),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(format!(
+                    "{name} {v}: a finite positive share of the diagonal, e.g. 0.05"
+                ));
+            }
+        }
+        if let Some(b) = self.repair.as_ref().and_then(|r| r.bound)
+            && !(b > 0.0 && b < 1.0)
+        {
+            return bad(format!(
+                "repair bound {b}: a scaled Jacobian between 0 and 1"
+            ));
+        }
+        if let Some(f) = self.surface_formats.iter().find(|f| !f.holds(dim)) {
+            return bad(format!(
+                "surface format {}: it holds surfaces; write 2D outlines as vtp or vtk",
+                f.extension()
+            ));
+        }
+        Ok(())
+    }
+}

@@ -4,25 +4,24 @@ use super::params::RunParams;
 use crate::error::Result;
 use crate::model::Atlas;
 use crate::report::{
-    JACOBIAN_BINS, MeanMeshReport, Report, SubjectReport, Summary, plot_cumulative_variance,
-    plot_e_d, plot_jacobian_histogram,
+    JACOBIAN_BINS, Report, SubjectReport, Summary, plot_cumulative_variance, plot_e_d,
+    plot_jacobian_histogram,
 };
 use std::path::Path;
 
 /// Writes the population-level plots and the report; with plots, the model's page too (by
 /// `morpher`, the atlas's; one is made when `None` and the atlas has a mesh).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn finish_report<const D: usize>(
     out: &Path,
-    dataset: &str,
     atlas_for_variance: &Atlas<D>,
     morpher: Option<&crate::mesh::Morpher<D>>,
     subjects: Vec<SubjectReport>,
     params: &RunParams,
-    mean_mesh: Option<MeanMeshReport>,
     batch: crate::study::batch::BatchFacts,
 ) -> Result<Report> {
     let crate::study::batch::BatchFacts {
+        dataset,
+        mean_mesh,
         failed,
         shard,
         resumed,
@@ -51,7 +50,7 @@ pub(crate) fn finish_report<const D: usize>(
         plot_jacobian_histogram(&out.join("scaled_jacobians.png"), &counts)?;
     }
     let report = Report {
-        dataset: dataset.to_string(),
+        dataset,
         dimension: D,
         modes: m,
         variance_explained: atlas_for_variance.cumulative_variance[..m].to_vec(),

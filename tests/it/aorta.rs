@@ -111,7 +111,7 @@ impl Aortas {
 fn held_out(atlas: &Atlas<3>, data: &Aortas, case: usize) -> HeldOut {
     let wall = data.wall(case);
     let index = ClosestPointIndex::from_shape(&wall);
-    let fit = Fitter::new(atlas)
+    let fit = Fitter::new(std::sync::Arc::new(atlas.clone()))
         .fit(&wall, &index, &FitParams::default())
         .unwrap();
     let mut morph = atlas

@@ -108,7 +108,7 @@ fn incomplete_femur_gives_the_weights_of_the_complete_one() {
         },
     )
     .unwrap();
-    let fitter = Fitter::new(&atlas);
+    let fitter = Fitter::new(std::sync::Arc::new(atlas.clone()));
     let sigma: Vec<f64> = atlas.eigenvalues.iter().map(|l| l.sqrt()).collect();
     for s in &shapes[..5] {
         // Longest principal axis: power iteration on the covariance.
@@ -242,7 +242,7 @@ fn ssm_correspondence_is_nearer_the_truth_than_ffd() {
             .unwrap();
             let subject = &shapes[k];
             let index = ClosestPointIndex::from_shape(subject);
-            let fit = atlasmesh::fit::Fitter::new(&atlas)
+            let fit = atlasmesh::fit::Fitter::new(std::sync::Arc::new(atlas.clone()))
                 .fit(subject, &index, &Default::default())
                 .unwrap();
             let mean = atlas.mean_shape();
@@ -317,7 +317,7 @@ fn a_mirrored_femur_is_named() {
         plots: false,
         ..RunParams::default()
     };
-    let fitter = Fitter::new(&atlas);
+    let fitter = Fitter::new(std::sync::Arc::new(atlas.clone()));
     let morpher = atlas.morpher(&params.morph).unwrap();
     let given =
         atlasmesh::study::fit_subject(&atlas, &fitter, &morpher, &shapes[0], &params).unwrap();

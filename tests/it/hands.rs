@@ -208,7 +208,7 @@ fn morphed_mesh_boundary_lies_on_the_subject() {
         .unwrap();
         let subject = &shapes[k];
         let index = ClosestPointIndex::from_shape(subject);
-        let fit = Fitter::new(&atlas)
+        let fit = Fitter::new(std::sync::Arc::new(atlas.clone()))
             .fit(subject, &index, &FitParams::default())
             .unwrap();
         let morph = atlas

@@ -83,10 +83,12 @@ fn hands_without_correspondence_register_and_fit() {
     params.plots = false;
     let out = common::temp_dir("hands-raw");
     let r = leave_one_out_of(
-        &corresponded,
-        &raw,
-        None,
-        &Default::default(),
+        atlasmesh::study::Folds {
+            corresponded: &corresponded,
+            subjects: &raw,
+            meshes: None,
+            population: &Default::default(),
+        },
         "raw hands",
         &params,
         &out,
@@ -163,10 +165,12 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
     };
     let out = common::temp_dir("dense-hands");
     let r = leave_one_out_of(
-        &corresponded,
-        &raw,
-        None,
-        &Default::default(),
+        atlasmesh::study::Folds {
+            corresponded: &corresponded,
+            subjects: &raw,
+            meshes: None,
+            population: &Default::default(),
+        },
         "dense hands",
         &params,
         &out,
@@ -348,10 +352,12 @@ fn femurs_without_correspondence() {
     params.baselines = true;
     let out = common::temp_dir("femurs-raw");
     let r = leave_one_out_of(
-        &corresponded,
-        &raw,
-        None,
-        &Default::default(),
+        atlasmesh::study::Folds {
+            corresponded: &corresponded,
+            subjects: &raw,
+            meshes: None,
+            population: &Default::default(),
+        },
         "raw femurs",
         &params,
         &out,
@@ -471,10 +477,12 @@ fn raw_hands_fit_for_five_resamplings() {
         params.plots = false;
         let out = common::temp_dir(&format!("hands-raw-seed-{seed}"));
         let r = leave_one_out_of(
-            &corresponded,
-            &raw,
-            None,
-            &Default::default(),
+            atlasmesh::study::Folds {
+                corresponded: &corresponded,
+                subjects: &raw,
+                meshes: None,
+                population: &Default::default(),
+            },
             "raw hands",
             &params,
             &out,

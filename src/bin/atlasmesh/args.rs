@@ -139,20 +139,16 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
-    /// The run's parameters for shapes of dimension `dim`.
+    /// The run's parameters for shapes of dimension `dim`, checked
+    /// ([`RunParams::validate`]).
     pub fn params_for(&self, dim: usize) -> anyhow::Result<RunParams> {
         let p = self.params()?;
-        if let Some(f) = p.surface_formats.iter().find(|f| !f.holds(dim)) {
-            return Err(atlasmesh::Error::Parameter(format!(
-                "--surface-format {}: it holds surfaces; write 2D outlines as vtp or vtk",
-                f.extension()
-            ))
-            .into());
-        }
+        p.validate(dim)?;
         Ok(p)
     }
 
-    fn params(&self) -> anyhow::Result<RunParams> {
+    /// The run's parameters as given (a run checks them when it opens).
+    pub fn params(&self) -> anyhow::Result<RunParams> {
         let formats = self
             .format
             .iter()
@@ -193,13 +189,6 @@ impl RunArgs {
         p.fit.partial = self.partial;
         p.plots = !self.no_plots;
         p.baselines = self.baselines;
-        if self.max_misfit.is_nan() || self.max_misfit <= 0.0 {
-            return Err(atlasmesh::Error::Parameter(format!(
-                "--max-misfit {}: a positive share of the diagonal, e.g. 0.05",
-                self.max_misfit
-            ))
-            .into());
-        }
         p.max_misfit = self.max_misfit;
         p.repair = (self.repair == "on").then_some(atlasmesh::mesh::RepairParams {
             bound: self.repair_bound,

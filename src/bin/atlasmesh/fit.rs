@@ -3,9 +3,7 @@
 use crate::args::{RunArgs, dataset_name};
 use crate::summary::{failures, print_summary};
 use crate::terminal::Terminal;
-use atlasmesh::geometry::Shape;
-use atlasmesh::model::Atlas;
-use atlasmesh::study::{self, batch};
+use atlasmesh::study::{self, RunContext, RunPlace, Shard, batch};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -64,198 +62,65 @@ pub struct FitArgs {
     no_resume: bool,
 }
 
-/// Runs `atlasmesh fit`.
+/// Runs `atlasmesh fit`: the dimension is the atlas's, chosen once here.
 pub fn run(a: FitArgs, term: &Terminal) -> anyhow::Result<()> {
-    if !a.landmarks_only.is_empty() {
-        return if atlasmesh::formats::atlas_dimension(&a.atlas)? == 3 {
-            landmarks_only::<3>(&a, term)
-        } else {
-            landmarks_only::<2>(&a, term)
-        };
-    }
-    let files = batch::subject_files(&a.subject)?;
-    batch::check_folder_names(&files)?;
-    let shard = a.shard.as_deref().map(batch::parse_shard).transpose()?;
-    // A subject of the other dimension than the atlas is named as such.
-    let other = |p: &Path, it: &str, dim: usize| {
-        atlasmesh::Error::Population(format!(
-            "{}: {it}, but the atlas {} is {dim}D",
-            p.display(),
-            a.atlas.display()
-        ))
-    };
     if atlasmesh::formats::atlas_dimension(&a.atlas)? == 3 {
-        let load = |p: &Path| -> atlasmesh::Result<Vec<_>> {
-            if !study::is_surface_file(p)? {
-                return Err(other(p, "a 2D outline", 3));
-            }
-            // Floating islands (under 1 % of the area) dropped, as in a population.
-            let mut s = vec![atlasmesh::formats::read_surface(p)?];
-            for i in study::clean_shapes(&mut s, study::ISLAND_SHARE) {
-                for w in i.warnings.iter().filter(|_| !term.is_quiet()) {
-                    eprintln!("warning: {}: {w}", i.name);
-                }
-            }
-            Ok(s)
-        };
-        fit::<3>(&a, &files, shard, &load, term)
+        run_in::<3>(&a, term)
     } else {
-        let load = |p: &Path| -> atlasmesh::Result<Vec<_>> {
-            if study::is_surface_file(p)? {
-                return Err(other(p, "a 3D surface", 2));
-            }
-            let columns = a.columns.clone().unwrap_or_default();
-            let shapes = atlasmesh::formats::read_outlines_with(p, !a.open, &columns)?;
-            for s in &shapes {
-                s.validate()
-                    .map_err(|e| atlasmesh::Error::parse(p, 0, e.to_string()))?;
-            }
-            Ok(shapes)
-        };
-        fit::<2>(&a, &files, shard, &load, term)
+        run_in::<2>(&a, term)
     }
 }
 
-/// The batch of `files` with an atlas of dimension `D` (see [`atlasmesh::study::batch`]).
-fn fit<const D: usize>(
-    a: &FitArgs,
-    files: &[PathBuf],
-    shard: Option<(usize, usize)>,
-    load: &(dyn Fn(&Path) -> atlasmesh::Result<Vec<Shape<D>>> + Sync),
-    term: &Terminal,
-) -> anyhow::Result<()> {
-    let mut atlas = Atlas::<D>::load(&a.atlas)?;
-    let atlas_crc = batch::file_crc32(&a.atlas)?;
-    let mut params = a.run.params_for(D)?;
-    params.atlas = atlas.params;
-    if let Some(c) = &params.sets {
-        study::apply_sets(&mut atlas, c)?;
-    }
-    if let (Some(deck), Some(path)) = (&params.deck, &a.run.deck) {
-        study::check_deck(&atlas, deck, path)?;
-    }
-    let files = match shard {
-        Some((i, n)) => batch::shard(files, i, n),
-        None => files.to_vec(),
+/// `atlasmesh fit` with an atlas of dimension `D`.
+fn run_in<const D: usize>(a: &FitArgs, term: &Terminal) -> anyhow::Result<()> {
+    let place = RunPlace {
+        out: a.out.clone(),
+        resume: !a.no_resume,
+        shard: a.shard.as_deref().map(Shard::parse).transpose()?,
     };
+    // Every subject file listed (and its folder name checked) before the atlas is read.
+    let files = if a.landmarks_only.is_empty() {
+        let files = batch::subject_files(&a.subject)?;
+        batch::check_folder_names(&files)?;
+        files
+    } else {
+        Vec::new()
+    };
+    let ctx = RunContext::<D>::open(&a.atlas, a.run.params()?, a.run.deck.as_deref(), place)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.jobs)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let opts = batch::BatchOptions {
-        resume: !a.no_resume,
-        shard: shard.map(|(i, n)| format!("{i}/{n}")),
+    if !a.landmarks_only.is_empty() {
+        let subjects = study::read_landmark_subjects::<D>(&a.landmarks_only)?;
+        let r =
+            pool.install(|| study::fit_landmark_subjects(&ctx, &subjects, a.landmark_sd, term))?;
+        return print_posterior(&r, &a.out, term);
+    }
+    let reading = study::SubjectReading {
+        open: a.open,
+        columns: a.columns.clone().unwrap_or_default(),
     };
-    let r = pool.install(|| {
-        batch::fit_batch(
-            &atlas,
-            &files,
-            load,
-            &dataset_name(&files),
-            &params,
-            atlas_crc,
-            &a.out,
-            &opts,
-            term,
-        )
-    })?;
+    let r =
+        pool.install(|| batch::fit_batch(&ctx, &files, &reading, &dataset_name(&files), term))?;
+    if !term.is_quiet() {
+        for s in &r.subjects {
+            for w in &s.warnings {
+                eprintln!("warning: {}: {w}", s.name);
+            }
+        }
+    }
     print_summary(&r, &a.out);
     failures(&r)
 }
 
-/// `fit --landmarks-only`: each subject's posterior given its landmarks (see
-/// [`atlasmesh::study::write_landmark_fit`]).
-fn landmarks_only<const D: usize>(a: &FitArgs, term: &Terminal) -> anyhow::Result<()> {
-    use atlasmesh::formats::landmarks;
-    use atlasmesh::study::Progress;
-    use rayon::prelude::*;
-    let mut atlas = Atlas::<D>::load(&a.atlas)?;
-    let params = a.run.params_for(D)?;
-    if let Some(c) = &params.sets {
-        study::apply_sets(&mut atlas, c)?;
-    }
-    if let (Some(deck), Some(path)) = (&params.deck, &a.run.deck) {
-        study::check_deck(&atlas, deck, path)?;
-    }
-    // Every subject's landmarks, read before anything is written.
-    let mut subjects: Vec<(String, PathBuf, Vec<landmarks::NamedLandmark<D>>)> = Vec::new();
-    for f in &a.landmarks_only {
-        let csv = f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-        if csv {
-            for (name, l) in landmarks::read_landmarks_csv::<D>(f)? {
-                subjects.push((name, f.clone(), l));
-            }
-        } else {
-            let name = f
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            subjects.push((name, f.clone(), landmarks::read_landmarks::<D>(f)?));
-        }
-    }
-    let mut folders: Vec<String> = subjects.iter().map(|s| batch::folder_name(&s.0)).collect();
-    folders.sort();
-    if let Some(w) = folders.windows(2).find(|w| w[0] == w[1]) {
-        return Err(atlasmesh::Error::Population(format!(
-            "two subjects would share the output folder {}/; rename one",
-            w[0]
-        ))
-        .into());
-    }
-    let morpher = atlas
-        .has_mesh()
-        .then(|| atlas.morpher(&params.morph))
-        .transpose()?;
-    atlasmesh::formats::create_dir(&a.out)?;
-    let _lock = atlasmesh::formats::lock_dir(&a.out)?;
-    term.items_started("posterior", subjects.len());
-    let results: Vec<Result<atlasmesh::report::PosteriorReport, atlasmesh::report::FailedSubject>> =
-        subjects
-            .par_iter()
-            .map(|(name, file, given)| {
-                let folder = batch::folder_name(name);
-                let r = study::pair_with_atlas(&atlas, given, file).and_then(
-                    |(pairs, used, warnings)| {
-                        let mut r = study::write_landmark_fit(
-                            &atlas,
-                            morpher.as_ref(),
-                            name,
-                            &pairs,
-                            a.landmark_sd,
-                            &params,
-                            &a.out.join(&folder),
-                        )?;
-                        r.landmarks = used;
-                        r.warnings = warnings;
-                        for f in &mut r.files {
-                            *f = format!("{folder}/{f}");
-                        }
-                        Ok(r)
-                    },
-                );
-                term.item_done("posterior", name);
-                r.map_err(|e| {
-                    atlasmesh::report::FailedSubject::new(name, &file.display().to_string(), &e)
-                })
-            })
-            .collect();
-    term.items_finished("posterior");
-    let mut report = atlasmesh::report::PosteriorRunReport {
-        atlas: a.atlas.display().to_string(),
-        dimension: D,
-        modes: atlas.num_modes(),
-        subjects: Vec::new(),
-        failed: Vec::new(),
-        atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
-    };
-    for r in results {
-        match r {
-            Ok(r) => report.subjects.push(r),
-            Err(f) => report.failed.push(f),
-        }
-    }
-    let path = a.out.join("posterior.json");
-    report.write(&path)?;
+/// What `fit --landmarks-only` prints of its report (see
+/// [`atlasmesh::study::fit_landmark_subjects`]).
+fn print_posterior(
+    report: &atlasmesh::report::PosteriorRunReport,
+    out: &Path,
+    term: &Terminal,
+) -> anyhow::Result<()> {
     for s in &report.subjects {
         for w in s.warnings.iter().filter(|_| !term.is_quiet()) {
             eprintln!("warning: {}: {w}", s.name);
@@ -270,7 +135,7 @@ fn landmarks_only<const D: usize>(a: &FitArgs, term: &Terminal) -> anyhow::Resul
             s.scaled_jacobian_min
         );
     }
-    println!("posterior: {}", path.display());
+    println!("posterior: {}", out.join("posterior.json").display());
     for f in &report.failed {
         eprintln!("failed: {} ({}): {}", f.name, f.input, f.error);
     }

@@ -5,7 +5,7 @@ use crate::args::RunArgs;
 use crate::terminal::Terminal;
 use atlasmesh::model::Atlas;
 use atlasmesh::report::Sampling;
-use atlasmesh::study::{self, InstanceRun, InstanceSpec};
+use atlasmesh::study::{self, InstanceSpec, RunContext, RunPlace, Shard};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -177,11 +177,7 @@ pub struct SampleArgs {
 
 /// Runs `atlasmesh sample`.
 pub fn run_sample(a: SampleArgs, term: &Terminal) -> anyhow::Result<()> {
-    let shard = a
-        .shard
-        .as_deref()
-        .map(atlasmesh::study::batch::parse_shard)
-        .transpose()?;
+    let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
     let out = Outputs {
         atlas: &a.atlas,
         run: &a.run,
@@ -217,7 +213,7 @@ struct Outputs<'a> {
     run: &'a RunArgs,
     out: &'a PathBuf,
     jobs: usize,
-    shard: Option<(usize, usize)>,
+    shard: Option<Shard>,
     resume: bool,
 }
 
@@ -230,41 +226,25 @@ fn instances<const D: usize>(
     specs: &SpecsOf<D>,
     term: &Terminal,
 ) -> anyhow::Result<()> {
-    let mut atlas = Atlas::<D>::load(o.atlas)?;
+    let place = RunPlace {
+        out: o.out.clone(),
+        resume: o.resume,
+        shard: o.shard,
+    };
+    let ctx = RunContext::<D>::open(o.atlas, o.run.params()?, o.run.deck.as_deref(), place)?;
+    let atlas = &ctx.atlas;
     if atlas.data_frame.is_none() && !term.is_quiet() {
         eprintln!(
             "warning: {} is an atlas of format version 2, which does not know its data's unit: the instances are in its reference frame (rebuild it to have them in the data's unit)",
             o.atlas.display()
         );
     }
-    let mut params = o.run.params_for(D)?;
-    params.atlas = atlas.params;
-    if let Some(c) = &params.sets {
-        study::apply_sets(&mut atlas, c)?;
-    }
-    if let (Some(deck), Some(path)) = (&params.deck, &o.run.deck) {
-        study::check_deck(&atlas, deck, path)?;
-    }
-    let (specs, sampling) = specs(&atlas)?;
-    // An atlas without a mean mesh (build --no-mesh): the shapes alone.
-    let morpher = atlas
-        .has_mesh()
-        .then(|| atlas.morpher(&params.morph))
-        .transpose()?;
-    let run = InstanceRun {
-        resume: o.resume,
-        shard: o.shard,
-        sampling,
-        atlas_file: o.atlas.display().to_string(),
-        atlas_crc: atlasmesh::study::batch::file_crc32(o.atlas)?,
-    };
+    let (specs, sampling) = specs(atlas)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(o.jobs)
         .build()
         .map_err(|e| anyhow::anyhow!("thread pool: {e}"))?;
-    let r = pool.install(|| {
-        study::write_instances(&atlas, morpher.as_ref(), &specs, &params, o.out, &run, term)
-    })?;
+    let r = pool.install(|| study::write_instances(&ctx, &specs, sampling, term))?;
     if !atlas.has_mesh() {
         println!(
             "{} shapes written ({} already complete): the atlas has no mean mesh (built with --no-mesh), so no FE mesh",

@@ -47,10 +47,12 @@ fn loo<const D: usize>(a: &LooArgs, pop: Population<D>, term: &Terminal) -> anyh
     let (corresponded, template) =
         corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, a.jobs, term)?;
     Ok(study::leave_one_out_of(
-        &corresponded,
-        &shapes,
-        meshes.as_deref(),
-        &study::PopulationFacts { inputs, template },
+        study::Folds {
+            corresponded: &corresponded,
+            subjects: &shapes,
+            meshes: meshes.as_deref(),
+            population: &study::PopulationFacts { inputs, template },
+        },
         &dataset_name(&a.pop.shapes),
         &params,
         Path::new(&a.out),

@@ -1,5 +1,5 @@
 //! `atlasmesh merge-reports`: the reports of several shards joined into one (`report.json`
-//! of `fit`, or `instances.json` of `sample`).
+//! of `fit`, `instances.json` of `sample`, or `posterior.json` of `fit --landmarks-only`).
 
 use clap::Args;
 use std::path::PathBuf;
@@ -15,17 +15,34 @@ pub struct MergeArgs {
     out: PathBuf,
 }
 
-/// Whether `path` holds an `instances.json` (of `instance` or `sample`).
-fn is_instances(path: &std::path::Path) -> bool {
-    atlasmesh::formats::read_input(path)
+/// Which kind of run's report `path` holds: `instances` (of `instance` or `sample`),
+/// `posterior` (`fit --landmarks-only`) or a fit's.
+fn kind(path: &std::path::Path) -> &'static str {
+    let v = atlasmesh::formats::read_input(path)
         .ok()
-        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-        .is_some_and(|v| v.get("instances").is_some())
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok());
+    match v {
+        Some(v) if v.get("instances").is_some() => "instances",
+        Some(v) if v.get("subjects").is_some() && v.get("summary").is_none() => "posterior",
+        _ => "fit",
+    }
 }
 
 /// Runs `atlasmesh merge-reports`.
 pub fn run(a: MergeArgs) -> anyhow::Result<()> {
-    if is_instances(&a.reports[0]) {
+    if kind(&a.reports[0]) == "posterior" {
+        let r: atlasmesh::report::PosteriorRunReport = atlasmesh::study::run::merge(&a.reports)?;
+        r.write(&a.out)?;
+        println!(
+            "{} subjects ({} failed) from {} reports: {}",
+            r.subjects.len(),
+            r.failed.len(),
+            a.reports.len(),
+            a.out.display()
+        );
+        return Ok(());
+    }
+    if kind(&a.reports[0]) == "instances" {
         let r = atlasmesh::study::merge_instances(&a.reports)?;
         r.write(&a.out)?;
         println!(

@@ -1,0 +1,80 @@
+//! Reading a subject, the same for every front end: a file (or arrays) in the atlas's
+//! dimension, checked, its floating islands dropped with a warning that its report keeps.
+
+use super::population::{ISLAND_SHARE, clean_shapes, is_surface_file};
+use crate::error::{Error, Result};
+use crate::formats::CsvColumns;
+use crate::geometry::Shape;
+use std::path::Path;
+
+/// How subject files are read (outlines in CSV and text files; surfaces carry their own
+/// topology).
+#[derive(Clone, Debug, Default)]
+pub struct SubjectReading {
+    /// Outlines in CSV and text files are open.
+    pub open: bool,
+    /// The columns of CSV files, where their names are not the usual ones.
+    pub columns: CsvColumns,
+}
+
+/// A subject ready to fit: its shape, checked and cleaned, and what a user should know about
+/// it (islands dropped), which its report carries.
+#[derive(Clone, Debug)]
+pub struct Subject<const D: usize> {
+    /// The shape (subject frame and unit).
+    pub shape: Shape<D>,
+    /// Warnings about the input (floating components dropped, several remaining).
+    pub warnings: Vec<String>,
+}
+
+/// `shape` ready to fit: checked ([`Shape::validate`]) and its floating components under
+/// [`ISLAND_SHARE`] of its area (length) dropped, with a warning.
+///
+/// # Errors
+/// [`Error::Parse`] naming `origin` (a file, or `"shape K"`) for a shape that is not valid.
+pub fn prepare_subject<const D: usize>(shape: Shape<D>, origin: &Path) -> Result<Subject<D>> {
+    shape
+        .validate()
+        .map_err(|e| Error::parse(origin, 0, e.to_string()))?;
+    let mut one = [shape];
+    let report = clean_shapes(&mut one, ISLAND_SHARE);
+    let [shape] = one;
+    let warnings = report.into_iter().flat_map(|r| r.warnings).collect();
+    Ok(Subject { shape, warnings })
+}
+
+/// The subjects in the file `path` for an atlas of dimension `D`: a surface (PLY, STL, OBJ,
+/// VTK, VTP) in 3D, one or more outlines (CSV, text, VTK, VTP) in 2D, each prepared by
+/// [`prepare_subject`].
+///
+/// # Errors
+/// [`Error::Population`] for a file of the other dimension (naming what it holds), the
+/// errors of the readers and of [`prepare_subject`].
+pub fn read_subjects<const D: usize>(
+    path: &Path,
+    reading: &SubjectReading,
+) -> Result<Vec<Subject<D>>> {
+    let surface = is_surface_file(path)?;
+    let shapes: Vec<Shape<D>> = match (D, surface) {
+        (3, true) => vec![crate::formats::read_surface(path)?.into_dim()],
+        (2, false) => crate::formats::read_outlines_with(path, !reading.open, &reading.columns)?
+            .into_iter()
+            .map(Shape::into_dim)
+            .collect(),
+        (_, surface) => {
+            return Err(Error::Population(format!(
+                "{}: {}, but the atlas is {D}D",
+                path.display(),
+                if surface {
+                    "a 3D surface"
+                } else {
+                    "a 2D outline"
+                }
+            )));
+        }
+    };
+    shapes
+        .into_iter()
+        .map(|s| prepare_subject(s, path))
+        .collect()
+}

@@ -4,20 +4,21 @@
 //! "A statistical atlas based approach to automated subject-specific FE modeling"
 //! (the paper; equation numbers in the docs refer to it).
 //!
-//! The modules follow the pipeline, in the order the data flows:
+//! The modules are floors, each importing only from those below it (`scripts/check-layout.py`
+//! checks it), lowest first:
 //!
 //! | module | stage |
 //! |---|---|
-//! | [`formats`] | files in and out, one file per format |
-//! | [`geometry`] | points, shapes, normals, closest points, rays, similarities |
+//! | [`geometry`] | points, shapes, normals, closest points, rays, similarities, distances |
 //! | [`ffd`] | the B-spline FFD (eq. 1), `E_smooth`, the fit of eq. 9 |
-//! | [`register`] | correspondence by registration (eq. 2) or by arc length |
-//! | [`model`] | GPA, PCA and the atlas (sections 2.2-2.3, eq. 3-4) |
-//! | [`fit`] | shape instantiation and projection (Algorithm 1, eq. 5-8) |
 //! | [`mesh`] | FE meshes: meshing the mean, morph (eq. 9), quality (section 5.3), repair |
+//! | [`model`] | GPA, PCA and the atlas (sections 2.2-2.3, eq. 3-4) |
+//! | [`register`] | correspondence by registration (eq. 2) or by arc length |
+//! | [`fit`] | shape instantiation and projection (Algorithm 1, eq. 5-8) |
 //! | [`eval`] | measures (section 5, eq. 6, 10-13) |
+//! | [`formats`] | files in and out, one file per format |
 //! | [`report`] | `report.json`, plots, pictures, `report.html` |
-//! | [`study`] | the stages strung together: build, fit a subject, leave-one-out, batches |
+//! | [`study`] | the stages strung together: the run engine ([`study::run`]), build, fit a subject, leave-one-out, batches |
 //!
 //! Numerics never touch files; [`formats`] and [`report`] write, [`study`] decides what.
 

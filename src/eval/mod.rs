@@ -5,7 +5,7 @@
 //!
 //! | file | what it computes |
 //! |---|---|
-//! | `distance` | [`e_d`] (eq. 6), [`two_way_rms`], [`surface_distances`] (of a delivered mesh) |
+//! | `distance` | [`e_d`] (eq. 6), [`two_way_rms`], and, from `geometry`, [`surface_distances`] (of a delivered mesh) |
 //! | `normal_correlation` | [`normal_correlation`] (eq. 10-13), [`normals_at`] |
 //! | `model_measures` | [`shape_model_measures`] |
 
@@ -13,8 +13,8 @@ mod distance;
 mod model_measures;
 mod normal_correlation;
 
-pub use distance::{SurfaceDistances, e_d, surface_distances, two_way_rms};
-pub(crate) use model_measures::standard_normal;
+pub use crate::geometry::{SurfaceDistances, surface_distances};
+pub use distance::{e_d, two_way_rms};
 pub use model_measures::{ShapeModelMeasures, shape_model_measures};
 pub use normal_correlation::{normal_correlation, normals_at};
 

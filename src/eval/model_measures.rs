@@ -174,7 +174,7 @@ pub fn shape_model_measures<const D: usize>(
             let mut w = vec![0.0; full.num_modes()];
             (0..mm)
                 .map(|m| {
-                    w[m] = standard_normal(&mut rng) * full.eigenvalues[m].sqrt();
+                    w[m] = crate::model::standard_normal(&mut rng) * full.eigenvalues[m].sqrt();
                     let inst = full.instance(&w);
                     training
                         .iter()
@@ -190,12 +190,4 @@ pub fn shape_model_measures<const D: usize>(
         out.specificity_sd.push(sd);
     }
     Ok(out)
-}
-
-/// Standard normal deviate (Box-Muller) from a seeded generator.
-pub(crate) fn standard_normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
-    use rand::RngExt;
-    let u: f64 = rng.random_range(1e-12..1.0);
-    let v: f64 = rng.random_range(0.0..1.0);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
 }

@@ -2,26 +2,12 @@
 
 use super::deformation::Ffd;
 use super::lattice::Lattice;
-use super::system::{FfdParams, FfdSystem};
+use super::system::{FfdFit, FfdParams, FfdSystem};
 use crate::error::Result;
 use crate::geometry::Point;
 use faer::Mat;
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky};
-
-/// The precomputed fit of an FFD to fixed source points (eq. 9): the factorized normal
-/// matrix `B^T B + alpha K`, reusable for any number of target point sets (every subject of an
-/// atlas shares the mean shape as source).
-pub struct FfdFit<const D: usize> {
-    pub(super) lattice: Lattice<D>,
-    pub(super) unit: f64,
-    pub(super) sources: Vec<Point<D>>,
-    pub(super) weights: Option<Vec<f64>>,
-    /// The Cholesky factor of the normal matrix: structure (with the fill-reducing order)
-    /// and values.
-    pub(super) symbolic: std::sync::Arc<SymbolicCholesky<usize>>,
-    pub(super) values: Vec<f64>,
-}
+use faer::sparse::linalg::cholesky::LltRef;
 
 impl<const D: usize> FfdFit<D> {
     /// Builds and factorizes the normal matrix for the source points `sources` (shape units).

@@ -25,8 +25,8 @@ mod system;
 pub use bases::cubic_bases;
 pub use deformation::Ffd;
 pub use lattice::Lattice;
-pub use least_squares::FfdFit;
 pub use smoothing::smoothing_energy;
+pub use system::FfdFit;
 pub use system::{FfdParams, FfdSystem};
 
 #[cfg(test)]

@@ -1,7 +1,6 @@
 //! The sparse normal equations of eq. 2 and 9 and their Cholesky factor.
 
 use super::lattice::Lattice;
-use super::least_squares::FfdFit;
 use super::smoothing::{Banded, Scaling, smoothing_matrix};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
@@ -260,6 +259,21 @@ impl<const D: usize> FfdSystem<D> {
             values,
         })
     }
+}
+
+/// The precomputed fit of an FFD to fixed source points (eq. 9): the factorized normal
+/// matrix `B^T B + alpha K`, reusable for any number of target point sets (every subject of an
+/// atlas shares the mean shape as source).
+/// (Made by [`FfdSystem::factor`]; solved by its methods in `least_squares`.)
+pub struct FfdFit<const D: usize> {
+    pub(super) lattice: Lattice<D>,
+    pub(super) unit: f64,
+    pub(super) sources: Vec<Point<D>>,
+    pub(super) weights: Option<Vec<f64>>,
+    /// The Cholesky factor of the normal matrix: structure (with the fill-reducing order)
+    /// and values.
+    pub(super) symbolic: std::sync::Arc<faer::sparse::linalg::cholesky::SymbolicCholesky<usize>>,
+    pub(super) values: Vec<f64>,
 }
 
 /// A fill-reducing order of the control points of a lattice of `size` points per axis, for

@@ -60,7 +60,10 @@ pub use gmsh::{parse_msh, read_msh};
 pub(crate) use input::check_points;
 pub use input::{DEFAULT_MAX_POINTS, max_points, read_input, read_input_text};
 pub use outline::{parse_outlines, parse_outlines_with, read_outlines, read_outlines_with};
-pub use outline_csv::{parse_long_csv, parse_long_csv_with, parse_point_sets_csv, read_long_csv};
+pub use outline_csv::{
+    csv_holds_3d_points, parse_long_csv, parse_long_csv_with, parse_point_sets_csv, read_long_csv,
+    read_point_sets_csv,
+};
 pub use outline_text::{parse_text_outlines, read_text_outlines};
 pub use ply::write_ply;
 pub use shape_file::{ShapeFormat, write_shape};

@@ -54,6 +54,54 @@ pub fn parse_point_sets_csv(
         .collect())
 }
 
+/// 3D point sets from a CSV file as shape tools write them: the long table of
+/// [`parse_point_sets_csv`] (several shapes), or one shape per file with `x,y,z` columns
+/// under a header that may start with `#` (NumPy's `savetxt(..., header="x,y,z")`), or no
+/// header at all (three numbers per line). A one-shape file's shape is named after the file.
+///
+/// # Errors
+/// [`Error::Parse`] naming the line for a row that is not three numbers, and the errors of
+/// [`parse_point_sets_csv`].
+pub fn read_point_sets_csv(path: &Path, columns: &CsvColumns) -> Result<Vec<Shape<3>>> {
+    let text = read_text(path)?;
+    parse_point_sets_csv(path, &with_header(&text), columns)
+}
+
+/// `text` with a header line a [`Table`] reads: a leading `#` taken off the first line, or
+/// `x,y,z` put above rows of three numbers without a header.
+fn with_header(text: &str) -> std::borrow::Cow<'_, str> {
+    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
+    let trimmed = first.trim_start_matches('\u{feff}').trim_start();
+    if let Some(rest) = trimmed.strip_prefix('#') {
+        return text.replacen(first, rest.trim_start(), 1).into();
+    }
+    let numbers = trimmed
+        .split(',')
+        .map(|f| f.trim().parse::<f64>().is_ok())
+        .collect::<Vec<_>>();
+    if !numbers.is_empty() && numbers.iter().all(|&n| n) {
+        return format!("x,y,z\n{text}").into();
+    }
+    text.into()
+}
+
+/// Whether the CSV file `path` holds 3D points: a `z` column with a non-zero value (a 2D
+/// outline may carry `z` = 0), or rows of three numbers without a header.
+///
+/// # Errors
+/// Those of reading the file and its header.
+pub fn csv_holds_3d_points(path: &Path) -> Result<bool> {
+    let text = read_text(path)?;
+    let text = with_header(&text);
+    let t = Table::parse(path, &text, &CsvColumns::default())?;
+    let Some(z) = t.column(path, "z")? else {
+        return Ok(false);
+    };
+    Ok(t.rows
+        .iter()
+        .any(|(_, f)| f[z].trim().parse::<f64>().is_ok_and(|v| v != 0.0)))
+}
+
 /// The shapes of a long table of points in dimension `D`.
 fn point_table<const D: usize>(
     path: &Path,
@@ -109,7 +157,7 @@ fn point_table<const D: usize>(
             return Err(Error::parse(
                 path,
                 ln,
-                "a point has a non-zero z: 3D points, where 2D outlines were expected",
+                "a point has a non-zero z: 3D points (x,y,z), where 2D outlines (x,y) were expected",
             ));
         }
         if !rows.contains_key(&name) {

@@ -18,6 +18,7 @@
 //! | `orientation` | closed surfaces oriented outwards, signed volume |
 //! | `similarity` | [`Similarity`] `t_{R,T,s}` and rotations from generators |
 //! | `decimate` | vertex-clustering decimation |
+//! | `surface_distance` | [`surface_distances`]: a delivered shape's distances to its subject |
 //! | `thickness` | local thickness across a closed shape |
 //! | `topology` | connected components, genus, floating islands dropped |
 
@@ -32,6 +33,7 @@ mod query_memo;
 mod ray;
 mod shape;
 mod similarity;
+mod surface_distance;
 mod thickness;
 mod topology;
 
@@ -47,6 +49,7 @@ pub use principal_axes::{principal_axes_of, start_rotations};
 pub use query_memo::QueryMemo;
 pub use shape::{Contour2, REFERENCE_POINTS, Shape, Surface3, median_edge_length, uv_sphere};
 pub use similarity::{Similarity, rotation_exp};
+pub use surface_distance::{SurfaceDistances, surface_distances};
 pub use thickness::{local_thickness, thickness_quantile};
 pub use topology::{Component, components, drop_small_components};
 

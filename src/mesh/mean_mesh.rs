@@ -1,7 +1,7 @@
 //! The FE mesh of the mean shape (section 2.4): quadrilaterals in 2D, hexahedra in 3D.
 
 use crate::error::{Error, Result};
-use crate::eval::surface_distances;
+use crate::geometry::surface_distances;
 use crate::geometry::{ClosestPointIndex, Shape, bounding_box, same_dim};
 use crate::mesh::quality::{edge_ratio_max, mesh_quality, summarize};
 use crate::mesh::repair::default_bound;

@@ -326,7 +326,7 @@ impl<const D: usize> Atlas<D> {
     #[track_caller]
     pub fn instance(&self, w: &[f64]) -> Vec<Point<D>> {
         assert_eq!(w.len(), self.num_modes(), "instance: one weight per mode");
-        super::shape_model::combine(&self.mean, &self.modes, w)
+        combine(&self.mean, &self.modes, w)
     }
 
     /// `Psi^T (x - S_bar)`: the weights of the projection of `x` (reference frame, `N` points
@@ -349,4 +349,25 @@ impl<const D: usize> Atlas<D> {
             })
             .collect()
     }
+}
+
+/// `mean + modes w`, points of `D` coordinates interleaved in the rows of `modes`.
+pub(super) fn combine<const D: usize>(
+    mean: &[Point<D>],
+    modes: &Mat<f64>,
+    w: &[f64],
+) -> Vec<Point<D>> {
+    let mut out = mean.to_vec();
+    for (k, &wk) in w.iter().enumerate() {
+        if wk == 0.0 {
+            continue;
+        }
+        let col = modes.col(k);
+        for (i, p) in out.iter_mut().enumerate() {
+            for d in 0..D {
+                p[d] += wk * col[i * D + d];
+            }
+        }
+    }
+    out
 }

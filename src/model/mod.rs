@@ -23,6 +23,7 @@ mod shape_model;
 pub use atlas::{Atlas, AtlasParams, ModeSelection};
 pub use pca::{Pca, pca};
 pub use procrustes::{Gpa, align_to_mean, fit_similarity, generalized_procrustes};
+pub(crate) use shape_model::standard_normal;
 pub use shape_model::{MarginalModel, PosteriorModel};
 
 #[cfg(test)]

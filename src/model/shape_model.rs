@@ -37,7 +37,7 @@ impl<const D: usize> MarginalModel<D> {
             self.eigenvalues.len(),
             "instance: one weight per mode"
         );
-        combine(&self.mean, &self.modes, w)
+        super::atlas::combine(&self.mean, &self.modes, w)
     }
 
     /// The model's covariance of one kept point (`D × D`, reference-frame units squared):
@@ -123,7 +123,7 @@ impl<const D: usize> Atlas<D> {
             .iter()
             .map(|l| {
                 let z = loop {
-                    let z = crate::eval::standard_normal(rng);
+                    let z = standard_normal(rng);
                     if z.abs() <= bound {
                         break z;
                     }
@@ -266,27 +266,6 @@ impl<const D: usize> Atlas<D> {
     }
 }
 
-/// `mean + modes w`, points of `D` coordinates interleaved in the rows of `modes`.
-pub(super) fn combine<const D: usize>(
-    mean: &[Point<D>],
-    modes: &Mat<f64>,
-    w: &[f64],
-) -> Vec<Point<D>> {
-    let mut out = mean.to_vec();
-    for (k, &wk) in w.iter().enumerate() {
-        if wk == 0.0 {
-            continue;
-        }
-        let col = modes.col(k);
-        for (i, p) in out.iter_mut().enumerate() {
-            for d in 0..D {
-                p[d] += wk * col[i * D + d];
-            }
-        }
-    }
-    out
-}
-
 /// `Psi_i S Psi_i^T` (`D × D`) for the point `i` of `modes` and a weight covariance `S`
 /// given entry by entry.
 fn point_covariance<const D: usize>(
@@ -310,4 +289,13 @@ fn point_covariance<const D: usize>(
         }
     }
     c
+}
+
+/// Standard normal deviate (Box-Muller) from a seeded generator: the draws of the model's
+/// prior (eq. 4, `w ~ N(0, Lambda)`).
+pub(crate) fn standard_normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
+    use rand::RngExt;
+    let u: f64 = rng.random_range(1e-12..1.0);
+    let v: f64 = rng.random_range(0.0..1.0);
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
 }

@@ -120,7 +120,7 @@ impl<const D: usize> Registration<D> {
             facets: template.facets.clone(),
             landmarks: Vec::new(),
         };
-        let d = crate::eval::surface_distances(&deformed, target, index, true, f64::INFINITY);
+        let d = crate::geometry::surface_distances(&deformed, target, index, true, f64::INFINITY);
         let one_way = (self
             .deformed
             .iter()

@@ -26,4 +26,5 @@ pub mod viewer;
 pub use instances::*;
 pub use plots::*;
 pub use posterior::*;
+pub use render::font_available;
 pub use schema::*;

@@ -9,32 +9,6 @@ use crate::mesh::FeMesh;
 use crate::mesh::quality::mesh_quality;
 use plotters::prelude::*;
 use std::path::Path;
-use std::sync::OnceLock;
-
-/// Registers a font for plot labels from the usual system locations; `false` when none is
-/// found (plots are then drawn without text).
-pub fn font_available() -> bool {
-    static FONT: OnceLock<bool> = OnceLock::new();
-    *FONT.get_or_init(|| {
-        let candidates = [
-            "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-            "/usr/share/fonts/TTF/DejaVuSans.ttf",
-            "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-            "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-            "/Library/Fonts/Arial.ttf",
-            "C:\\Windows\\Fonts\\arial.ttf",
-        ];
-        for c in candidates {
-            if let Ok(b) = std::fs::read(c) {
-                let leaked: &'static [u8] = Box::leak(b.into_boxed_slice());
-                if plotters::style::register_font("sans-serif", FontStyle::Normal, leaked).is_ok() {
-                    return true;
-                }
-            }
-        }
-        false
-    })
-}
 
 /// An RGB picture that plotters draws into (no image codec: [`Canvas::save`] encodes it).
 struct Canvas {
@@ -109,7 +83,7 @@ pub(crate) fn integer_label(x: &f64) -> String {
 
 /// Plots the cumulative variance share against the number of modes (fig. 5).
 pub fn plot_cumulative_variance(path: &Path, cumulative: &[f64], kept: usize) -> Result<()> {
-    let text = font_available();
+    let text = super::render::font_available();
     Canvas::new(640, 420).draw(path, |root| {
         root.fill(&WHITE).map_err(perr(path))?;
         let n = cumulative.len().max(1);
@@ -158,7 +132,7 @@ pub fn plot_shape_model_measures(
     m: &crate::eval::ShapeModelMeasures,
     units: &str,
 ) -> Result<()> {
-    let text = font_available();
+    let text = super::render::font_available();
     let units = if units.is_empty() {
         "the shapes' unit"
     } else {
@@ -246,7 +220,7 @@ pub fn plot_shape_model_measures(
 
 /// Plots `E_d` against the iteration for every subject (fig. 11), log scale.
 pub fn plot_e_d(path: &Path, histories: &[(String, Vec<f64>)]) -> Result<()> {
-    let text = font_available();
+    let text = super::render::font_available();
     Canvas::new(720, 460).draw(path, |root| {
         root.fill(&WHITE).map_err(perr(path))?;
         let maxit = histories
@@ -359,7 +333,7 @@ pub fn jacobian_histogram(values: impl IntoIterator<Item = f64>) -> Vec<u32> {
 
 /// Histogram of the scaled Jacobians of all subjects' elements (counts summed over subjects).
 pub fn plot_jacobian_histogram(path: &Path, counts: &[u32]) -> Result<()> {
-    let text = font_available();
+    let text = super::render::font_available();
     Canvas::new(720, 460).draw(path, |root| {
         root.fill(&WHITE).map_err(perr(path))?;
         let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
@@ -406,7 +380,7 @@ pub fn plot_subject(
     mesh: &FeMesh<2>,
     closed: bool,
 ) -> Result<()> {
-    let text = font_available();
+    let text = super::render::font_available();
     Canvas::new(1100, 540).draw(path, |root| {
         root.fill(&WHITE).map_err(perr(path))?;
         let (left, right) = root.split_horizontally(550);
@@ -604,7 +578,7 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
         }
         return crate::formats::write_atomic(path, &img.png()?);
     }
-    let text = font_available();
+    let text = super::render::font_available();
     Canvas::new(360 * modes as u32, 380).draw(path, |root| {
         root.fill(&WHITE).map_err(perr(path))?;
         let (lo, hi) = bounding_box(&atlas.mean);
@@ -662,7 +636,7 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
 /// normal correlation (eq. 13) of the SSM fit's correspondence, of the FFD registration's and
 /// of the similarity ICP's.
 pub fn plot_baselines(path: &Path, subjects: &[SubjectReport]) -> Result<()> {
-    let text = font_available();
+    let text = super::render::font_available();
     let mut rows: Vec<(f64, f64, f64)> = subjects
         .iter()
         .map(|s| {

@@ -300,7 +300,7 @@ pub struct Legend<'a> {
 
 /// `img` with a strip above holding `title` and, with `legend`, a strip below holding a
 /// colour bar with a label at each end. Text needs a system font (see
-/// [`crate::report::font_available`]); without one the strips hold only the bar.
+/// [`font_available`]); without one the strips hold only the bar.
 pub fn annotated(img: &Image, title: &str, legend: Option<&Legend>) -> Image {
     const TOP: usize = 22;
     let bottom = if legend.is_some() { 26 } else { 0 };
@@ -320,7 +320,7 @@ pub fn annotated(img: &Image, title: &str, legend: Option<&Legend>) -> Image {
         }
         (x0, x1, y0, l)
     });
-    if !crate::report::font_available() {
+    if !font_available() {
         return out;
     }
     use plotters::prelude::*;
@@ -427,6 +427,37 @@ pub fn boundary_triangles(
         }
     }
     (tris, values)
+}
+
+/// Registers a font for plot labels from the usual system locations; `false` when none is
+/// found (plots are then drawn without text).
+pub fn font_available() -> bool {
+    static FONT: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *FONT.get_or_init(|| {
+        let candidates = [
+            "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/TTF/DejaVuSans.ttf",
+            "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+            "/Library/Fonts/Arial.ttf",
+            "C:\\Windows\\Fonts\\arial.ttf",
+        ];
+        for c in candidates {
+            if let Ok(b) = std::fs::read(c) {
+                let leaked: &'static [u8] = Box::leak(b.into_boxed_slice());
+                if plotters::style::register_font(
+                    "sans-serif",
+                    plotters::style::FontStyle::Normal,
+                    leaked,
+                )
+                .is_ok()
+                {
+                    return true;
+                }
+            }
+        }
+        false
+    })
 }
 
 #[cfg(test)]

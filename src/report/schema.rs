@@ -128,6 +128,10 @@ pub struct SubjectReport {
     pub converged: bool,
     /// `E_d` at every iteration.
     pub e_d_history: Vec<f64>,
+    /// The fit's shape weights in standard deviations of each mode (`w_k / sqrt(lambda_k)`,
+    /// eq. 4): the subject's coordinates in the shape space.
+    #[serde(default)]
+    pub sd: Vec<f64>,
     /// Output files of this subject, relative to the report.
     pub files: Vec<String>,
 }

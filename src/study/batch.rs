@@ -11,7 +11,7 @@
 
 use super::build::mean_mesh_report;
 use super::progress::Progress;
-use super::report_files::finish_report;
+use super::report_files::{BatchFacts, finish_report};
 use super::run::{Job, Origin, RunContext, RunOutcome, Units, check_folders, run_items};
 use super::subject_file::{Subject, SubjectReading, read_subjects};
 use super::write_subject::write_subject;
@@ -23,29 +23,6 @@ use std::sync::Arc;
 
 /// File name of a subject's record in its folder.
 pub const RECORD: &str = "subject.json";
-
-/// What a run adds to a report beside the subjects: the data set's name, the mean mesh, a
-/// batch's failures, its shard and the subjects it skipped; the shape-model measures of the
-/// population (the HTML report plots them).
-#[derive(Clone, Debug, Default)]
-pub struct BatchFacts {
-    /// The data the run was made from (files or folder).
-    pub dataset: String,
-    /// The atlas's mean mesh.
-    pub mean_mesh: Option<crate::report::MeanMeshReport>,
-    /// Subjects that failed, with the reason.
-    pub failed: Vec<FailedSubject>,
-    /// The shard (`I/N`) of a batch.
-    pub shard: Option<String>,
-    /// Subjects skipped because their outputs were complete.
-    pub resumed: usize,
-    /// The population model's measures (the HTML report plots them).
-    pub measures: Option<crate::eval::ShapeModelMeasures>,
-    /// The population's shapes as read (leave-one-out).
-    pub inputs: Vec<crate::report::InputReport>,
-    /// The registration's template (leave-one-out with registration).
-    pub template: Option<String>,
-}
 
 /// A subject's record `NAME/subject.json`: its report (files relative to the batch folder)
 /// and what it was made from.

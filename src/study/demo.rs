@@ -22,7 +22,7 @@ pub fn demo_population(n: usize, points: usize, seed: u64) -> Vec<Shape<2>> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     (0..n)
         .map(|k| {
-            let c: [f64; 4] = std::array::from_fn(|_| crate::eval::standard_normal(&mut rng));
+            let c: [f64; 4] = std::array::from_fn(|_| crate::model::standard_normal(&mut rng));
             let mut pose = Similarity::<2>::planar_rotation(rng.random_range(-0.6..0.6));
             pose.s = rng.random_range(20.0..60.0);
             pose.t = [
@@ -59,7 +59,7 @@ pub fn demo_population_3d(n: usize, rings: usize, seed: u64) -> Result<Vec<Shape
     let nv = rings;
     (0..n)
         .map(|k| {
-            let c: [f64; 4] = std::array::from_fn(|_| crate::eval::standard_normal(&mut rng));
+            let c: [f64; 4] = std::array::from_fn(|_| crate::model::standard_normal(&mut rng));
             let axis = crate::geometry::normalize([
                 rng.random_range(-1.0..1.0),
                 rng.random_range(-1.0..1.0),

@@ -181,7 +181,7 @@ pub fn leave_one_out_of<const D: usize>(
         None,
         reports,
         params,
-        crate::study::batch::BatchFacts {
+        crate::study::report_files::BatchFacts {
             dataset: dataset.to_string(),
             mean_mesh,
             measures,

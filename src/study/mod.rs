@@ -49,7 +49,7 @@ pub mod subject_page;
 mod write_subject;
 
 pub use baselines::*;
-pub use batch::{BatchFacts, fit_batch, fit_shapes};
+pub use batch::{fit_batch, fit_shapes};
 pub use build::*;
 pub use demo::*;
 pub use instance::*;
@@ -60,6 +60,7 @@ pub use params::*;
 pub use population::*;
 pub use progress::{Progress, Silent};
 pub use register_pair::{PairRegistration, register_pair};
+pub use report_files::BatchFacts;
 pub use run::{RunContext, RunPlace, Shard};
 pub use sets::*;
 pub use subject::*;

@@ -2,6 +2,7 @@
 
 use super::Progress;
 use crate::error::{Error, Result};
+use crate::formats::CsvColumns;
 use crate::geometry::{ClosestPointIndex, Point, Shape};
 use crate::register::RegistrationResiduals;
 use crate::register::{resample_corresponding, resample_uniform};
@@ -446,15 +447,29 @@ fn clean_candidates<const D: usize>(shapes: &[Shape<D>]) -> Vec<bool> {
 }
 
 /// Reads the 3D point sets in `paths` ([`crate::formats::read_point_set`]: files with or
-/// without faces), in the order given.
-pub fn load_point_sets(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
+/// without faces; CSV files by [`crate::formats::read_point_sets_csv`], a long table of
+/// several shapes or one shape of `x,y,z` rows), in the order given.
+pub fn load_point_sets(paths: &[PathBuf], columns: &CsvColumns) -> Result<Vec<Shape<3>>> {
     if paths.is_empty() {
         return Err(Error::Population("no input file given".into()));
     }
-    paths
+    let per_file: Vec<Vec<Shape<3>>> = paths
         .par_iter()
-        .map(|p| crate::formats::read_point_set(p))
-        .collect()
+        .map(|p| {
+            if is_csv(p) {
+                crate::formats::read_point_sets_csv(p, columns)
+            } else {
+                crate::formats::read_point_set(p).map(|s| vec![s])
+            }
+        })
+        .collect::<Result<_>>()?;
+    Ok(per_file.into_iter().flatten().collect())
+}
+
+/// Whether `path` is named as a CSV file.
+fn is_csv(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
 }
 
 /// Reads the triangle surfaces in `paths` (PLY, STL, OBJ), in the order given. Shapes in
@@ -463,10 +478,20 @@ pub fn load_surfaces(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
     if paths.is_empty() {
         return Err(Error::Population("no input file given".into()));
     }
-    paths
-        .par_iter()
-        .map(|p| crate::formats::read_surface(p))
-        .collect()
+    paths.par_iter().map(|p| read_surface_file(p)).collect()
+}
+
+/// The triangle surface in `path` ([`crate::formats::read_surface`]); a CSV of 3D points is
+/// refused with what it can make instead.
+pub(crate) fn read_surface_file(path: &Path) -> Result<Shape<3>> {
+    if is_csv(path) {
+        return Err(Error::parse(
+            path,
+            0,
+            "3D points without facets: they make a shape model alone (build --no-mesh); a mesh, a registration or a fit needs surfaces (PLY, STL, OBJ, VTP, VTK)",
+        ));
+    }
+    crate::formats::read_surface(path)
 }
 
 /// Whether `path` names a 3D surface file: by its extension (`.ply`, `.stl`, `.obj`), and
@@ -482,6 +507,7 @@ pub fn is_surface_file(path: &Path) -> Result<bool> {
         .unwrap_or_default();
     let v = match ext.as_str() {
         "ply" | "stl" | "obj" => return Ok(true),
+        "csv" => return crate::formats::csv_holds_3d_points(path),
         "vtk" => crate::formats::read_vtk_polydata(path)?,
         "vtp" => crate::formats::read_vtp(path)?,
         _ => return Ok(false),
@@ -566,7 +592,7 @@ pub fn inputs_are_surfaces(paths: &[PathBuf]) -> Result<bool> {
             .map(|(p, _)| p.display().to_string())
             .unwrap_or_default();
         return Err(Error::Population(format!(
-            "2D and 3D shapes mixed: {odd} is an outline, other inputs are surfaces"
+            "2D and 3D shapes mixed: {odd} is a 2D outline, other inputs are 3D (surfaces or x,y,z points)"
         )));
     }
     Ok(n > 0)

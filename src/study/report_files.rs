@@ -9,6 +9,29 @@ use crate::report::{
 };
 use std::path::Path;
 
+/// What a run adds to a report beside the subjects: the data set's name, the mean mesh, a
+/// batch's failures, its shard and the subjects it skipped; the shape-model measures of the
+/// population (the HTML report plots them).
+#[derive(Clone, Debug, Default)]
+pub struct BatchFacts {
+    /// The data the run was made from (files or folder).
+    pub dataset: String,
+    /// The atlas's mean mesh.
+    pub mean_mesh: Option<crate::report::MeanMeshReport>,
+    /// Subjects that failed, with the reason.
+    pub failed: Vec<crate::report::FailedSubject>,
+    /// The shard (`I/N`) of a batch.
+    pub shard: Option<String>,
+    /// Subjects skipped because their outputs were complete.
+    pub resumed: usize,
+    /// The population model's measures (the HTML report plots them).
+    pub measures: Option<crate::eval::ShapeModelMeasures>,
+    /// The population's shapes as read (leave-one-out).
+    pub inputs: Vec<crate::report::InputReport>,
+    /// The registration's template (leave-one-out with registration).
+    pub template: Option<String>,
+}
+
 /// Writes the population-level plots and the report; with plots, the model's page too (by
 /// `morpher`, the atlas's; one is made when `None` and the atlas has a mesh).
 pub(crate) fn finish_report<const D: usize>(
@@ -17,9 +40,9 @@ pub(crate) fn finish_report<const D: usize>(
     morpher: Option<&crate::mesh::Morpher<D>>,
     subjects: Vec<SubjectReport>,
     params: &RunParams,
-    batch: crate::study::batch::BatchFacts,
+    batch: BatchFacts,
 ) -> Result<Report> {
-    let crate::study::batch::BatchFacts {
+    let BatchFacts {
         dataset,
         mean_mesh,
         failed,

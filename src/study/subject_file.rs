@@ -56,7 +56,7 @@ pub fn read_subjects<const D: usize>(
 ) -> Result<Vec<Subject<D>>> {
     let surface = is_surface_file(path)?;
     let shapes: Vec<Shape<D>> = match (D, surface) {
-        (3, true) => vec![crate::formats::read_surface(path)?.into_dim()],
+        (3, true) => vec![super::population::read_surface_file(path)?.into_dim()],
         (2, false) => crate::formats::read_outlines_with(path, !reading.open, &reading.columns)?
             .into_iter()
             .map(Shape::into_dim)
@@ -65,10 +65,15 @@ pub fn read_subjects<const D: usize>(
             return Err(Error::Population(format!(
                 "{}: {}, but the atlas is {D}D",
                 path.display(),
-                if surface {
-                    "a 3D surface"
-                } else {
+                if !surface {
                     "a 2D outline"
+                } else if path
+                    .extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+                {
+                    "3D points (x,y,z)"
+                } else {
+                    "a 3D surface"
                 }
             )));
         }

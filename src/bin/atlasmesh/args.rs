@@ -8,8 +8,10 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct PopArgs {
-    /// Shape files: 2D outlines as long CSV (shape,point,x,y), text (x y per line) or legacy
-    /// VTK with LINES; 3D surfaces as PLY, STL, OBJ, VTP or legacy VTK with POLYGONS.
+    /// Shape files, folders of them or `.list` files naming one path per line: 2D outlines as
+    /// long CSV (shape,point,x,y), text (x y per line) or legacy VTK with LINES; 3D surfaces
+    /// as PLY, STL, OBJ, VTP or legacy VTK with POLYGONS; 3D point sets (with --no-mesh) as
+    /// long CSV (shape,point,x,y,z), one CSV of x,y,z rows per shape, or vertex-only files.
     #[arg(long, num_args = 1.., required = true)]
     pub shapes: Vec<PathBuf>,
     /// 3D: template volume meshes (.inp, .msh, .vtu or .vtk; hexahedra or tetrahedra, one
@@ -67,6 +69,14 @@ pub struct PopArgs {
     /// (20 000 quadrilaterals)
     #[arg(long, value_name = "SIZE", default_value = "auto")]
     pub element_size: atlasmesh::mesh::ElementSize,
+}
+
+impl PopArgs {
+    /// `--shapes` with its folders and `.list` files replaced by the files they name.
+    pub fn expand(&mut self) -> atlasmesh::Result<()> {
+        self.shapes = atlasmesh::study::batch::subject_files(&self.shapes)?;
+        Ok(())
+    }
 }
 
 #[derive(Args)]

@@ -29,7 +29,8 @@ pub struct BuildArgs {
 }
 
 /// Runs `atlasmesh build`.
-pub fn run(a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
+pub fn run(mut a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
+    a.pop.expand()?;
     if study::inputs_are_surfaces(&a.pop.shapes)? {
         build(
             &a,

@@ -25,7 +25,8 @@ pub struct LooArgs {
 }
 
 /// Runs `atlasmesh loo`.
-pub fn run(a: LooArgs, term: &Terminal) -> anyhow::Result<()> {
+pub fn run(mut a: LooArgs, term: &Terminal) -> anyhow::Result<()> {
+    a.pop.expand()?;
     let r = if study::inputs_are_surfaces(&a.pop.shapes)? {
         loo(&a, surfaces_and_params(&a.pop, &a.run, false, term)?, term)?
     } else {

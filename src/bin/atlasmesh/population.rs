@@ -71,7 +71,7 @@ pub fn surfaces_and_params(
     let mut params = run.params_for(3)?;
     apply_pop(&mut params, pop);
     let mut shapes = if point_sets && !pop.register {
-        study::load_point_sets(&pop.shapes)?
+        study::load_point_sets(&pop.shapes, &pop.columns.clone().unwrap_or_default())?
     } else {
         study::load_surfaces(&pop.shapes)?
     };

@@ -5,7 +5,7 @@ use super::params::{
     FitParams, GIVE_UP_AFTER, PRE_ALIGNMENT_ITERATIONS, PRE_PRUNE_AFTER, PRE_PRUNE_FACTOR,
     PRUNE_FACTOR, rotation_angle,
 };
-use super::resolution::Model;
+use super::resolution::{Level, Model, spread};
 use super::result::FitResult;
 use super::scratch::{Run, Scratches};
 use super::state::{Pass, Sampling, Stage, State, Subject};
@@ -76,21 +76,6 @@ pub(super) fn orientation<const D: usize>(points: &[Point<D>], facets: &[[usize;
     total.signum()
 }
 
-/// Indices of `k` points spread evenly over `0..n` (all of them when `k` is 0 or `>= n`).
-pub(super) fn spread(n: usize, k: usize) -> Vec<usize> {
-    if k == 0 || k >= n {
-        return (0..n).collect();
-    }
-    if k == 1 {
-        return vec![0];
-    }
-    let mut v: Vec<usize> = (0..k)
-        .map(|i| ((i as f64) * (n - 1) as f64 / (k - 1) as f64).round() as usize)
-        .collect();
-    v.dedup();
-    v
-}
-
 /// The atlas prepared for fitting: the model at full resolution and a coarse one for the
 /// first stages (see [`Fitter::fit`]), `Lambda^{-1}`. Build once, fit many.
 pub struct Fitter<const D: usize> {
@@ -109,13 +94,6 @@ pub struct Fitter<const D: usize> {
 
 /// Spare buffers a [`Fitter`] keeps at most (one per worker of a batch, typically).
 pub(super) const SPARE_SCRATCHES: usize = 16;
-
-/// Which of the fitter's models.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub(super) enum Level {
-    Coarse,
-    Full,
-}
 
 impl<const D: usize> Fitter<D> {
     /// A fitter of `atlas`: its model at full and coarse resolution, precomputed once for every subject.
@@ -160,7 +138,7 @@ impl<const D: usize> Fitter<D> {
                 x.coarse.w = None;
                 x
             }
-            None => Scratches::new(self, params),
+            None => Scratches::new(&self.full, self.model(Level::Coarse, params)),
         }
     }
 
@@ -181,17 +159,6 @@ impl<const D: usize> Fitter<D> {
             (Level::Coarse, Some(c)) if params.coarse_points == self.coarse_points => c,
             _ => &self.full,
         }
-    }
-
-    /// The instance `S_bar + Psi w` at the model's points.
-    pub(super) fn instance(&self, model: &Model<D>, w: &[f64], out: &mut Vec<Point<D>>) {
-        out.clear();
-        out.extend(model.mean.iter().enumerate().map(|(i, p)| {
-            std::array::from_fn(|d| {
-                let row = &model.psi[(i * D + d) * self.m..(i * D + d + 1) * self.m];
-                p[d] + row.iter().zip(w).map(|(a, b)| a * b).sum::<f64>()
-            })
-        }));
     }
 
     /// Fits the atlas to `subject` (Algorithm 1, eq. 5-8) and projects the result onto it.
@@ -462,7 +429,7 @@ impl<const D: usize> Fitter<D> {
         let tol = COARSE_TOLERANCE_FACTOR * params.tolerance;
         let mut runs: Vec<(f64, Run<D>)> = chosen
             .into_iter()
-            .map(|st| (f64::INFINITY, Run::new(st, self, x)))
+            .map(|st| (f64::INFINITY, Run::new(st, &self.full, x)))
             .collect();
         for &gamma in &gammas {
             // Best first: a start that is still far behind the best after a few updates
@@ -504,7 +471,7 @@ impl<const D: usize> Fitter<D> {
             self.schedule(subj, &mut run, &stage, &last, x)?;
         }
         let full_x = &mut x.full;
-        full_x.set_weights(self, &self.full, &run.state.w, false);
+        full_x.set_weights(&self.full, &run.state.w, false);
         let sim = run.state.sim;
         let instance: Vec<Point<D>> = full_x.x.iter().map(|p| sim.apply(p)).collect();
         let projected = project_along_normals(
@@ -575,7 +542,7 @@ impl<const D: usize> Fitter<D> {
                     break;
                 }
             }
-            x.full.set_weights(self, &self.full, &run.state.w, false);
+            x.full.set_weights(&self.full, &run.state.w, false);
             run.locus
                 .push(x.full.x.iter().map(|p| run.state.sim.apply(p)).collect());
         }

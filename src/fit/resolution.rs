@@ -1,6 +1,5 @@
 //! The shape model at one resolution (all points, or a coarse subset for the first stage).
 
-use super::fitter::spread;
 use crate::geometry::{ClosestPointIndex, Point, Shape, facet_normal, norm};
 use crate::model::Atlas;
 
@@ -13,6 +12,30 @@ pub(super) struct Model<const D: usize> {
     pub(super) psi: Vec<f64>,
     /// Index of the mean's facets, refitted to every instance.
     pub(super) index: ClosestPointIndex<D>,
+    /// Modes (the width of a row of `psi`).
+    pub(super) m: usize,
+}
+
+/// Which of the fitter's models.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) enum Level {
+    Coarse,
+    Full,
+}
+
+/// Indices of `k` points spread evenly over `0..n` (all of them when `k` is 0 or `>= n`).
+pub(super) fn spread(n: usize, k: usize) -> Vec<usize> {
+    if k == 0 || k >= n {
+        return (0..n).collect();
+    }
+    if k == 1 {
+        return vec![0];
+    }
+    let mut v: Vec<usize> = (0..k)
+        .map(|i| ((i as f64) * (n - 1) as f64 / (k - 1) as f64).round() as usize)
+        .collect();
+    v.dedup();
+    v
 }
 
 impl<const D: usize> Model<D> {
@@ -28,11 +51,28 @@ impl<const D: usize> Model<D> {
         }
         let mean: Vec<Point<D>> = ids.iter().map(|&i| atlas.mean[i]).collect();
         let index = ClosestPointIndex::new(&mean, &facets);
-        Model { mean, psi, index }
+        Model {
+            mean,
+            psi,
+            index,
+            m,
+        }
     }
 
     pub(super) fn len(&self) -> usize {
         self.mean.len()
+    }
+
+    /// The instance `S_bar + Psi w` (eq. 4) at the model's points, reference frame.
+    pub(super) fn instance(&self, w: &[f64], out: &mut Vec<Point<D>>) {
+        let m = self.m;
+        out.clear();
+        out.extend(self.mean.iter().enumerate().map(|(i, p)| {
+            std::array::from_fn(|d| {
+                let row = &self.psi[(i * D + d) * m..(i * D + d + 1) * m];
+                p[d] + row.iter().zip(w).map(|(a, b)| a * b).sum::<f64>()
+            })
+        }));
     }
 
     /// The coarse model of about `k` points: for outlines, `k` of the points evenly spread

@@ -1,7 +1,5 @@
 //! Buffers reused by the updates of a fit, apart from the maths.
 
-use super::fitter::{Fitter, Level};
-use super::params::FitParams;
 use super::resolution::Model;
 use super::state::State;
 use crate::geometry::{ClosestPointIndex, Point};
@@ -31,15 +29,9 @@ impl<const D: usize> Scratch<D> {
     }
 
     /// Makes `x` the instance of `w` (and, with `index`, its index and normals current).
-    pub(super) fn set_weights(
-        &mut self,
-        fitter: &Fitter<D>,
-        model: &Model<D>,
-        w: &[f64],
-        index: bool,
-    ) {
+    pub(super) fn set_weights(&mut self, model: &Model<D>, w: &[f64], index: bool) {
         if self.w.as_deref() != Some(w) {
-            fitter.instance(model, w, &mut self.x);
+            model.instance(w, &mut self.x);
             self.w = Some(w.to_vec());
             self.indexed = false;
         }
@@ -60,20 +52,13 @@ pub(super) struct Scratches<const D: usize> {
 }
 
 impl<const D: usize> Scratches<D> {
-    pub(super) fn new(fitter: &Fitter<D>, params: &FitParams) -> Self {
-        let coarse = fitter.model(Level::Coarse, params);
+    /// Buffers for the models `full` and `coarse` (the same model when the fit has no
+    /// coarse one).
+    pub(super) fn new(full: &Model<D>, coarse: &Model<D>) -> Self {
         Scratches {
-            full: Scratch::new(&fitter.full),
+            full: Scratch::new(full),
             coarse: Scratch::new(coarse),
-            use_coarse: !std::ptr::eq(coarse, &fitter.full),
-        }
-    }
-
-    /// The model of the coarse level for this fit.
-    pub(super) fn coarse_model<'f>(&self, fitter: &'f Fitter<D>) -> &'f Model<D> {
-        match &fitter.coarse {
-            Some(c) if self.use_coarse => c,
-            _ => &fitter.full,
+            use_coarse: !std::ptr::eq(coarse, full),
         }
     }
 }
@@ -88,8 +73,8 @@ pub(super) struct Run<const D: usize> {
 }
 
 impl<const D: usize> Run<D> {
-    pub(super) fn new(state: State<D>, fitter: &Fitter<D>, x: &mut Scratches<D>) -> Self {
-        x.full.set_weights(fitter, &fitter.full, &state.w, false);
+    pub(super) fn new(state: State<D>, full: &Model<D>, x: &mut Scratches<D>) -> Self {
+        x.full.set_weights(full, &state.w, false);
         let locus = vec![x.full.x.iter().map(|p| state.sim.apply(p)).collect()];
         Run {
             state,

@@ -1,6 +1,6 @@
 //! The state a fit carries from one update to the next.
 
-use super::fitter::Level;
+use super::resolution::Level;
 use crate::geometry::{ClosestPointIndex, Point, QueryMemo, Shape, Similarity};
 
 /// Which model points (forward pairs) and subject vertices (backward pairs) take part.

@@ -1,7 +1,8 @@
 //! One update of the shape parameters and the pose: eq. 5-8 linearized along the normals.
 
-use super::fitter::{Fitter, Level};
+use super::fitter::Fitter;
 use super::params::compatibility;
+use super::resolution::Level;
 use super::scratch::Scratches;
 use super::state::{Sampling, State, Step, Subject};
 use crate::error::{Error, Result};
@@ -53,7 +54,10 @@ impl<const D: usize> Fitter<D> {
         scratches: &mut Scratches<D>,
     ) -> Result<Step> {
         let model = match level {
-            Level::Coarse => scratches.coarse_model(self),
+            Level::Coarse => match &self.coarse {
+                Some(c) if scratches.use_coarse => c,
+                _ => &self.full,
+            },
             Level::Full => &self.full,
         };
         let scratch = match level {
@@ -66,7 +70,7 @@ impl<const D: usize> Fitter<D> {
         let p = if gamma.is_some() { pose + m } else { pose };
         let cols = p + 1;
         let sim = st.sim;
-        scratch.set_weights(self, model, &st.w, true);
+        scratch.set_weights(model, &st.w, true);
         let x = &scratch.x;
         let buf = &mut scratch.rows;
         buf.clear();

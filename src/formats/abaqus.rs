@@ -1,7 +1,7 @@
 //! Abaqus/CalculiX `.inp`: meshes with `*NSET`, `*ELSET`, `*SURFACE` read and written, and
 //! whole decks whose node coordinates are replaced.
 
-use super::fe_mesh::{id_lines, xyz};
+use super::helpers::{id_lines, xyz};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use crate::mesh::{ElementKind, FeMesh, MeshSets};
@@ -432,7 +432,7 @@ pub fn parse_inp(path: &Path, text: &str) -> Result<InpDeck> {
         element_sets,
         surfaces: surface_sets,
     };
-    super::fe_mesh::check_mesh(path, &nodes, kind, &conn, &sets)?;
+    super::helpers::check_mesh(path, &nodes, kind, &conn, &sets)?;
     Ok(InpDeck {
         mesh: FeMesh {
             nodes,

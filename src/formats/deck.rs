@@ -255,7 +255,7 @@ impl FebDeck {
                         .and_then(|i| i.checked_sub(1))
                         .filter(|&k| k < nodes.len())
                     {
-                        let p = super::fe_mesh::xyz(&nodes[k]);
+                        let p = super::helpers::xyz(&nodes[k]);
                         let t = format!("{:.17e},{:.17e},{:.17e}", p[0], p[1], p[2]);
                         w.write_event(Event::Text(BytesText::new(&t)))
                             .map_err(|e| Error::Mesh(format!("the FEBio deck: {e}")))?;

@@ -3,12 +3,12 @@
 use super::abaqus::{inp, parse_inp};
 use super::febio::feb;
 use super::gmsh::{msh, parse_msh};
+use super::helpers::check_mesh;
 use super::vtk_legacy::{parse_vtk_unstructured, vtk};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
+use crate::mesh::FeMesh;
 use crate::mesh::quality::ElementQuality;
-use crate::mesh::{ElementKind, FeMesh, MeshSets};
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// Reads an FE mesh of dimension `D` (format from the extension).
@@ -28,7 +28,7 @@ pub fn read_fe_mesh_raw(path: &Path) -> Result<FeMesh<3>> {
 /// [`read_fe_mesh_raw`] of a file's bytes: the format from the extension of `path`, which
 /// only names the file in messages (no file is read).
 pub fn parse_fe_mesh_raw(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
-    let text = || super::outline::utf8(path, bytes);
+    let text = || super::helpers::utf8(path, bytes);
     // (Each parser checks its mesh: `check_mesh`.)
     match mesh_extension(path)? {
         "inp" => Ok(parse_inp(path, text()?)?.mesh),
@@ -90,26 +90,6 @@ pub fn to_dimension<const D: usize>(path: &Path, m: FeMesh<3>) -> Result<FeMesh<
         connectivity: m.connectivity,
         sets: m.sets,
     })
-}
-
-pub(crate) fn check_mesh<const D: usize>(
-    path: &Path,
-    nodes: &[Point<D>],
-    kind: ElementKind,
-    conn: &[usize],
-    sets: &MeshSets,
-) -> Result<()> {
-    if conn.is_empty() {
-        return Err(Error::parse(path, 0, "the mesh has no elements"));
-    }
-    super::check_points(path, nodes.len(), 1)?;
-    if let Some((i, m)) = (nodes.iter().enumerate())
-        .find_map(|(i, p)| crate::geometry::coordinate_problem(p).map(|m| (i, m)))
-    {
-        return Err(Error::parse(path, 0, format!("node {} {m}", i + 1)));
-    }
-    sets.check(kind, nodes.len(), conn.len() / kind.nodes())
-        .map_err(|m| Error::parse(path, 0, m))
 }
 
 /// The FE mesh formats written.
@@ -196,23 +176,4 @@ pub fn write_mesh<const D: usize>(
         MeshFormat::Feb => feb(mesh, path)?,
     };
     crate::formats::write_atomic(path, text.as_bytes())
-}
-
-pub(crate) fn xyz<const D: usize>(p: &Point<D>) -> [f64; 3] {
-    [p[0], p[1], if D > 2 { p[2] } else { 0.0 }]
-}
-
-/// Comma-separated 1-based ids, `per_line` per line (Abaqus allows 16 per data line).
-pub(crate) fn id_lines(out: &mut String, ids: impl IntoIterator<Item = usize>, per_line: usize) {
-    let mut k = 0;
-    for i in ids {
-        if k > 0 {
-            out.push_str(if k % per_line == 0 { ",\n" } else { ", " });
-        }
-        let _ = write!(out, "{}", i + 1);
-        k += 1;
-    }
-    if k > 0 {
-        out.push('\n');
-    }
 }

@@ -1,7 +1,7 @@
 //! FEBio `.feb` 4.0: the `Mesh` section with node sets, element sets and surfaces, and a
 //! model around it.
 
-use super::fe_mesh::xyz;
+use super::helpers::xyz;
 use crate::error::{Error, Result};
 use crate::mesh::{ElementKind, FeMesh};
 use std::fmt::Write as _;

@@ -3,7 +3,7 @@
 //! are read in order; `$PhysicalNames` is text in binary files too; sections the mesh does not
 //! need (`$NodeData`, `$Periodic`, ...) are read past.
 
-use super::gmsh::{Parsed, gmsh_dimension, gmsh_nodes, physical_names};
+use super::gmsh_parsed::{Parsed, gmsh_dimension, gmsh_nodes, physical_names};
 use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::path::Path;

@@ -11,9 +11,10 @@
 //! | `shape_file` | shapes out in the formats asked (VTP, VTK, PLY, STL) |
 //! | `vtk_legacy` | legacy VTK: POLYDATA outlines and surfaces, UNSTRUCTURED_GRID meshes |
 //! | `vtk_xml` | VTK XML: VTP shapes, VTU meshes |
-//! | `fe_mesh` | FE meshes: the format by extension ([`MeshFormat`]), shared checks |
+//! | `fe_mesh` | FE meshes: the format by extension ([`MeshFormat`]) |
+//! | `helpers` | what the readers and writers share: text, numbers, coordinates, mesh checks |
 //! | `abaqus` | Abaqus/CalculiX `.inp` meshes and decks |
-//! | `gmsh`, `gmsh_binary` | Gmsh `.msh`: ASCII and the mesh's assembly; binary files |
+//! | `gmsh`, `gmsh_binary`, `gmsh_parsed` | Gmsh `.msh`: ASCII and the mesh's assembly; binary files; what both fill |
 //! | `febio` | FEBio `.feb` |
 //! | `deck` | solver decks (`.inp`, `.feb`) copied per subject with its nodes |
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
@@ -31,6 +32,8 @@ pub mod fe_mesh;
 pub mod febio;
 pub mod gmsh;
 mod gmsh_binary;
+mod gmsh_parsed;
+mod helpers;
 pub mod input;
 pub mod landmarks;
 pub mod obj;

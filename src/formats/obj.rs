@@ -1,26 +1,8 @@
 //! Wavefront OBJ surfaces read.
 
-use super::surface::Parsed;
+use super::helpers::{Parsed, xyz_after_keyword};
 use crate::error::{Error, Result};
-use crate::geometry::Point;
 use std::path::Path;
-
-/// The three coordinates after the keyword of a `vertex x y z` (STL) or `v x y z` (OBJ) line.
-pub(crate) fn xyz_after_keyword(
-    path: &Path,
-    line: usize,
-    text: &str,
-    tokens: &[&str],
-) -> Result<Point<3>> {
-    let mut p = [0.0; 3];
-    for (d, v) in p.iter_mut().enumerate() {
-        *v = tokens
-            .get(d + 1)
-            .and_then(|s| s.parse().ok())
-            .ok_or_else(|| Error::parse(path, line, format!("bad vertex line '{text}'")))?;
-    }
-    Ok(p)
-}
 
 /// OBJ: `v x y z` and `f i j k ...` lines (1-based, `i/t/n` forms, negative indices from
 /// the end); other lines are skipped.

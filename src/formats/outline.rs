@@ -1,6 +1,7 @@
 //! Reading 2D outlines: the format by extension, and the checks every reader shares.
 
 use super::csv_table::CsvColumns;
+use super::helpers::text_of;
 use super::outline_csv::parse_long_csv_with;
 use super::outline_text::parse_text_outlines;
 use super::vtk_cells::outline_from_polydata;
@@ -84,49 +85,4 @@ pub(crate) fn check_finite(path: &Path, s: &Shape<2>) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-pub(crate) fn read_text(path: &Path) -> Result<String> {
-    let bytes = crate::formats::read_input(path)?;
-    text_of(path, &bytes).map(str::to_owned)
-}
-
-/// The text of a file's bytes, as [`read_text`] gives it.
-pub(crate) fn text_of<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
-    std::str::from_utf8(bytes).map_err(|_| Error::parse(path, 0, "not a text file (invalid UTF-8)"))
-}
-
-/// The text of a file's bytes, as `std::fs::read_to_string` gives it (invalid UTF-8 is an
-/// I/O error of kind `InvalidData`).
-pub(crate) fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
-    std::str::from_utf8(bytes).map_err(|_| {
-        Error::io(
-            path,
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidData,
-                "stream did not contain valid UTF-8",
-            ),
-        )
-    })
-}
-
-pub(crate) fn stem(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "shape".into())
-}
-
-pub(crate) fn parse_f64(path: &Path, line: usize, tok: &str) -> Result<f64> {
-    let v: f64 = tok
-        .trim()
-        .parse()
-        .map_err(|_| Error::parse(path, line, format!("{:?} is not a number", tok.trim())))?;
-    if !v.is_finite() {
-        return Err(Error::parse(
-            path,
-            line,
-            format!("coordinate {:?} is NaN or infinite", tok.trim()),
-        ));
-    }
-    Ok(v)
 }

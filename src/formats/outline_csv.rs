@@ -3,7 +3,7 @@
 
 use super::atomic::MAX_COUNT;
 use super::csv_table::{CsvColumns, Table};
-use super::outline::{parse_f64, read_text, stem};
+use super::helpers::{parse_f64, read_text, stem};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
 use std::collections::HashMap;

@@ -1,6 +1,6 @@
 //! Outlines from plain text files, one point per line, blank lines between shapes.
 
-use super::outline::{parse_f64, read_text, stem};
+use super::helpers::{parse_f64, read_text, stem};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
 use std::path::Path;

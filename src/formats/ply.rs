@@ -1,7 +1,7 @@
 //! PLY surfaces (ASCII and binary, either endianness) read, binary written.
 
 use super::atomic::{MAX_COUNT, write_atomic};
-use super::surface::Parsed;
+use super::helpers::Parsed;
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
 use std::path::Path;

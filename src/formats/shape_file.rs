@@ -3,7 +3,7 @@
 //! Slicer).
 
 use super::atomic::write_atomic;
-use super::fe_mesh::xyz;
+use super::helpers::xyz;
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use std::fmt::Write as _;

@@ -1,8 +1,7 @@
 //! STL surfaces (ASCII and binary) read, binary written.
 
 use super::atomic::write_atomic;
-use super::obj::xyz_after_keyword;
-use super::surface::Parsed;
+use super::helpers::{Parsed, xyz_after_keyword};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape, facet_normal};
 use std::collections::HashMap;

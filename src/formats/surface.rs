@@ -5,7 +5,7 @@ use super::obj::parse_obj;
 use super::ply::parse_ply;
 use super::stl::parse_stl;
 use crate::error::{Error, Result};
-use crate::geometry::{Point, Shape, prepare_surface};
+use crate::geometry::{Shape, prepare_surface};
 use std::path::Path;
 
 /// Reads a triangle surface; the format comes from the extension (`.ply`, `.stl`, `.obj`,
@@ -110,5 +110,3 @@ fn parse_vertices_and_faces(path: &Path, bytes: &[u8], need_faces: bool) -> Resu
         landmarks: Vec::new(),
     })
 }
-
-pub(crate) type Parsed = (Vec<Point<3>>, Vec<Vec<usize>>);

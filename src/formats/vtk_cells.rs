@@ -2,8 +2,8 @@
 //! polygons or lines of polydata, the outline a chain of lines makes, and the FE mesh of an
 //! unstructured grid's cells of one kind (with `set_NAME` point and cell data as sets).
 
-use super::fe_mesh::check_mesh;
-use super::outline::stem;
+use super::helpers::check_mesh;
+use super::helpers::stem;
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use crate::mesh::{ElementKind, FeMesh, MeshSets};

@@ -5,7 +5,7 @@
 //! as 4.2 ASCII.
 
 use super::atomic::MAX_COUNT;
-use super::fe_mesh::xyz;
+use super::helpers::xyz;
 use super::vtk_cells::{
     DataArrays, VtkPolyData, cell_types, mesh_from_cells, outline_from_polydata,
 };

@@ -28,7 +28,7 @@ pub mod quality;
 pub mod repair;
 pub mod sets;
 
-pub use boundary::{BoundaryFace, boundary_faces, boundary_surface};
+pub use boundary::{BoundaryFace, FacePair, boundary_faces, boundary_surface, face_pairs};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};

@@ -10,6 +10,7 @@
 //! | `subject_page` | a subject's page `NAME.html` |
 //! | `model_page` | the model's page `model.html` |
 //! | `viewer` | the interactive 3D view's scene (`viewer.js`, WebGL) |
+//! | `viewer_scene` | the typed JSON of a scene, the contract with `viewer.js` |
 //! | `posterior` | [`PosteriorRunReport`]: the `posterior.json` schema of `fit --landmarks-only` |
 //! | `instances` | [`InstancesReport`]: the `instances.json` schema of `instance` and `sample` |
 
@@ -22,6 +23,7 @@ pub mod render;
 mod schema;
 pub mod subject_page;
 pub mod viewer;
+pub mod viewer_scene;
 
 pub use instances::*;
 pub use plots::*;

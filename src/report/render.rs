@@ -397,6 +397,24 @@ pub fn thumbnail(png: &[u8], max_width: usize) -> Result<Vec<u8>> {
     out.png()
 }
 
+/// Dark blue (0) through teal (0.5) to yellow (1): a magnitude (a mode's displacement).
+pub fn magnitude_color(t: f64) -> [u8; 3] {
+    const A: [f64; 3] = [0.18, 0.16, 0.45];
+    const B: [f64; 3] = [0.13, 0.57, 0.55];
+    const C: [f64; 3] = [0.99, 0.9, 0.15];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (p, q, w) = if t < 0.5 {
+        (A, B, 2.0 * t)
+    } else {
+        (B, C, 2.0 * t - 1.0)
+    };
+    std::array::from_fn(|d| ((p[d] + (q[d] - p[d]) * w) * 255.0).round() as u8)
+}
+
 /// Red (inverted, ≤ 0) through yellow to green (1): a scaled Jacobian.
 pub fn jacobian_color(s: f64) -> [u8; 3] {
     if s <= 0.0 {

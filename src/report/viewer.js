@@ -9,6 +9,30 @@
 // data-state ("drawn", "no-webgl", "error: ..."), data-triangles, data-drawn-pixels (the
 // pixels of the first frame that are not background), data-ready-ms (when the first frame
 // was drawn, from the page's start).
+//
+// The scene's JSON is Rust's `report::viewer_scene::SceneJson` (version 1); the typedefs
+// below name the same fields, and CI type-checks this file against them (scripts/js).
+// Rust pairs the faces between cells, samples the colour maps and writes no markup: labels
+// reach the page as text.
+// @ts-check
+
+/**
+ * @typedef {Float32Array | Uint32Array} Arr  an array once decoded
+ * @typedef {{lut: number[][], below: number[], nan: number[]}} ColorMap  256 RGB bytes
+ * @typedef {{jacobian: ColorMap, distance: ColorMap, magnitude: ColorMap}} ColorMaps
+ * @typedef {{id: string, label: string, unit: string, lo: number, hi: number,
+ *   map: 'jacobian' | 'distance' | 'magnitude'}} Field
+ * @typedef {{nodes_per_cell: number, corners: number, faces: number[][], nodes: Uint32Array,
+ *   face_cell: Uint32Array, face_local: Uint32Array, face_other: Uint32Array}} Cells
+ * @typedef {{id: string, label: string, visible: boolean, opacity: number, color: number[],
+ *   positions: Float32Array, worst: number[], triangles?: Uint32Array, segments?: Uint32Array,
+ *   cells?: Cells, point_values: Object<string, Float32Array>,
+ *   cell_values: Object<string, Float32Array>, centroids?: Float32Array}} Layer
+ * @typedef {{sd: number[], max_sd: number, displacements: Object<string, Float32Array[]>,
+ *   max_displacement: number[]}} Modes
+ * @typedef {{version: number, dimension: number, layers: Layer[], fields: Field[],
+ *   view: {look: number[], up: number[]}, colormaps: ColorMaps, modes?: Modes}} Scene
+ */
 (function () {
   'use strict';
 
@@ -50,32 +74,18 @@
     return Promise.all(jobs).then(function () { return obj; });
   }
 
-  // Colour maps, as the PNG pictures draw them (src/report/render.rs).
-  var MAPS = {
-    jacobian: function (s) {
-      if (!(s > 0)) return s <= 0 ? [200 / 255, 0, 0] : [0.6, 0.6, 0.6];
-      var t = Math.min(s, 1);
-      return t < 0.5 ? [1, 2 * t, 60 / 255] : [2 * (1 - t), 1, 60 / 255];
-    },
-    distance: function (t) {
-      if (!isFinite(t)) return [0.6, 0.6, 0.6];
-      t = Math.max(0, Math.min(1, t));
-      if (t < 0.5) { var s = 2 * t; return [(60 + 195 * s) / 255, (110 + 145 * s) / 255, 1]; }
-      var u = 2 * (t - 0.5);
-      return [1, (255 - 200 * u) / 255, (255 - 215 * u) / 255];
-    },
-    magnitude: function (t) {
-      if (!isFinite(t)) return [0.6, 0.6, 0.6];
-      t = Math.max(0, Math.min(1, t));
-      // dark blue, teal, yellow
-      var a = [0.18, 0.16, 0.45], b = [0.13, 0.57, 0.55], c = [0.99, 0.9, 0.15];
-      var p = t < 0.5 ? a : b, q = t < 0.5 ? b : c, w = t < 0.5 ? 2 * t : 2 * t - 1;
-      return [p[0] + (q[0] - p[0]) * w, p[1] + (q[1] - p[1]) * w, p[2] + (q[2] - p[2]) * w];
+  // The colour of value `v` of `field`, from the scene's sampled maps (Rust's, the PNG
+  // pictures' own): RGB in 0..1.
+  /** @param {ColorMaps} maps @param {Field} field @param {number} v @returns {number[]} */
+  function colorOf(maps, field, v) {
+    var m = maps[field.map], c;
+    if (field.map === 'jacobian') {
+      c = !(v > 0) ? (v <= 0 ? m.below : m.nan) : m.lut[Math.round(Math.min(v, 1) * 255)];
+    } else {
+      var t = (v - field.lo) / Math.max(field.hi - field.lo, 1e-300);
+      c = isFinite(t) ? m.lut[Math.round(Math.max(0, Math.min(1, t)) * 255)] : m.nan;
     }
-  };
-  function colorOf(field, v) {
-    if (field.map === 'jacobian') return MAPS.jacobian(v);
-    return MAPS[field.map]((v - field.lo) / Math.max(field.hi - field.lo, 1e-300));
+    return [c[0] / 255, c[1] / 255, c[2] / 255];
   }
 
   // 4x4 matrices, column-major as WebGL takes them.
@@ -111,6 +121,7 @@
     ' float l = 1.0; if (lit > 0.5) { l = 0.3 + 0.7 * abs(dot(normalize(vN), normalize(vV))); }' +
     ' gl_FragColor = vec4(vCol * l, alpha); }';
 
+  /** @constructor @param {HTMLElement} root @param {Scene} scene */
   function Viewer(root, scene) {
     this.root = root;
     this.scene = scene;
@@ -137,11 +148,11 @@
     (location.hash || '').replace(/^#/, '').split('&').forEach(function (kv) {
       var p = kv.split('='), v = (p[1] || '').split(',');
       if (p[0] === 'clip' && v.length === 2) {
-        self.clip = { on: true, axis: Math.max(0, Math.min(2, v[0] | 0)), at: Math.max(0, Math.min(1, +v[1] || 0)) };
+        self.clip = { on: true, axis: Math.max(0, Math.min(2, Math.trunc(Number(v[0])) || 0)), at: Math.max(0, Math.min(1, +v[1] || 0)) };
       } else if (p[0] === 'color' && self.fieldById[p[1]]) {
         self.field = p[1];
       } else if (p[0] === 'mode' && v.length === 2 && self.scene.modes) {
-        self.mode = { k: Math.max(0, Math.min(self.scene.modes.sd.length - 1, (v[0] | 0) - 1)), w: +v[1] || 0 };
+        self.mode = { k: Math.max(0, Math.min(self.scene.modes.sd.length - 1, (Math.trunc(Number(v[0])) || 0) - 1)), w: +v[1] || 0 };
       } else if (p[0] === 'side' && p[1] === 'back') {
         side = -1;
       }
@@ -149,86 +160,105 @@
     return side;
   };
 
+  // An element `tag` with attributes `attrs` and children (elements, or strings as text).
+  /** @param {string} tag @param {Object<string, string>} attrs @param {Array<Node|string>} [children] @returns {HTMLElement} */
+  function el(tag, attrs, children) {
+    var e = document.createElement(tag);
+    Object.keys(attrs).forEach(function (k) { e.setAttribute(k, attrs[k]); });
+    (children || []).forEach(function (c) { e.appendChild(typeof c === 'string' ? document.createTextNode(c) : c); });
+    return e;
+  }
+  /** @param {HTMLElement} e @returns {HTMLInputElement} */
+  function input(e) { return /** @type {HTMLInputElement} */ (e); }
+
   Viewer.prototype.build = function () {
     var self = this, s = this.scene, root = this.root;
-    root.innerHTML = '';
-    var canvas = document.createElement('canvas');
-    canvas.width = root.getAttribute('data-width') | 0 || 720;
-    canvas.height = root.getAttribute('data-height') | 0 || 480;
-    canvas.className = 'am-canvas';
-    canvas.setAttribute('aria-label', 'interactive 3D view: drag to rotate, right-drag or shift-drag to pan, wheel to zoom');
-    var panel = document.createElement('div');
-    panel.className = 'am-panel';
+    root.textContent = '';
+    var canvas = /** @type {HTMLCanvasElement} */ (el('canvas', {
+      class: 'am-canvas',
+      'aria-label': 'interactive 3D view: drag to rotate, right-drag or shift-drag to pan, wheel to zoom'
+    }));
+    canvas.width = Number(root.getAttribute('data-width')) || 720;
+    canvas.height = Number(root.getAttribute('data-height')) || 480;
+    var panel = el('div', { class: 'am-panel' });
     root.appendChild(canvas);
     root.appendChild(panel);
     this.canvas = canvas;
-    var gl = canvas.getContext('webgl', { preserveDrawingBuffer: true, antialias: true }) ||
-      canvas.getContext('experimental-webgl', { preserveDrawingBuffer: true });
+    var gl = /** @type {WebGLRenderingContext} */ (
+      canvas.getContext('webgl', { preserveDrawingBuffer: true, antialias: true }) ||
+      canvas.getContext('experimental-webgl', { preserveDrawingBuffer: true }));
     if (!gl) throw new Error('no-webgl');
     this.gl = gl;
-    function add(html) { var d = document.createElement('div'); d.innerHTML = html; panel.appendChild(d); return d; }
+    /** @param {Array<Node|string>} children @returns {HTMLElement} */
+    function add(children) { var d = el('div', {}, children); panel.appendChild(d); return d; }
     // Layers.
-    s.layers.forEach(function (l, i) {
-      var d = add('<label><input type="checkbox"' + (l.visible ? ' checked' : '') + '> ' + esc(l.label) + '</label>');
-      d.querySelector('input').addEventListener('change', function (e) { l.visible = e.target.checked; self.update(); });
+    s.layers.forEach(function (l) {
+      var box = input(el('input', { type: 'checkbox' }));
+      box.checked = l.visible;
+      box.addEventListener('change', function () { l.visible = box.checked; self.update(); });
+      add([el('label', {}, [box, ' ' + l.label])]);
     });
     // Colour.
     if (s.fields.length) {
-      var opts = s.fields.map(function (f) { return '<option value="' + esc(f.id) + '">' + esc(f.label) + (f.unit ? ' (' + esc(f.unit) + ')' : '') + '</option>'; }).join('');
-      var d = add('<label>colour by <select>' + opts + '</select></label>');
-      d.querySelector('select').value = this.field;
-      d.querySelector('select').addEventListener('change', function (e) { self.field = e.target.value; self.update(); });
+      var select = /** @type {HTMLSelectElement} */ (el('select', {}, s.fields.map(function (f) {
+        return el('option', { value: f.id }, [f.label + (f.unit ? ' (' + f.unit + ')' : '')]);
+      })));
+      select.value = this.field;
+      select.addEventListener('change', function () { self.field = select.value; self.update(); });
+      add([el('label', {}, ['colour by ', select])]);
     }
     // Clipping plane.
-    var hasCells = s.layers.some(function (l) { return l.cells; });
-    var dc = add('<label><input type="checkbox" class="am-clip"> clip ' + (hasCells ? 'through the volume' : '') +
-      '</label> <select class="am-axis"><option value="0">x</option><option value="1">y</option><option value="2" ' +
-      (s.dimension === 3 ? 'selected' : '') + '>z</option></select>' +
-      ' <input type="range" class="am-at" min="0" max="1000" value="500">');
-    dc.querySelector('.am-clip').checked = this.clip.on;
-    dc.querySelector('.am-axis').value = String(this.clip.axis);
-    dc.querySelector('.am-at').value = String(Math.round(this.clip.at * 1000));
-    dc.querySelector('.am-clip').addEventListener('change', function (e) { self.clip.on = e.target.checked; self.update(); });
-    dc.querySelector('.am-axis').addEventListener('change', function (e) { self.clip.axis = +e.target.value; self.update(); });
-    dc.querySelector('.am-at').addEventListener('input', function (e) { self.clip.at = e.target.value / 1000; self.update(); });
+    var hasCells = s.layers.some(function (l) { return !!l.cells; });
+    var clipOn = input(el('input', { type: 'checkbox', class: 'am-clip' }));
+    var axis = /** @type {HTMLSelectElement} */ (el('select', { class: 'am-axis' }, ['x', 'y', 'z'].map(function (a, i) {
+      return el('option', { value: String(i) }, [a]);
+    })));
+    var at = input(el('input', { type: 'range', class: 'am-at', min: '0', max: '1000', value: '500' }));
+    add([el('label', {}, [clipOn, ' clip ' + (hasCells ? 'through the volume' : '')]), ' ', axis, ' ', at]);
+    clipOn.checked = this.clip.on;
+    axis.value = String(this.clip.axis);
+    at.value = String(Math.round(this.clip.at * 1000));
+    clipOn.addEventListener('change', function () { self.clip.on = clipOn.checked; self.update(); });
+    axis.addEventListener('change', function () { self.clip.axis = +axis.value; self.update(); });
+    at.addEventListener('input', function () { self.clip.at = +at.value / 1000; self.update(); });
     if (s.layers.some(function (l) { return l.worst && l.worst.length; })) {
-      var dw = add('<label><input type="checkbox" checked> worst elements (magenta)</label>');
-      dw.querySelector('input').addEventListener('change', function (e) { self.worst = e.target.checked; self.update(); });
+      var worst = input(el('input', { type: 'checkbox' }));
+      worst.checked = true;
+      worst.addEventListener('change', function () { self.worst = worst.checked; self.update(); });
+      add([el('label', {}, [worst, ' worst elements (magenta)'])]);
     }
     // Modes.
     if (s.modes && s.modes.sd.length) {
-      var mo = s.modes.sd.map(function (_, k) { return '<option value="' + k + '">mode ' + (k + 1) + '</option>'; }).join('');
       var mx = s.modes.max_sd || 3;
-      var dm = add('<select class="am-mode">' + mo + '</select> <input type="range" class="am-w" min="' + (-mx) + '" max="' + mx +
-        '" step="0.1" value="0"> <span class="am-wv">0.0 σ</span>');
-      dm.querySelector('.am-mode').addEventListener('change', function (e) { self.mode.k = +e.target.value; self.update(); });
-      dm.querySelector('.am-w').addEventListener('input', function (e) {
-        self.mode.w = +e.target.value;
-        dm.querySelector('.am-wv').textContent = (self.mode.w >= 0 ? '+' : '') + self.mode.w.toFixed(1) + ' σ';
-        self.update();
-      });
-      this.modeSlider = dm.querySelector('.am-w');
-      dm.querySelector('.am-mode').value = String(this.mode.k);
-      this.modeSlider.value = String(this.mode.w);
-      dm.querySelector('.am-wv').textContent = (this.mode.w >= 0 ? '+' : '') + this.mode.w.toFixed(1) + ' σ';
+      var mode = /** @type {HTMLSelectElement} */ (el('select', { class: 'am-mode' }, s.modes.sd.map(function (_, k) {
+        return el('option', { value: String(k) }, ['mode ' + (k + 1)]);
+      })));
+      var slider = input(el('input', { type: 'range', class: 'am-w', min: String(-mx), max: String(mx), step: '0.1', value: '0' }));
+      var shown = el('span', { class: 'am-wv' }, ['0.0 σ']);
+      var label = function () { shown.textContent = (self.mode.w >= 0 ? '+' : '') + self.mode.w.toFixed(1) + ' σ'; };
+      add([mode, ' ', slider, ' ', shown]);
+      mode.addEventListener('change', function () { self.mode.k = +mode.value; self.update(); });
+      slider.addEventListener('input', function () { self.mode.w = +slider.value; label(); self.update(); });
+      this.modeSlider = slider;
+      mode.value = String(this.mode.k);
+      slider.value = String(this.mode.w);
+      label();
     }
-    var dv = add('<button type="button" data-v="1">front</button> <button type="button" data-v="-1">back</button>');
-    dv.querySelectorAll('button').forEach(function (b) {
-      b.addEventListener('click', function () { self.reset(+b.getAttribute('data-v')); self.draw(); });
+    var views = [1, -1].map(function (v) {
+      var b = el('button', { type: 'button', 'data-v': String(v) }, [v > 0 ? 'front' : 'back']);
+      b.addEventListener('click', function () { self.reset(v); self.draw(); });
+      return b;
     });
-    this.legend = add('');
+    add([views[0], ' ', views[1]]);
+    this.legend = add([]);
     this.legend.className = 'am-legend';
-    this.info = add('');
+    this.info = add([]);
     this.info.className = 'am-info';
     this.mouse();
   };
 
-  function esc(t) {
-    return String(t).replace(/&/g, '&amp;').replace(/</g, '&lt;').replace(/>/g, '&gt;').replace(/"/g, '&quot;');
-  }
-
-  // Per layer: its faces (a cell layer: every face of every cell, with the one or two cells it
-  // belongs to), and the bounding box of everything.
+  // Per cell layer: the centroids of its cells (the clipping plane keeps or removes whole
+  // cells); and the bounding box of everything.
   Viewer.prototype.prepare = function () {
     var lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
     this.scene.layers.forEach(function (l) {
@@ -237,32 +267,14 @@
         if (p[i + d] < lo[d]) lo[d] = p[i + d];
         if (p[i + d] > hi[d]) hi[d] = p[i + d];
       }
-      if (!l.cells) return;
-      var k = l.nodes_per_cell, n = l.cells.length / k, table = l.faces;
-      var faces = [], owners = [];
-      var buckets = new Map();
-      for (var c = 0; c < n; c++) {
-        for (var f = 0; f < table.length; f++) {
-          var ids = table[f].map(function (j) { return l.cells[c * k + j]; });
-          var key = ids.slice().sort(function (a, b) { return a - b; }).join(',');
-          var at = buckets.get(key);
-          if (at === undefined) {
-            buckets.set(key, faces.length);
-            faces.push(ids);
-            owners.push([c, -1]);
-          } else {
-            owners[at][1] = c;
-          }
-        }
-      }
-      l.faceList = faces;
-      l.owners = owners;
+      var C = l.cells;
+      if (!C) return;
+      var k = C.nodes_per_cell, n = C.nodes.length / k, corners = C.corners || k;
       l.centroids = new Float32Array(n * 3);
-      var corners = l.corners || k;
-      for (var c2 = 0; c2 < n; c2++) {
+      for (var c = 0; c < n; c++) {
         for (var j = 0; j < corners; j++) {
-          var v = l.cells[c2 * k + j];
-          for (var d2 = 0; d2 < 3; d2++) l.centroids[c2 * 3 + d2] += p[v * 3 + d2] / corners;
+          var v = C.nodes[c * k + j];
+          for (var d2 = 0; d2 < 3; d2++) l.centroids[c * 3 + d2] += p[v * 3 + d2] / corners;
         }
       }
     });
@@ -396,20 +408,20 @@
     var triangles = 0;
     this.scene.layers.forEach(function (l) {
       if (!l.visible) return;
-      var p = self.positions(l), vals = self.values(l, p);
+      var p = self.positions(l), vals = self.values(l, p), maps = self.scene.colormaps;
       var base = l.color || [0.75, 0.75, 0.78];
       var tri = [], tcol = [], edges = [];
       function color(pointIds, cell) {
-        if (vals && vals.cell && cell >= 0) return colorOf(vals.field, vals.cell[cell]);
+        if (vals && vals.cell && cell >= 0) return colorOf(maps, vals.field, vals.cell[cell]);
         if (vals && vals.point) {
           var s = 0, n = 0;
           pointIds.forEach(function (i) { var x = vals.point[i]; if (isFinite(x)) { s += x; n++; } });
-          return n ? colorOf(vals.field, s / n) : [0.6, 0.6, 0.6];
+          return n ? colorOf(maps, vals.field, s / n) : [0.6, 0.6, 0.6];
         }
         return base;
       }
       function pointColor(i) {
-        if (vals && vals.point) return colorOf(vals.field, vals.point[i]);
+        if (vals && vals.point) return colorOf(maps, vals.field, vals.point[i]);
         return null;
       }
       function poly(ids, cell) {
@@ -438,15 +450,19 @@
             keep[c] = pl[0] * l.centroids[3 * c] + pl[1] * l.centroids[3 * c + 1] + pl[2] * l.centroids[3 * c + 2] <= pl[3] ? 1 : 0;
           }
         }
-        var planar = self.scene.dimension !== 3;
-        for (var f = 0; f < l.faceList.length; f++) {
-          var o = l.owners[f], a0 = keep ? keep[o[0]] : 1, a1 = o[1] >= 0 ? (keep ? keep[o[1]] : 1) : 0;
+        // Every face Rust paired with its one or two cells: drawn where exactly one of them is
+        // kept (the boundary, and the faces between kept and removed cells).
+        var C = l.cells, planar = self.scene.dimension !== 3, NONE = 4294967295;
+        for (var f = 0; f < C.face_cell.length; f++) {
+          var c0 = C.face_cell[f], c1 = C.face_other[f];
+          var a0 = keep ? keep[c0] : 1, a1 = c1 !== NONE ? (keep ? keep[c1] : 1) : 0;
           if (planar) {
             if (!a0) continue;
           } else if (a0 + a1 !== 1) {
             continue;
           }
-          poly(l.faceList[f], a0 ? o[0] : o[1]);
+          var local = C.faces[C.face_local[f]], k0 = C.nodes_per_cell;
+          poly(local.map(function (j) { return C.nodes[c0 * k0 + j]; }), a0 ? c0 : c1);
         }
       }
       var b = self.upload(p, tri, tcol, l.opacity == null ? 1 : l.opacity, !!l.cells && self.clip.on);
@@ -454,10 +470,10 @@
       self.buffers.push(b);
       if (edges.length) self.buffers.push(self.lines(p, edges, [0.15, 0.15, 0.15], false));
       if (self.worst && l.worst && l.worst.length && l.cells) {
-        var we = [], k = l.nodes_per_cell;
+        var we = [], W = l.cells, k = W.nodes_per_cell;
         l.worst.forEach(function (c) {
-          l.faces.forEach(function (face) {
-            for (var e = 0; e < face.length; e++) we.push(l.cells[c * k + face[e]], l.cells[c * k + face[(e + 1) % face.length]]);
+          W.faces.forEach(function (face) {
+            for (var e = 0; e < face.length; e++) we.push(W.nodes[c * k + face[e]], W.nodes[c * k + face[(e + 1) % face.length]]);
           });
         });
         self.buffers.push(self.lines(p, we, [1, 0, 1], true));
@@ -565,17 +581,21 @@
 
   Viewer.prototype.showLegend = function () {
     var f = this.field && this.fieldById[this.field];
-    if (!f) { this.legend.innerHTML = ''; return; }
-    var lo = f.lo, hi = f.hi;
+    this.legend.textContent = '';
+    if (!f) return;
+    var lo = f.lo, hi = f.hi, maps = this.scene.colormaps;
     var stops = [];
     for (var i = 0; i <= 10; i++) {
-      var v = lo + (hi - lo) * i / 10, c = colorOf(f, v);
+      var c = colorOf(maps, f, lo + (hi - lo) * i / 10);
       stops.push('rgb(' + Math.round(c[0] * 255) + ',' + Math.round(c[1] * 255) + ',' + Math.round(c[2] * 255) + ') ' + (i * 10) + '%');
     }
-    var unit = f.unit ? ' ' + esc(f.unit) : '';
-    this.legend.innerHTML = '<div class="am-bar" style="background:linear-gradient(to right,' + stops.join(',') + ')"></div>' +
-      '<span>' + (f.lo_label ? esc(f.lo_label) : fmt(lo) + unit) + '</span><span style="float:right">' +
-      (f.hi_label ? esc(f.hi_label) : fmt(hi) + unit) + '</span><div class="am-caption">' + esc(f.label) + '</div>';
+    var unit = f.unit ? ' ' + f.unit : '';
+    var bar = el('div', { class: 'am-bar' });
+    bar.style.background = 'linear-gradient(to right,' + stops.join(',') + ')';
+    this.legend.appendChild(bar);
+    this.legend.appendChild(el('span', {}, [fmt(lo) + unit]));
+    this.legend.appendChild(el('span', { style: 'float:right' }, [fmt(hi) + unit]));
+    this.legend.appendChild(el('div', { class: 'am-caption' }, [f.label]));
   };
 
   function fmt(v) {
@@ -591,8 +611,11 @@
     this.draw();
   };
 
+  /** The viewer of each container. @type {WeakMap<Element, any>} */
+  var VIEWERS = new WeakMap();
+
   function start() {
-    var viewers = document.querySelectorAll('div.am-viewer');
+    var viewers = /** @type {NodeListOf<HTMLElement>} */ (document.querySelectorAll('div.am-viewer'));
     var pending = viewers.length;
     document.body.setAttribute('data-viewers', String(viewers.length));
     viewers.forEach(function (root) {
@@ -610,7 +633,7 @@
       }
       decode(JSON.parse(src.textContent)).then(function (scene) {
         try {
-          root.viewer = new Viewer(root, scene);
+          VIEWERS.set(root, new Viewer(root, /** @type {Scene} */ (scene)));
           done();
         } catch (e) {
           if (String(e.message) === 'no-webgl') {
@@ -623,10 +646,10 @@
         }
       }, function (e) { done('error: ' + e); throw e; });
     });
-    document.querySelectorAll('[data-focus]').forEach(function (el) {
-      el.addEventListener('click', function () {
-        var v = document.querySelector('div.am-viewer');
-        if (v && v.viewer) v.viewer.focus(el.getAttribute('data-focus').split(',').map(Number));
+    document.querySelectorAll('[data-focus]').forEach(function (row) {
+      row.addEventListener('click', function () {
+        var v = VIEWERS.get(document.querySelector('div.am-viewer'));
+        if (v) v.focus(row.getAttribute('data-focus').split(',').map(Number));
       });
     });
   }

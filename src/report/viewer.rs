@@ -12,10 +12,13 @@
 //! those of the files written (the subject's frame and unit), in single precision: the view
 //! is for looking, the files hold the numbers.
 
+use super::viewer_scene::{
+    CellsJson, ColorMapJson, ColorMapsJson, FieldJson, LayerJson, MapName, ModesJson, Packed,
+    SCENE_VERSION, SceneJson, ViewJson,
+};
 use crate::geometry::Point;
-use crate::mesh::{ElementKind, FeMesh};
+use crate::mesh::{ElementKind, FacePair, FeMesh};
 use base64::Engine as _;
-use serde_json::{Value, json};
 use std::io::Write as _;
 
 /// How a field's values become colours (the PNG pictures' maps, `render`).
@@ -64,8 +67,8 @@ pub enum Geometry {
     Triangles(Vec<[usize; 3]>),
     /// Segments (an outline), by point index.
     Segments(Vec<[usize; 2]>),
-    /// FE cells: the faces between cells are found by the viewer, which draws the boundary
-    /// (and, clipped, the faces between kept and removed cells).
+    /// FE cells with their faces paired ([`crate::mesh::face_pairs`]): the viewer draws the
+    /// boundary (and, clipped, the faces between kept and removed cells).
     Cells {
         /// Nodes per cell in `cells` (quadratic kinds: corners first).
         nodes_per_cell: usize,
@@ -75,6 +78,9 @@ pub enum Geometry {
         faces: Vec<Vec<usize>>,
         /// The cells' nodes, `nodes_per_cell` each.
         cells: Vec<usize>,
+        /// Every distinct face of the cells with the one or two cells it belongs to (2D:
+        /// every cell's outline, alone).
+        pairs: Vec<FacePair>,
     },
 }
 
@@ -143,6 +149,17 @@ impl Layer {
             corners: mesh.kind.linear().nodes(),
             faces: drawn_faces(mesh.kind),
             cells: mesh.connectivity.clone(),
+            pairs: if mesh.kind.linear().dimension() == 3 {
+                crate::mesh::face_pairs(mesh)
+            } else {
+                (0..mesh.num_elements())
+                    .map(|element| FacePair {
+                        element,
+                        face: 0,
+                        other: None,
+                    })
+                    .collect()
+            },
         };
         Layer::of(id, label, &mesh.nodes, geometry)
     }
@@ -214,24 +231,30 @@ fn packed(bytes: &[u8]) -> String {
     base64::engine::general_purpose::STANDARD.encode(gz)
 }
 
-fn f32s(values: impl Iterator<Item = f64>) -> Value {
+fn f32s(values: impl Iterator<Item = f64>) -> Packed {
     let bytes: Vec<u8> = values.flat_map(|v| (v as f32).to_le_bytes()).collect();
-    json!({ "f32": packed(&bytes) })
+    Packed::F32 {
+        f32: packed(&bytes),
+    }
 }
 
-fn u32s(values: impl Iterator<Item = usize>) -> Value {
-    let bytes: Vec<u8> = values.flat_map(|v| (v as u32).to_le_bytes()).collect();
-    json!({ "u32": packed(&bytes) })
+fn u32s(values: impl Iterator<Item = usize>) -> Packed {
+    let bytes: Vec<u8> = values
+        .flat_map(|v| u32::try_from(v).unwrap_or(u32::MAX).to_le_bytes())
+        .collect();
+    Packed::U32 {
+        u32: packed(&bytes),
+    }
 }
 
-fn points_value(points: &[Point<3>]) -> Value {
+fn points_value(points: &[Point<3>]) -> Packed {
     f32s(points.iter().flat_map(|p| p.iter().copied()))
 }
 
 /// Displacements as 16-bit integers times a scale (the largest component over 32767): a
 /// third of the page's size in single precision after compression, to a 30 000th of the
 /// largest displacement.
-fn displacements_value(d: &[Point<3>]) -> Value {
+fn displacements_value(d: &[Point<3>]) -> Packed {
     let largest = d
         .iter()
         .flatten()
@@ -254,88 +277,110 @@ fn displacements_value(d: &[Point<3>]) -> Value {
             (q.clamp(-32767.0, 32767.0) as i16).to_le_bytes()
         })
         .collect();
-    json!({ "i16": packed(&bytes), "scale": scale })
+    Packed::I16 {
+        i16: packed(&bytes),
+        scale,
+    }
 }
 
-fn layer_value(l: &Layer) -> Value {
-    let mut v = json!({
-        "id": l.id,
-        "label": l.label,
-        "visible": l.visible,
-        "opacity": l.opacity,
-        "color": l.color,
-        "positions": points_value(&l.points),
-        "worst": l.worst,
-    });
+fn layer_value(l: &Layer) -> LayerJson {
+    let values = |vals: &[(String, Vec<f64>)]| {
+        vals.iter()
+            .map(|(k, x)| (k.clone(), f32s(x.iter().copied())))
+            .collect()
+    };
+    let (mut triangles, mut segments, mut cells_json) = (None, None, None);
     match &l.geometry {
-        Geometry::Triangles(t) => v["triangles"] = u32s(t.iter().flatten().copied()),
-        Geometry::Segments(s) => v["segments"] = u32s(s.iter().flatten().copied()),
+        Geometry::Triangles(t) => triangles = Some(u32s(t.iter().flatten().copied())),
+        Geometry::Segments(s) => segments = Some(u32s(s.iter().flatten().copied())),
         Geometry::Cells {
             nodes_per_cell,
             corners,
             faces,
             cells,
+            pairs,
         } => {
-            v["cells"] = u32s(cells.iter().copied());
-            v["nodes_per_cell"] = json!(nodes_per_cell);
-            v["corners"] = json!(corners);
-            v["faces"] = json!(faces);
+            cells_json = Some(CellsJson {
+                nodes_per_cell: *nodes_per_cell,
+                corners: *corners,
+                faces: faces.clone(),
+                nodes: u32s(cells.iter().copied()),
+                face_cell: u32s(pairs.iter().map(|p| p.element)),
+                face_local: u32s(pairs.iter().map(|p| usize::from(p.face))),
+                face_other: u32s(pairs.iter().map(|p| p.other.unwrap_or(usize::MAX))),
+            })
         }
     }
-    let values = |vals: &[(String, Vec<f64>)]| -> Value {
-        vals.iter()
-            .map(|(k, x)| (k.clone(), f32s(x.iter().copied())))
-            .collect::<serde_json::Map<_, _>>()
-            .into()
-    };
-    v["point_values"] = values(&l.point_values);
-    v["cell_values"] = values(&l.cell_values);
-    v
+    LayerJson {
+        id: l.id.clone(),
+        label: l.label.clone(),
+        visible: l.visible,
+        opacity: l.opacity,
+        color: l.color,
+        positions: points_value(&l.points),
+        worst: l.worst.clone(),
+        triangles,
+        segments,
+        cells: cells_json,
+        point_values: values(&l.point_values),
+        cell_values: values(&l.cell_values),
+    }
 }
 
-/// The scene as the JSON `viewer.js` reads.
-pub fn scene_json(scene: &Scene) -> String {
-    let fields: Vec<Value> = scene
+/// `color` sampled at 256 even steps of `0..=1`.
+fn sampled(color: impl Fn(f64) -> [u8; 3], below: [u8; 3]) -> ColorMapJson {
+    ColorMapJson {
+        lut: (0..256).map(|i| color(f64::from(i) / 255.0)).collect(),
+        below,
+        nan: [153, 153, 153],
+    }
+}
+
+/// The PNG pictures' colour maps ([`super::render`]), sampled for the viewer.
+fn colormaps() -> ColorMapsJson {
+    use super::render::{distance_color, jacobian_color, magnitude_color};
+    let distance = distance_color(1.0);
+    ColorMapsJson {
+        // (0 itself is "inverted" in the pictures: the lowest step is just above it.)
+        jacobian: sampled(|t| jacobian_color(t.max(1e-9)), jacobian_color(0.0)),
+        distance: sampled(&distance, distance(0.0)),
+        magnitude: sampled(magnitude_color, magnitude_color(0.0)),
+    }
+}
+
+/// The scene as the typed JSON `viewer.js` reads ([`SceneJson`]).
+pub fn scene_value(scene: &Scene) -> SceneJson {
+    let fields = scene
         .fields
         .iter()
-        .map(|f| {
-            json!({
-                "id": f.id,
-                "label": f.label,
-                "unit": f.unit,
-                "lo": finite_or(f.range.0, 0.0),
-                "hi": finite_or(f.range.1, 1.0),
-                "map": match f.map {
-                    ColorMap::Jacobian => "jacobian",
-                    ColorMap::Distance => "distance",
-                    ColorMap::Magnitude => "magnitude",
-                },
-            })
+        .map(|f| FieldJson {
+            id: f.id.clone(),
+            label: f.label.clone(),
+            unit: f.unit.clone(),
+            lo: finite_or(f.range.0, 0.0),
+            hi: finite_or(f.range.1, 1.0),
+            map: match f.map {
+                ColorMap::Jacobian => MapName::Jacobian,
+                ColorMap::Distance => MapName::Distance,
+                ColorMap::Magnitude => MapName::Magnitude,
+            },
         })
         .collect();
-    let mut v = json!({
-        "dimension": scene.dimension,
-        "layers": scene.layers.iter().map(layer_value).collect::<Vec<_>>(),
-        "fields": fields,
-        "view": { "look": scene.look.0, "up": scene.look.1 },
-    });
-    if let Some(m) = &scene.modes {
-        let displacements: serde_json::Map<String, Value> = m
+    let modes = scene.modes.as_ref().map(|m| ModesJson {
+        sd: m.sd.clone(),
+        max_sd: m.max_sd,
+        displacements: m
             .displacements
             .iter()
             .map(|(id, per_mode)| {
                 (
                     id.clone(),
-                    per_mode
-                        .iter()
-                        .map(|d| displacements_value(d))
-                        .collect::<Vec<_>>()
-                        .into(),
+                    per_mode.iter().map(|d| displacements_value(d)).collect(),
                 )
             })
-            .collect();
+            .collect(),
         // The largest displacement of any layer at 1 sd, per mode (the colour bar's end).
-        let max_displacement: Vec<f64> = (0..m.sd.len())
+        max_displacement: (0..m.sd.len())
             .map(|k| {
                 m.displacements
                     .iter()
@@ -343,16 +388,27 @@ pub fn scene_json(scene: &Scene) -> String {
                     .flat_map(|d| d.iter().map(|p| crate::geometry::norm(*p)))
                     .fold(0.0, f64::max)
             })
-            .collect();
-        v["modes"] = json!({
-            "sd": m.sd,
-            "max_sd": m.max_sd,
-            "displacements": displacements,
-            "max_displacement": max_displacement,
-        });
+            .collect(),
+    });
+    SceneJson {
+        version: SCENE_VERSION,
+        dimension: scene.dimension,
+        layers: scene.layers.iter().map(layer_value).collect(),
+        fields,
+        view: ViewJson {
+            look: scene.look.0,
+            up: scene.look.1,
+        },
+        colormaps: colormaps(),
+        modes,
     }
+}
+
+/// The scene as the JSON `viewer.js` reads, ready to sit in a `<script>` element.
+pub fn scene_json(scene: &Scene) -> String {
+    let text = serde_json::to_string(&scene_value(scene)).unwrap_or_default();
     // (`<` escaped so that no name can close the script element the JSON sits in.)
-    v.to_string().replace('<', "\\u003c")
+    text.replace('<', "\\u003c")
 }
 
 fn finite_or(x: f64, or: f64) -> f64 {
@@ -395,9 +451,14 @@ mod tests {
     use super::*;
     use std::io::Read as _;
 
-    fn unpack(v: &Value, key: &str) -> Vec<u8> {
+    fn unpack(v: &Packed) -> Vec<u8> {
+        let text = match v {
+            Packed::F32 { f32 } => f32,
+            Packed::U32 { u32 } => u32,
+            Packed::I16 { i16, .. } => i16,
+        };
         let b = base64::engine::general_purpose::STANDARD
-            .decode(v[key].as_str().unwrap())
+            .decode(text)
             .unwrap();
         let mut out = Vec::new();
         flate2::read::GzDecoder::new(&b[..])
@@ -420,20 +481,27 @@ mod tests {
         scene.layers.push(l);
         let text = scene_json(&scene);
         assert!(!text.contains("</script>"), "{text}");
-        let v: Value = serde_json::from_str(&text).unwrap();
-        let layer = &v["layers"][0];
-        let cells: Vec<u32> = unpack(&layer["cells"], "u32")
+        // Read back through the typed schema, as the page's contract.
+        let v: SceneJson = serde_json::from_str(&text).unwrap();
+        assert_eq!(v.version, SCENE_VERSION);
+        assert_eq!(v.colormaps.jacobian.lut.len(), 256);
+        assert_eq!(v.colormaps.jacobian.below, [200, 0, 0]);
+        let layer = &v.layers[0];
+        assert_eq!(layer.label, "a </script> mesh");
+        let c = layer.cells.as_ref().unwrap();
+        let cells: Vec<u32> = unpack(&c.nodes)
             .chunks(4)
             .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
             .collect();
         assert_eq!(cells, vec![0, 1, 2, 3]);
-        let pos: Vec<f32> = unpack(&layer["positions"], "f32")
+        let pos: Vec<f32> = unpack(&layer.positions)
             .chunks(4)
             .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
             .collect();
         assert_eq!(pos, vec![0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.]);
-        assert_eq!(layer["faces"], json!([[0, 1, 2, 3]]));
-        let sj = unpack(&layer["cell_values"]["sj"], "f32");
+        assert_eq!(c.faces, vec![vec![0, 1, 2, 3]]);
+        assert_eq!(unpack(&c.face_other), u32::MAX.to_le_bytes());
+        let sj = unpack(&layer.cell_values["sj"]);
         assert_eq!(f32::from_le_bytes(sj[..4].try_into().unwrap()), 0.5);
     }
 
@@ -446,9 +514,11 @@ mod tests {
             })
             .collect();
         let v = displacements_value(&d);
-        let scale = v["scale"].as_f64().unwrap();
+        let Packed::I16 { scale, .. } = v else {
+            panic!("not i16")
+        };
         assert!((scale - 2.5 / 32767.0).abs() < 1e-6, "{scale}");
-        let back: Vec<f64> = unpack(&v, "i16")
+        let back: Vec<f64> = unpack(&v)
             .chunks(2)
             .map(|c| f64::from(i16::from_le_bytes([c[0], c[1]])) * scale)
             .collect();
@@ -456,7 +526,10 @@ mod tests {
             assert!((a - b).abs() <= 0.5 * scale + 1e-15, "{a} {b}");
         }
         // Nothing moves: no division by zero.
-        assert_eq!(displacements_value(&[[0.0; 3]])["scale"], json!(1.0));
+        assert!(matches!(
+            displacements_value(&[[0.0; 3]]),
+            Packed::I16 { scale, .. } if scale == 1.0
+        ));
     }
 
     #[test]

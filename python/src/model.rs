@@ -467,10 +467,8 @@ impl Atlas {
     /// misses parts; `mesh=False` for the fit alone (no morph: `mesh` is None). The GIL is
     /// released while it runs.
     #[pyo3(signature = (subject, facets=None, partial=false, grid=20, alpha=50.0, mesh=true))]
-    #[allow(clippy::too_many_arguments)]
     fn fit(
         &self,
-        py: Python<'_>,
         subject: &Bound<'_, PyAny>,
         facets: Option<&Bound<'_, PyAny>>,
         partial: bool,
@@ -478,6 +476,7 @@ impl Atlas {
         alpha: f64,
         mesh: bool,
     ) -> PyResult<FitResult> {
+        let py = subject.py();
         each!(&self.inner, a, D => {
             let params = call_params(a, partial, grid, alpha)?;
             let subject = match facets {

@@ -287,9 +287,59 @@ fn instance_mesh<const D: usize>(
 impl<const D: usize> Instances<'_, D> {
     /// One instance of [`write_instances`], written into `dir` (files named relative to it);
     /// the surface alone without a morph (an atlas without a mesh).
+    /// The picture of an instance's mesh (`NAME.png`, coloured by scaled Jacobian) and its
+    /// thumbnail (`NAME_thumb.png`) in `dir`; their names.
+    fn pictures(
+        &self,
+        spec: &InstanceSpec,
+        surface: &Shape<D>,
+        im: &InstanceMesh<D>,
+        dir: &Path,
+    ) -> Result<Vec<String>> {
+        let (atlas, view) = (&*self.ctx.atlas, self.view.as_ref());
+        let base = file_name(&spec.name);
+        let mut files = Vec::new();
+        let name = format!("{base}.png");
+        if let Some(view) = view {
+            let title = format!("{}: mesh, scaled Jacobian", spec.name);
+            write_atomic(
+                &dir.join(&name),
+                &quality_picture(&im.mesh, &im.quality, view, &title)?,
+            )?;
+        } else {
+            let to2 =
+                |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
+            let mesh2 = crate::mesh::FeMesh {
+                nodes: to2(&im.mesh.nodes),
+                kind: im.mesh.kind,
+                connectivity: im.mesh.connectivity.clone(),
+                sets: Default::default(),
+            };
+            crate::report::plot_subject(
+                &dir.join(&name),
+                &spec.name,
+                &to2(&atlas.to_data_frame(&atlas.mean)),
+                &to2(&surface.points),
+                &[],
+                &mesh2,
+                atlas.facets.len() == atlas.mean.len(),
+            )?;
+        }
+        // The thumbnail `instances.html` shows.
+        let bytes = std::fs::read(dir.join(&name)).map_err(|e| Error::io(dir.join(&name), e))?;
+        files.push(name);
+        let thumb = format!("{base}_thumb.png");
+        write_atomic(
+            &dir.join(&thumb),
+            &crate::report::render::thumbnail(&bytes, 200)?,
+        )?;
+        files.push(thumb);
+        Ok(files)
+    }
+
     fn write(&self, spec: &InstanceSpec, dir: &Path) -> Result<InstanceReport> {
         let (atlas, params) = (&*self.ctx.atlas, &self.ctx.params);
-        let (morpher, view) = (self.morpher.as_deref(), self.view.as_ref());
+        let morpher = self.morpher.as_deref();
         let m = atlas.num_modes();
         let w: Vec<f64> = (0..m)
             .map(|k| spec.sd.get(k).copied().unwrap_or(0.0) * atlas.eigenvalues[k].sqrt())
@@ -336,42 +386,7 @@ impl<const D: usize> Instances<'_, D> {
             files.push(name);
         }
         if let (true, Some(im)) = (params.plots, &made) {
-            let name = format!("{base}.png");
-            if let Some(view) = view {
-                let title = format!("{}: mesh, scaled Jacobian", spec.name);
-                write_atomic(
-                    &dir.join(&name),
-                    &quality_picture(&im.mesh, &im.quality, view, &title)?,
-                )?;
-            } else {
-                let to2 =
-                    |v: &[Point<D>]| -> Vec<Point<2>> { v.iter().map(same_dim::<D, 2>).collect() };
-                let mesh2 = crate::mesh::FeMesh {
-                    nodes: to2(&im.mesh.nodes),
-                    kind: im.mesh.kind,
-                    connectivity: im.mesh.connectivity.clone(),
-                    sets: Default::default(),
-                };
-                crate::report::plot_subject(
-                    &dir.join(&name),
-                    &spec.name,
-                    &to2(&atlas.to_data_frame(&atlas.mean)),
-                    &to2(&surface.points),
-                    &[],
-                    &mesh2,
-                    atlas.facets.len() == atlas.mean.len(),
-                )?;
-            }
-            // The thumbnail `instances.html` shows.
-            let bytes =
-                std::fs::read(dir.join(&name)).map_err(|e| Error::io(dir.join(&name), e))?;
-            files.push(name);
-            let thumb = format!("{base}_thumb.png");
-            write_atomic(
-                &dir.join(&thumb),
-                &crate::report::render::thumbnail(&bytes, 200)?,
-            )?;
-            files.push(thumb);
+            files.extend(self.pictures(spec, &surface, im, dir)?);
         }
         let nan = f64::NAN;
         let rms = |v: &[f64]| (v.iter().map(|d| d * d).sum::<f64>() / v.len().max(1) as f64).sqrt();

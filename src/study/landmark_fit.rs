@@ -240,6 +240,71 @@ pub fn pair_with_atlas<const D: usize>(
 }
 
 impl<const D: usize> Posterior<'_, D> {
+    /// The mean mesh morphed onto the posterior mean `surface` (eq. 9), repaired, checked and
+    /// written into `out` in every format (VTU with `posterior_sd` at every node: the
+    /// standard deviation of the mean shape's closest point) with its deck; the files' names
+    /// added to `files`. Returns its elements, smallest scaled Jacobian and inverted elements.
+    fn write_mesh(
+        &self,
+        morpher: &Morpher<D>,
+        surface: &Shape<D>,
+        fit: &crate::fit::LandmarkFit<D>,
+        out: &Path,
+        files: &mut Vec<String>,
+    ) -> Result<(usize, f64, usize)> {
+        let (atlas, params) = (&*self.ctx.atlas, &self.ctx.params);
+        let base = file_name(&surface.name);
+        let morph = morpher.morph(&Correspondence {
+            targets: surface.points.clone(),
+            partnered: Vec::new(),
+            frame: fit.similarity,
+        })?;
+        let mut mesh = morph.mesh;
+        let mut quality = morph.quality;
+        let index = ClosestPointIndex::from_shape(surface);
+        if let Some(rp) = &params.repair {
+            quality = repair_with_quality(&mut mesh, Some(&index), rp, &quality)?.1;
+        }
+        let q = summarize(&quality);
+        check_valid(surface, &mesh, &q, params)?;
+        // Each node: the spread at the mean shape's closest point (reference frame).
+        let on_mean = ClosestPointIndex::from_shape(&atlas.mean_shape());
+        let node_sd: Vec<f64> = atlas
+            .mesh
+            .nodes
+            .iter()
+            .map(|p| {
+                let c = on_mean.closest(p);
+                let f = atlas.facets[c.facet];
+                (0..D).map(|k| c.weights[k] * fit.point_sd[f[k]]).sum()
+            })
+            .collect();
+        let mean_mesh = atlas.mesh.moved(&fit.similarity);
+        for f in &params.formats {
+            let file = format!("{base}_mesh.{}", f.extension());
+            if *f == crate::formats::MeshFormat::Vtu {
+                crate::formats::write_vtu_with_point_data(
+                    &out.join(&file),
+                    &mesh,
+                    Some(&mean_mesh),
+                    &quality,
+                    &[("posterior_sd", &node_sd)],
+                )?;
+            } else {
+                write_mesh(&out.join(&file), &mesh, Some(&mean_mesh), &quality)?;
+            }
+            files.push(file);
+        }
+        if let Some(deck) = &params.deck {
+            files.push(deck.write_with_nodes(&mesh.nodes, out, &base)?);
+        }
+        Ok((
+            mesh.num_elements(),
+            q.scaled_jacobian_min,
+            q.inverted_elements,
+        ))
+    }
+
     /// Fits the atlas to the landmarks `observed` of the subject `name` (the run's standard
     /// deviation, subject units) and writes into `out`: the posterior mean surface `NAME_fit.vtp` with the
     /// point data `posterior_sd` (and the other `params.surface_formats` without it), the mesh
@@ -270,55 +335,7 @@ impl<const D: usize> Posterior<'_, D> {
         let mut files = Vec::new();
         let (mut elements, mut sj, mut inverted) = (0, f64::NAN, 0);
         if let Some(morpher) = morpher {
-            let morph = morpher.morph(&Correspondence {
-                targets: surface.points.clone(),
-                partnered: Vec::new(),
-                frame: fit.similarity,
-            })?;
-            let mut mesh = morph.mesh;
-            let mut quality = morph.quality;
-            let index = ClosestPointIndex::from_shape(&surface);
-            if let Some(rp) = &params.repair {
-                quality = repair_with_quality(&mut mesh, Some(&index), rp, &quality)?.1;
-            }
-            let q = summarize(&quality);
-            check_valid(&surface, &mesh, &q, params)?;
-            // Each node: the spread at the mean shape's closest point (reference frame).
-            let on_mean = ClosestPointIndex::from_shape(&atlas.mean_shape());
-            let node_sd: Vec<f64> = atlas
-                .mesh
-                .nodes
-                .iter()
-                .map(|p| {
-                    let c = on_mean.closest(p);
-                    let f = atlas.facets[c.facet];
-                    (0..D).map(|k| c.weights[k] * fit.point_sd[f[k]]).sum()
-                })
-                .collect();
-            let mean_mesh = atlas.mesh.moved(&fit.similarity);
-            for f in &params.formats {
-                let file = format!("{base}_mesh.{}", f.extension());
-                if *f == crate::formats::MeshFormat::Vtu {
-                    crate::formats::write_vtu_with_point_data(
-                        &out.join(&file),
-                        &mesh,
-                        Some(&mean_mesh),
-                        &quality,
-                        &[("posterior_sd", &node_sd)],
-                    )?;
-                } else {
-                    write_mesh(&out.join(&file), &mesh, Some(&mean_mesh), &quality)?;
-                }
-                files.push(file);
-            }
-            if let Some(deck) = &params.deck {
-                files.push(deck.write_with_nodes(&mesh.nodes, out, &base)?);
-            }
-            (elements, sj, inverted) = (
-                mesh.num_elements(),
-                q.scaled_jacobian_min,
-                q.inverted_elements,
-            );
+            (elements, sj, inverted) = self.write_mesh(morpher, &surface, &fit, out, &mut files)?;
         }
         let file = format!("{base}_fit.vtp");
         crate::formats::write_vtp_with_point_data(

@@ -83,28 +83,7 @@ pub fn leave_one_out_of<const D: usize>(
         meshes,
         population,
     } = folds;
-    if subjects.len() != shapes.len() {
-        return Err(Error::Population(format!(
-            "{} subjects for {} corresponded shapes",
-            subjects.len(),
-            shapes.len()
-        )));
-    }
-    if let Some(m) = meshes
-        && m.len() != shapes.len()
-    {
-        return Err(Error::Population(format!(
-            "leave-one-out with template meshes needs one per shape: {} meshes, {} shapes",
-            m.len(),
-            shapes.len()
-        )));
-    }
-    if shapes.len() < 4 {
-        return Err(Error::Population(format!(
-            "leave-one-out needs at least 4 shapes, got {}",
-            shapes.len()
-        )));
-    }
+    folds.check()?;
     create_dir(out)?;
     let _lock = crate::formats::lock_dir(out)?;
     // The full atlas, for the variance figures and to check the population once.
@@ -122,32 +101,7 @@ pub fn leave_one_out_of<const D: usize>(
         (0..shapes.len())
             .into_par_iter()
             .map(|k| {
-                let training: Vec<Shape<D>> = shapes
-                    .iter()
-                    .enumerate()
-                    .filter(|(i, _)| *i != k)
-                    .map(|(_, s)| s.clone())
-                    .collect();
-                let training_meshes: Option<Vec<FeMesh<D>>> = meshes.map(|m| {
-                    m.iter()
-                        .enumerate()
-                        .filter(|(i, _)| *i != k)
-                        .map(|(_, x)| x.clone())
-                        .collect()
-                });
-                let atlas =
-                    std::sync::Arc::new(atlas_of(&training, training_meshes.as_deref(), params)?);
-                let fitter = Fitter::new(atlas.clone());
-                let morpher = atlas.morpher(&params.morph)?;
-                let r = process_subject(
-                    &atlas,
-                    &fitter,
-                    &morpher,
-                    &subjects[k],
-                    out,
-                    params,
-                    "report.html",
-                );
+                let r = fold(&folds, k, params, out);
                 progress.item_done(label, &subjects[k].name);
                 r
             })
@@ -190,5 +144,66 @@ pub fn leave_one_out_of<const D: usize>(
             template: population.template.clone(),
             ..Default::default()
         },
+    )
+}
+
+impl<const D: usize> Folds<'_, D> {
+    /// Checks that the folds fit together: a subject and (with meshes) a mesh per shape, and
+    /// at least 4 shapes.
+    fn check(&self) -> Result<()> {
+        let (shapes, subjects, meshes) = (self.corresponded, self.subjects, self.meshes);
+        if subjects.len() != shapes.len() {
+            return Err(Error::Population(format!(
+                "{} subjects for {} corresponded shapes",
+                subjects.len(),
+                shapes.len()
+            )));
+        }
+        if let Some(m) = meshes
+            && m.len() != shapes.len()
+        {
+            return Err(Error::Population(format!(
+                "leave-one-out with template meshes needs one per shape: {} meshes, {} shapes",
+                m.len(),
+                shapes.len()
+            )));
+        }
+        if shapes.len() < 4 {
+            return Err(Error::Population(format!(
+                "leave-one-out needs at least 4 shapes, got {}",
+                shapes.len()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Fold `k` of a leave-one-out: the atlas of the other shapes (GPA, PCA, mesh of the mean),
+/// the held-out subject fitted, morphed, repaired, measured and written into `out`.
+fn fold<const D: usize>(
+    folds: &Folds<'_, D>,
+    k: usize,
+    params: &RunParams,
+    out: &Path,
+) -> Result<SubjectReport> {
+    let others = |i: &usize| *i != k;
+    let training: Vec<Shape<D>> = (0..folds.corresponded.len())
+        .filter(others)
+        .map(|i| folds.corresponded[i].clone())
+        .collect();
+    let training_meshes: Option<Vec<FeMesh<D>>> = folds
+        .meshes
+        .map(|m| (0..m.len()).filter(others).map(|i| m[i].clone()).collect());
+    let atlas = std::sync::Arc::new(atlas_of(&training, training_meshes.as_deref(), params)?);
+    let fitter = Fitter::new(atlas.clone());
+    let morpher = atlas.morpher(&params.morph)?;
+    process_subject(
+        &atlas,
+        &fitter,
+        &morpher,
+        &folds.subjects[k],
+        out,
+        params,
+        "report.html",
     )
 }

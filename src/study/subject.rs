@@ -54,37 +54,8 @@ pub fn fit_subject<const D: usize>(
     let fit_seconds = t0.elapsed().as_secs_f64();
     let (rms, to_instance) = fit_distances(&fit.instance, &atlas.facets, subject, &index);
     let rel = rms / subject.bbox_diagonal();
-    if let Err(e) = check_misfit(subject, rms, to_instance, params) {
-        // A refused subject may be a mirror image: say so when its mirror fits clearly better.
-        return Err(
-            match (e, mirrored_fit_rms(atlas, fitter, subject, params)) {
-                (Error::NotConverged { name, message }, Some(m)) if m < MIRROR_BETTER * rms => {
-                    Error::NotConverged {
-                        name,
-                        message: format!(
-                            "{message}; its mirror image fits at an RMS distance of {m:.4}: the \
-                         subject may be mirrored (mirror it, or use an atlas of the other side)"
-                        ),
-                    }
-                }
-                (e, _) => e,
-            },
-        );
-    }
-    let mut warnings = Vec::new();
-    let mirrored_rms = if rel > MIRROR_CHECK_ABOVE {
-        mirrored_fit_rms(atlas, fitter, subject, params)
-    } else {
-        None
-    };
-    if let Some(m) = mirrored_rms
-        && m < MIRROR_BETTER * rms
-    {
-        warnings.push(format!(
-            "the subject may be mirrored: its mirror image fits the model at an RMS distance \
-             of {m:.4}, against {rms:.4} as given (mirror it, or use an atlas of the other side)"
-        ));
-    }
+    let (mirrored_rms, warnings) =
+        checked_misfit(atlas, fitter, subject, params, (rms, to_instance))?;
     let morph = morpher.morph(&fit.correspondence())?;
     let mut mesh = morph.mesh;
     let mut per_element = morph.quality;
@@ -102,16 +73,10 @@ pub fn fit_subject<const D: usize>(
     let dist = distribution(&mesh, &per_element);
     let mean_normals = atlas.mean_shape().vertex_normals();
     let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
-    let baselines = if params.baselines {
-        Some(baseline_correlations(
-            atlas,
-            subject,
-            &index,
-            &mean_normals,
-        )?)
-    } else {
-        None
-    };
+    let baselines = params
+        .baselines
+        .then(|| baseline_correlations(atlas, subject, &index, &mean_normals))
+        .transpose()?;
     let mut report = SubjectReport {
         name: subject.name.clone(),
         iterations: fit.iterations,
@@ -377,6 +342,56 @@ fn check_misfit<const D: usize>(
 /// Whether `value <= bound` (false when either is NaN).
 fn within(value: f64, bound: f64) -> bool {
     value <= bound
+}
+
+/// The misfit guard of a fit at the two-way RMS distance `rms` (its subject's distances to
+/// the instance `to_instance`), and the mirror check: a refused subject whose mirror image
+/// fits clearly better is said to be mirrored; an accepted one far from its fit is checked
+/// too, with a warning. Returns the mirror's RMS distance (when it was fitted) and the
+/// warnings.
+///
+/// # Errors
+/// [`Error::NotConverged`] from `check_misfit`, naming the mirror where it fits better.
+fn checked_misfit<const D: usize>(
+    atlas: &Atlas<D>,
+    fitter: &Fitter<D>,
+    subject: &Shape<D>,
+    params: &RunParams,
+    (rms, to_instance): (f64, Vec<f64>),
+) -> Result<(Option<f64>, Vec<String>)> {
+    let rel = rms / subject.bbox_diagonal();
+    if let Err(e) = check_misfit(subject, rms, to_instance, params) {
+        // A refused subject may be a mirror image: say so when its mirror fits clearly better.
+        return Err(
+            match (e, mirrored_fit_rms(atlas, fitter, subject, params)) {
+                (Error::NotConverged { name, message }, Some(m)) if m < MIRROR_BETTER * rms => {
+                    Error::NotConverged {
+                        name,
+                        message: format!(
+                            "{message}; its mirror image fits at an RMS distance of {m:.4}: the \
+                         subject may be mirrored (mirror it, or use an atlas of the other side)"
+                        ),
+                    }
+                }
+                (e, _) => e,
+            },
+        );
+    }
+    let mut warnings = Vec::new();
+    let mirrored_rms = if rel > MIRROR_CHECK_ABOVE {
+        mirrored_fit_rms(atlas, fitter, subject, params)
+    } else {
+        None
+    };
+    if let Some(m) = mirrored_rms
+        && m < MIRROR_BETTER * rms
+    {
+        warnings.push(format!(
+            "the subject may be mirrored: its mirror image fits the model at an RMS distance \
+             of {m:.4}, against {rms:.4} as given (mirror it, or use an atlas of the other side)"
+        ));
+    }
+    Ok((mirrored_rms, warnings))
 }
 
 #[cfg(test)]

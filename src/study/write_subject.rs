@@ -19,17 +19,15 @@ const PICTURE_WIDTH: usize = 760;
 /// The 3D pictures of a subject (figs. 23 and 27): the fitted surface coloured by its
 /// distance to the subject, and the morphed mesh's surface coloured by scaled Jacobian, seen
 /// alike; written as `NAME_distance.png`, `NAME_quality.png` into `out`. Returns their names.
-#[allow(clippy::too_many_arguments)]
 fn pictures_3d<const D: usize>(
     atlas: &Atlas<D>,
     subject: &Shape<D>,
     fit: &FitResult<D>,
-    mesh: &FeMesh<D>,
-    per_element: &[ElementQuality],
+    (mesh, per_element): (&FeMesh<D>, &[ElementQuality]),
     distance: &[f64],
-    base: &str,
     out: &Path,
 ) -> Result<Vec<String>> {
+    let base = &file_name(&subject.name);
     let mut files = Vec::new();
     // Figs. 23 and 27: the fitted surface coloured by its distance to the subject, and the
     // morphed mesh's surface coloured by scaled Jacobian, seen alike.
@@ -229,10 +227,8 @@ pub fn write_subject<const D: usize>(
                 atlas,
                 subject,
                 &fit,
-                &mesh,
-                &per_element,
+                (&mesh, &per_element),
                 &instance_distance,
-                &base,
                 out,
             )?);
         } else {

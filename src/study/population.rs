@@ -203,6 +203,67 @@ fn id_list<'a>(ids: impl Iterator<Item = &'a String>) -> String {
 /// dropped, with a warning in the report.
 pub const ISLAND_SHARE: f64 = 0.01;
 
+/// Records each shape's registration residuals in its input report, with a warning where
+/// the registered template did not reach it (95th percentile beyond
+/// [`crate::register::REGISTRATION_WARNING_P95`] of its diagonal). Returns the warnings
+/// added, `(shape, warning)`.
+pub fn record_registration(
+    inputs: &mut [InputReport],
+    residuals: &[Option<RegistrationResiduals>],
+) -> Vec<(String, String)> {
+    let mut added = Vec::new();
+    for (i, res) in inputs.iter_mut().zip(residuals) {
+        i.registration = *res;
+        if let Some(x) = res
+            && x.p95_relative > crate::register::REGISTRATION_WARNING_P95
+        {
+            let w = format!(
+                "the registered template is up to {:.3} (95th percentile, {:.1} % of the \
+                 diagonal; two-way RMS {:.3}) from it: check its registration",
+                x.p95,
+                100.0 * x.p95_relative,
+                x.rms
+            );
+            i.warnings.push(w.clone());
+            added.push((i.name.clone(), w));
+        }
+    }
+    added
+}
+
+/// A population's shapes cleaned as every front end cleans them ([`clean_shapes`] with
+/// [`ISLAND_SHARE`]), the landmark pairing's warnings added to their shapes'; with
+/// `refuse_islands`, a shape with a floating component is an error instead.
+///
+/// # Errors
+/// [`Error::Shape`] naming the first shape with islands, with `refuse_islands`.
+pub fn clean_population<const D: usize>(
+    shapes: &mut [Shape<D>],
+    pairing: &LandmarkPairing,
+    refuse_islands: bool,
+) -> Result<Vec<InputReport>> {
+    let mut inputs = clean_shapes(shapes, ISLAND_SHARE);
+    for (name, w) in &pairing.warnings {
+        if let Some(i) = inputs.iter_mut().find(|i| &i.name == name) {
+            i.warnings.push(w.clone());
+        }
+    }
+    if let Some(i) = inputs
+        .iter()
+        .find(|i| refuse_islands && i.dropped_components > 0)
+    {
+        return Err(Error::shape(
+            &i.name,
+            format!(
+                "has {} floating component(s) under {:.0} % of its area (--refuse-islands)",
+                i.dropped_components,
+                100.0 * ISLAND_SHARE
+            ),
+        ));
+    }
+    Ok(inputs)
+}
+
 /// Drops from every shape the floating components under `min_share` of its area (length),
 /// and describes each shape's topology (components, genus) and what was dropped; a point set
 /// without facets is left as it is (0 components).

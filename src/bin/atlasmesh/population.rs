@@ -4,9 +4,8 @@
 use crate::args::{PopArgs, RunArgs, apply_pop};
 use crate::terminal::Terminal;
 use atlasmesh::geometry::Shape;
-use atlasmesh::geometry::same_dim;
 use atlasmesh::mesh::FeMesh;
-use atlasmesh::register::{REGISTRATION_WARNING_P95, RegisterParams};
+use atlasmesh::register::RegisterParams;
 use atlasmesh::report::InputReport;
 use atlasmesh::study::{self, PopulationOptions, RunParams, Template};
 use std::path::Path;
@@ -26,33 +25,17 @@ pub struct Population<const D: usize> {
     pub landmark_ids: Vec<String>,
 }
 
-/// Drops the floating islands of `shapes` (or refuses them with `--refuse-islands`), with a
-/// warning for each on stderr.
+/// Drops the floating islands of `shapes` (or refuses them with `--refuse-islands`,
+/// [`study::clean_population`]), with a warning for each on stderr.
 fn clean<const D: usize>(
     pop: &PopArgs,
     shapes: &mut [Shape<D>],
     pairing: &study::LandmarkPairing,
     term: &Terminal,
 ) -> anyhow::Result<Vec<InputReport>> {
-    let mut inputs = study::clean_shapes(shapes, study::ISLAND_SHARE);
-    for (name, w) in &pairing.warnings {
-        if let Some(i) = inputs.iter_mut().find(|i| &i.name == name) {
-            i.warnings.push(w.clone());
-        }
-    }
-    for i in &inputs {
-        if pop.refuse_islands && i.dropped_components > 0 {
-            return Err(atlasmesh::Error::shape(
-                &i.name,
-                format!(
-                    "has {} floating component(s) under {:.0} % of its area (--refuse-islands)",
-                    i.dropped_components,
-                    100.0 * study::ISLAND_SHARE
-                ),
-            )
-            .into());
-        }
-        if !term.is_quiet() {
+    let inputs = study::clean_population(shapes, pairing, pop.refuse_islands)?;
+    if !term.is_quiet() {
+        for i in &inputs {
             for w in &i.warnings {
                 eprintln!("warning: {}: {w}", i.name);
             }
@@ -134,28 +117,17 @@ fn template_file<const D: usize>(
     landmark_ids: &[String],
 ) -> anyhow::Result<Shape<D>> {
     let files = [path.to_path_buf()];
-    /// A shape read in dimension `E` (which is `D`) as a `Shape<D>`.
-    fn in_dimension<const E: usize, const D: usize>(s: Shape<E>) -> Shape<D> {
-        Shape {
-            name: s.name,
-            points: s.points.iter().map(same_dim::<E, D>).collect(),
-            facets: s
-                .facets
-                .iter()
-                .map(|f| std::array::from_fn(|k| f[k]))
-                .collect(),
-            landmarks: s.landmarks,
-        }
-    }
     let mut t: Shape<D> = if D == 3 {
-        in_dimension(study::load_surfaces(&files)?.remove(0))
+        study::load_surfaces(&files)?.remove(0).into_dim()
     } else {
         let opts = PopulationOptions {
             closed: !pop.open,
             resample: pop.resample,
             columns: pop.columns.clone().unwrap_or_default(),
         };
-        in_dimension(study::load_outlines_raw(&files, &opts)?.remove(0))
+        study::load_outlines_raw(&files, &opts)?
+            .remove(0)
+            .into_dim()
     };
     if let Some(l) = &pop.template_landmarks {
         // Paired with the population's landmarks by id.
@@ -204,22 +176,9 @@ pub fn corresponded<const D: usize>(
     if !term.is_quiet() {
         eprintln!("registration template: {}", r.template);
     }
-    for (i, res) in inputs.iter_mut().zip(&r.residuals) {
-        i.registration = *res;
-        if let Some(x) = res
-            && x.p95_relative > REGISTRATION_WARNING_P95
-        {
-            let w = format!(
-                "the registered template is up to {:.3} (95th percentile, {:.1} % of the \
-                 diagonal; two-way RMS {:.3}) from it: check its registration",
-                x.p95,
-                100.0 * x.p95_relative,
-                x.rms
-            );
-            if !term.is_quiet() {
-                eprintln!("warning: {}: {w}", i.name);
-            }
-            i.warnings.push(w);
+    for (name, w) in study::record_registration(inputs, &r.residuals) {
+        if !term.is_quiet() {
+            eprintln!("warning: {name}: {w}");
         }
     }
     Ok((r.shapes, Some(r.template)))

@@ -161,12 +161,7 @@ fn fit_result<const D: usize>(
     let t = fit.similarity;
     Ok(FitResult {
         dim: D,
-        sd: fit
-            .weights
-            .iter()
-            .zip(&atlas.eigenvalues)
-            .map(|(w, l)| w / l.sqrt())
-            .collect(),
+        sd: atlas.in_sd(&fit.weights),
         scale: t.s,
         rotation: t.r.iter().flatten().copied().collect(),
         translation: t.t.to_vec(),
@@ -429,7 +424,7 @@ impl Atlas {
             let inside: Vec<Point<D>> = x.iter().map(|p| t.apply_inverse(p)).collect();
             let w = a.atlas.coefficients(&inside);
             let p: Vec<Point<D>> = a.atlas.instance(&w).iter().map(|q| t.apply(q)).collect();
-            let sd: Vec<f64> = w.iter().zip(&a.atlas.eigenvalues).map(|(w, l)| w / l.sqrt()).collect();
+            let sd = a.atlas.in_sd(&w);
             Ok((arrays::of_points::<D>(py, &p)?, arrays::to_f64(py, sd.iter().copied(), &[sd.len()])?))
         })
     }

@@ -98,6 +98,15 @@ impl<const D: usize> Atlas<D> {
         Ok(a)
     }
 
+    /// The weights `w` in standard deviations of each mode: `w_k / sqrt(lambda_k)` (eq. 4,
+    /// `Lambda` of eq. 7), the shape space's coordinates a user compares across subjects.
+    pub fn in_sd(&self, w: &[f64]) -> Vec<f64> {
+        w.iter()
+            .zip(&self.eigenvalues)
+            .map(|(w, l)| w / l.sqrt())
+            .collect()
+    }
+
     /// Random weights of the model: `w_k = sqrt(lambda_k) z_k`, `z_k` standard normal
     /// (eq. 4's prior `w ~ N(0, Lambda)`); with `max_sd`, each `z_k` is drawn again until
     /// `|z_k| <= max_sd` (a normal truncated at `max_sd` standard deviations).

@@ -109,19 +109,12 @@ pub fn demo_3d(out: &Path, progress: &dyn Progress) -> Result<Report> {
     params.atlas.modes = crate::model::ModeSelection::Variance(0.99);
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<3>::load(&out.join("atlas.safetensors"))?;
-    let place = RunPlace {
-        out: out.to_path_buf(),
-        ..RunPlace::default()
-    };
-    let ctx = RunContext::new(loaded, params, place)?;
-    let subjects = test
-        .iter()
-        .map(|s| prepare_subject(s.clone(), Path::new(&s.name)))
-        .collect::<Result<Vec<_>>>()?;
-    let report = fit_shapes(
-        &ctx,
-        &subjects,
+    let report = fit_held_out(
+        loaded,
+        params,
+        test,
         "demo 3D (synthetic, seed 20261122)",
+        out,
         progress,
     )?;
     demo_succeeded(report)
@@ -140,17 +133,37 @@ pub fn demo(out: &Path, progress: &dyn Progress) -> Result<Report> {
     };
     build(train, &params, &out.join("atlas.safetensors"))?;
     let loaded = Atlas::<2>::load(&out.join("atlas.safetensors"))?;
+    let report = fit_held_out(
+        loaded,
+        params,
+        test,
+        "demo (synthetic, seed 20261122)",
+        out,
+        progress,
+    )?;
+    demo_succeeded(report)
+}
+
+/// The held-out shapes `test` fitted with `atlas` and written into `out` (`label` names the
+/// data in the report).
+fn fit_held_out<const D: usize>(
+    atlas: Atlas<D>,
+    params: RunParams,
+    test: &[Shape<D>],
+    label: &str,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<Report> {
     let place = RunPlace {
         out: out.to_path_buf(),
         ..RunPlace::default()
     };
-    let ctx = RunContext::new(loaded, params, place)?;
+    let ctx = RunContext::new(atlas, params, place)?;
     let subjects = test
         .iter()
         .map(|s| prepare_subject(s.clone(), Path::new(&s.name)))
         .collect::<Result<Vec<_>>>()?;
-    let report = fit_shapes(&ctx, &subjects, "demo (synthetic, seed 20261122)", progress)?;
-    demo_succeeded(report)
+    fit_shapes(&ctx, &subjects, label, progress)
 }
 
 /// The demo's report, or an error when one of its subjects failed (every one succeeds on a

@@ -70,11 +70,7 @@ pub fn sample_specs<const D: usize>(
             let w = atlas.sample_weights(&mut rng, max_sd)?;
             Ok(InstanceSpec {
                 name: format!("sample-{:0digits$}", k + 1),
-                sd: w
-                    .iter()
-                    .zip(&atlas.eigenvalues)
-                    .map(|(w, l)| w / l.sqrt())
-                    .collect(),
+                sd: atlas.in_sd(&w),
             })
         })
         .collect()

@@ -361,13 +361,7 @@ impl<const D: usize> Posterior<'_, D> {
             landmark_sd: sd,
             landmark_rms: fit.landmark_rms,
             scale: fit.similarity.s,
-            sd: fit
-                .posterior
-                .weights
-                .iter()
-                .zip(&atlas.eigenvalues)
-                .map(|(w, l)| w / l.sqrt())
-                .collect(),
+            sd: atlas.in_sd(&fit.posterior.weights),
             point_sd_median: sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN),
             point_sd_max: sorted.last().copied().unwrap_or(f64::NAN),
             elements,

@@ -119,12 +119,7 @@ pub fn fit_subject<const D: usize>(
         warnings,
         converged: fit.converged,
         e_d_history: fit.e_d_history.clone(),
-        sd: fit
-            .weights
-            .iter()
-            .zip(&atlas.eigenvalues)
-            .map(|(w, l)| w / l.sqrt())
-            .collect(),
+        sd: atlas.in_sd(&fit.weights),
         files: Vec::new(),
     };
     report.failed_checks = failed_checks(&report, delivered.finite, params);

@@ -236,7 +236,7 @@ pub fn record_registration(
 /// `refuse_islands`, a shape with a floating component is an error instead.
 ///
 /// # Errors
-/// [`Error::Shape`] naming the first shape with islands, with `refuse_islands`.
+/// [`Error::InvalidShape`] naming the first shape with islands, with `refuse_islands`.
 pub fn clean_population<const D: usize>(
     shapes: &mut [Shape<D>],
     pairing: &LandmarkPairing,

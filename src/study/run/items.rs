@@ -267,7 +267,7 @@ fn remove_temporaries(dir: &Path) {
 }
 
 /// Checks that no two of `names` would share an output folder (as
-/// [`file_name`](crate::study::file_name)s: `S 1` and `S_1` both make `S_1/`); `what` says
+/// file names: `S 1` and `S_1` both make `S_1/`); `what` says
 /// where each comes from in the error.
 ///
 /// # Errors

@@ -23,7 +23,7 @@
  * @typedef {{id: string, label: string, unit: string, lo: number, hi: number,
  *   map: 'jacobian' | 'distance' | 'magnitude'}} Field
  * @typedef {{nodes_per_cell: number, corners: number, faces: number[][], nodes: Uint32Array,
- *   face_cell: Uint32Array, face_local: Uint32Array, face_other: Uint32Array}} Cells
+ *   face_slot_steps: Uint32Array, face_other_steps: Uint32Array}} Cells
  * @typedef {{id: string, label: string, visible: boolean, opacity: number, color: number[],
  *   positions: Float32Array, worst: number[], triangles?: Uint32Array, segments?: Uint32Array,
  *   cells?: Cells, point_values: Object<string, Float32Array>,
@@ -452,16 +452,17 @@
         }
         // Every face Rust paired with its one or two cells: drawn where exactly one of them is
         // kept (the boundary, and the faces between kept and removed cells).
-        var C = l.cells, planar = self.scene.dimension !== 3, NONE = 4294967295;
-        for (var f = 0; f < C.face_cell.length; f++) {
-          var c0 = C.face_cell[f], c1 = C.face_other[f];
-          var a0 = keep ? keep[c0] : 1, a1 = c1 !== NONE ? (keep ? keep[c1] : 1) : 0;
+        var C = l.cells, planar = self.scene.dimension !== 3, nf = C.faces.length, slot = 0;
+        for (var f = 0; f < C.face_slot_steps.length; f++) {
+          slot += C.face_slot_steps[f];
+          var c0 = Math.floor(slot / nf), step = C.face_other_steps[f], c1 = c0 + step;
+          var a0 = keep ? keep[c0] : 1, a1 = step ? (keep ? keep[c1] : 1) : 0;
           if (planar) {
             if (!a0) continue;
           } else if (a0 + a1 !== 1) {
             continue;
           }
-          var local = C.faces[C.face_local[f]], k0 = C.nodes_per_cell;
+          var local = C.faces[slot % nf], k0 = C.nodes_per_cell;
           poly(local.map(function (j) { return C.nodes[c0 * k0 + j]; }), a0 ? c0 : c1);
         }
       }

@@ -305,9 +305,17 @@ fn layer_value(l: &Layer) -> LayerJson {
                 corners: *corners,
                 faces: faces.clone(),
                 nodes: u32s(cells.iter().copied()),
-                face_cell: u32s(pairs.iter().map(|p| p.element)),
-                face_local: u32s(pairs.iter().map(|p| usize::from(p.face))),
-                face_other: u32s(pairs.iter().map(|p| p.other.unwrap_or(usize::MAX))),
+                face_slot_steps: u32s(pairs.iter().scan(0, |last, p| {
+                    let slot = p.element * faces.len() + usize::from(p.face);
+                    let step = slot - *last;
+                    *last = slot;
+                    Some(step)
+                })),
+                face_other_steps: u32s(
+                    pairs
+                        .iter()
+                        .map(|p| p.other.map_or(0, |o| o.saturating_sub(p.element))),
+                ),
             })
         }
     }
@@ -500,7 +508,8 @@ mod tests {
             .collect();
         assert_eq!(pos, vec![0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.]);
         assert_eq!(c.faces, vec![vec![0, 1, 2, 3]]);
-        assert_eq!(unpack(&c.face_other), u32::MAX.to_le_bytes());
+        assert_eq!(unpack(&c.face_slot_steps), 0u32.to_le_bytes());
+        assert_eq!(unpack(&c.face_other_steps), 0u32.to_le_bytes());
         let sj = unpack(&layer.cell_values["sj"]);
         assert_eq!(f32::from_le_bytes(sj[..4].try_into().unwrap()), 0.5);
     }

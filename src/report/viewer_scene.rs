@@ -160,12 +160,14 @@ pub struct CellsJson {
     pub faces: Vec<Vec<usize>>,
     /// The cells' nodes (`u32`, `nodes_per_cell` each).
     pub nodes: Packed,
-    /// Every distinct face: the first cell it belongs to (`u32`).
-    pub face_cell: Packed,
-    /// Its local face number in that cell (`u32`, into `faces`).
-    pub face_local: Packed,
-    /// The other cell it belongs to (`u32`; 4294967295 on the boundary).
-    pub face_other: Packed,
+    /// Every distinct face as the slot `cell × faces.len() + local` of the first cell it
+    /// belongs to and its local face number in it, in increasing order, each given as its
+    /// difference from the previous one (the first from 0) (`u32`: small numbers that
+    /// compress well).
+    pub face_slot_steps: Packed,
+    /// The other cell it belongs to, given as its difference from the first (always
+    /// positive), 0 on the boundary (`u32`).
+    pub face_other_steps: Packed,
 }
 
 /// The model page's modes.

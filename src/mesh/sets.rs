@@ -372,7 +372,7 @@ impl SetsConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::ElementKind;
+    use crate::mesh::{ElementKind, FacePair, face_pairs};
 
     fn two_cubes() -> FeMesh<3> {
         let mut nodes = Vec::new();
@@ -402,6 +402,24 @@ mod tests {
             connectivity: [hex(0), hex(1)].concat(),
             sets: Default::default(),
         }
+    }
+
+    #[test]
+    fn two_cubes_share_one_face_of_their_eleven() {
+        let m = two_cubes();
+        let pairs = face_pairs(&m);
+        assert_eq!(pairs.len(), 11);
+        let inner: Vec<&FacePair> = pairs.iter().filter(|p| p.other.is_some()).collect();
+        assert_eq!(inner.len(), 1);
+        assert_eq!((inner[0].element, inner[0].other), (0, Some(1)));
+        // The same face seen from both cubes: the nodes at x = 1.
+        let f = ElementKind::Hex8.faces()[inner[0].face as usize];
+        assert!(f.iter().all(|&k| m.nodes[m.element(0)[k]][0] == 1.0));
+        // The boundary is the other ten, each once.
+        assert_eq!(boundary_faces(&m).len(), 10);
+        let listed: std::collections::HashSet<(usize, u8)> =
+            pairs.iter().map(|p| (p.element, p.face)).collect();
+        assert_eq!(listed.len(), 11);
     }
 
     #[test]

@@ -279,12 +279,22 @@ impl Atlas {
             register: bool,
             mesh: bool,
         ) -> PyResult<RustAtlas<D>> {
-            // Read and cleaned as the command line reads a population (islands dropped).
-            let shapes: Vec<Shape<D>> = list
-                .iter()
-                .enumerate()
-                .map(|(k, o)| subject_of::<D>(&o, k).map(|s| s.shape))
-                .collect::<PyResult<_>>()?;
+            // Read and cleaned as the command line reads a population (islands dropped); a
+            // CSV of 3D points holds one shape or several, as `build --no-mesh` reads it.
+            let mut shapes: Vec<Shape<D>> = Vec::new();
+            for (k, o) in list.iter().enumerate() {
+                match o.extract::<PathBuf>() {
+                    Ok(p)
+                        if D == 3
+                            && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) =>
+                    {
+                        let sets = atlasmesh::study::load_point_sets(&[p], &Default::default())
+                            .map_err(to_py)?;
+                        shapes.extend(sets.into_iter().map(Shape::into_dim::<D>));
+                    }
+                    _ => shapes.push(subject_of::<D>(&o, k)?.shape),
+                }
+            }
             py.detach(|| {
                 let shapes = if register {
                     let r = atlasmesh::study::register_population(

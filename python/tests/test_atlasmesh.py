@@ -180,3 +180,22 @@ def test_femur_leave_one_out_as_the_rust_test(data):
         median = float(np.median(rms))
         print(f"{modes} modes: median two-way RMS {median:.3f} mm (bound {bound:.3f})")
         assert median <= bound, (modes, median)
+
+
+def test_a_model_of_3d_points_from_a_csv(tmp_path):
+    """3D point sets in correspondence from one long CSV (shape,point,x,y,z), as
+    `build --no-mesh` reads them: the model of their points, no mesh."""
+    rng = np.random.default_rng(5)
+    base = rng.standard_normal((30, 3)) * 10
+    rows = ["shape,point,x,y,z"]
+    for k in range(8):
+        pts = base * (1 + 0.05 * rng.standard_normal()) + rng.standard_normal((30, 3))
+        rows += [f"s{k},{i},{x:.17g},{y:.17g},{z:.17g}" for i, (x, y, z) in enumerate(pts)]
+    f = tmp_path / "points.csv"
+    f.write_text("\n".join(rows) + "\n")
+    model = atlasmesh.Atlas.build([str(f)], modes=3, mesh=False)
+    assert model.dimension == 3 and model.mean.shape == (30, 3)
+    assert model.mean_mesh is None
+    for register in (False, True):
+        with pytest.raises(atlasmesh.Error, match="without facets"):
+            atlasmesh.Atlas.build([str(f)], modes=3, register=register)

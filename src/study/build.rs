@@ -2,7 +2,7 @@
 
 use super::params::RunParams;
 use super::sets::apply_sets;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::formats::{create_dir, write_vtp, write_vtu};
 use crate::geometry::Shape;
 use crate::mesh::quality::{mesh_quality, summarize};
@@ -47,6 +47,7 @@ pub fn atlas_of<const D: usize>(
     meshes: Option<&[FeMesh<D>]>,
     params: &RunParams,
 ) -> Result<Atlas<D>> {
+    refuse_point_sets(shapes, "a mesh of the mean")?;
     let mut atlas = match meshes {
         Some(m) => Atlas::build_with_meshes(shapes, &params.atlas, m)?,
         None => {
@@ -185,4 +186,20 @@ pub fn write_build_facts<const D: usize>(
         .map_err(|e| crate::error::Error::Numerical(format!("inputs.json: {e}")))?;
     crate::formats::write_atomic(&path, &text)?;
     Ok(path)
+}
+
+/// Refuses shapes without facets (point sets) for `what`, which needs surfaces or outlines:
+/// they make a shape model alone.
+///
+/// # Errors
+/// [`Error::Population`] naming the first point set.
+pub(crate) fn refuse_point_sets<const D: usize>(shapes: &[Shape<D>], what: &str) -> Result<()> {
+    match shapes.iter().find(|s| s.facets.is_empty()) {
+        Some(s) => Err(Error::Population(format!(
+            "{}: points without facets make a shape model alone (build --no-mesh, or mesh=False \
+             in Python); {what} needs surfaces or outlines",
+            s.name
+        ))),
+        None => Ok(()),
+    }
 }

@@ -357,6 +357,7 @@ pub fn register_population<const D: usize>(
     jobs: usize,
     progress: &dyn Progress,
 ) -> Result<Registered<D>> {
+    super::build::refuse_point_sets(shapes, "a registration")?;
     if shapes.len() < 2 {
         return Err(Error::Population(format!(
             "registration needs at least 2 shapes, got {}",

@@ -31,7 +31,8 @@ def assert_same(atlas, subjects, tmp_path):
     atlas.save(str(saved))
     out = tmp_path / "out"
     run = subprocess.run(
-        [command_line(), "fit", "--atlas", str(saved), "--out", str(out), "--no-plots", "--quiet"]
+        # Default options, pictures and pages included, as a user runs it.
+        [command_line(), "fit", "--atlas", str(saved), "--out", str(out), "--quiet"]
         + ["--subject"]
         + [str(s) for s in subjects],
         capture_output=True,
@@ -53,6 +54,10 @@ def assert_same(atlas, subjects, tmp_path):
         assert np.array_equal(cells, r.mesh.elements), name
         assert cli.get("warnings", []) == r.measures.get("warnings", []), name
         assert cli["success"] == r.success, name
+        # The subject's page says the verdict its report gives.
+        page = (out / name / f"{name}.html").read_text()
+        verdict = 'class="verdict ok"' if r.success else 'class="verdict bad"'
+        assert verdict in page, name
     return by_name
 
 

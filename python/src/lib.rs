@@ -4,6 +4,8 @@
 //! checked, the GIL released while the work runs. Shapes and meshes come in and out in the
 //! data's frame and unit (mm for mm data).
 
+#![warn(clippy::too_many_lines)]
+
 mod arrays;
 mod errors;
 mod model;

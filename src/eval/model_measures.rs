@@ -1,6 +1,10 @@
 //! Compactness, generalization and specificity of a shape model (Styner et al. 2003).
 
-use crate::geometry::{Point, Shape};
+use crate::error::{Error, Result};
+use crate::geometry::{Point, Shape, centroid_size, dist2};
+use crate::model::{Atlas, AtlasParams, ModeSelection, align_to_mean, standard_normal};
+use rand::SeedableRng;
+use rayon::prelude::*;
 
 /// The standard measures of a shape model built from shapes in correspondence (Davies 2002;
 /// Styner et al. 2003), for the first `1..=modes.len()` modes. Distances are mean point-to-
@@ -41,10 +45,7 @@ pub fn shape_model_measures<const D: usize>(
     max_modes: usize,
     samples: usize,
     seed: u64,
-) -> crate::error::Result<ShapeModelMeasures> {
-    use crate::error::Error;
-    use crate::model::{Atlas, AtlasParams, ModeSelection, align_to_mean};
-    use rayon::prelude::*;
+) -> Result<ShapeModelMeasures> {
     let ns = shapes.len();
     if ns < 4 {
         return Err(Error::Population(format!(
@@ -57,48 +58,8 @@ pub fn shape_model_measures<const D: usize>(
             "shape-model measures: at least one mode and one sample".into(),
         ));
     }
-    let raw: Vec<Vec<Point<D>>> = shapes.iter().map(|s| s.points.clone()).collect();
-    // Shape units per Procrustes unit: the mean centroid size (the Procrustes mean has norm 1).
-    let unit = raw
-        .iter()
-        .map(|s| crate::geometry::centroid_size(s))
-        .sum::<f64>()
-        / ns as f64;
-    // Every model keeps all its modes; `truncate` gives the first M.
-    let params = AtlasParams {
-        modes: ModeSelection::Variance(1.0),
-        ..AtlasParams::default()
-    };
-    let model_of = |shapes: &[Shape<D>]| -> crate::error::Result<Atlas<D>> {
-        Atlas::build_model(shapes, &params).map_err(|e| match e {
-            Error::Population(m) if m.contains("identical") => Error::Population(
-                "the shapes are identical after alignment: no variance to model".into(),
-            ),
-            e => e,
-        })
-    };
-    let full = model_of(shapes)?;
-    // A model's reference frame is its Procrustes frame scaled to a mean of norm `r`: a
-    // shape there is aligned to the unit mean (tangent space), then scaled back; distances
-    // are brought to shape units by `unit / r`.
-    let frame = |a: &Atlas<D>| -> (Vec<Point<D>>, f64) {
-        let r = a
-            .mean
-            .iter()
-            .map(|p| p.iter().map(|c| c * c).sum::<f64>())
-            .sum::<f64>()
-            .sqrt();
-        (a.mean.iter().map(|p| p.map(|c| c / r)).collect(), r)
-    };
-    let mean_distance = |a: &[Point<D>], b: &[Point<D>], r: f64| -> f64 {
-        a.iter()
-            .zip(b)
-            .map(|(p, q)| crate::geometry::dist2(*p, *q).sqrt())
-            .sum::<f64>()
-            / a.len() as f64
-            * unit
-            / r
-    };
+    let pop = Measured::of(shapes);
+    let full = pop.model_of(shapes)?;
     // (A population may have fewer modes than shapes less one: PCA drops the round-off ones.)
     let mm = mm.min(full.num_modes());
     let mut out = ShapeModelMeasures {
@@ -114,80 +75,157 @@ pub fn shape_model_measures<const D: usize>(
         out.compactness.push(c);
         out.compactness_sd.push(csd);
     }
-    // Generalization: per left-out shape, the model of the others truncated to M modes, the
-    // shape projected into it (`truncate(M).project`), for every M.
-    let errors: Vec<Vec<f64>> = (0..ns)
-        .into_par_iter()
-        .map(|i| {
-            let rest: Vec<Shape<D>> = shapes
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| *k != i)
-                .map(|(_, s)| s.clone())
-                .collect();
-            let model = model_of(&rest)?;
-            let (unit_mean, r) = frame(&model);
-            let x: Vec<Point<D>> = align_to_mean(&raw[i], &unit_mean)
-                .iter()
-                .map(|p| p.map(|c| c * r))
-                .collect();
-            (0..mm)
-                .map(|m| {
-                    // A left-out model with fewer modes: its projection stays.
-                    let kept = (m + 1).min(model.num_modes());
-                    let projected = model.truncate(kept)?.project(&x);
-                    Ok(mean_distance(&projected, &x, r))
-                })
-                .collect()
-        })
-        .collect::<crate::error::Result<_>>()?;
-    let mean_sd = |v: &[f64]| -> (f64, f64) {
-        let n = v.len() as f64;
-        let m = v.iter().sum::<f64>() / n;
-        let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0).max(1.0);
-        (m, (var / n).sqrt())
-    };
+    let errors = pop.generalization_errors(mm)?;
     for m in 0..mm {
         let (g, sd) = mean_sd(&errors.iter().map(|e| e[m]).collect::<Vec<_>>());
         out.generalization.push(g);
         out.generalization_sd.push(sd);
     }
-    // Specificity: the same weights for every M (the first M of them), seeded per sample;
-    // the training shapes aligned to the full model's mean as the left-out ones above.
-    let (unit_mean, r) = frame(&full);
-    let training: Vec<Vec<Point<D>>> = raw
-        .iter()
-        .map(|s| {
-            align_to_mean(s, &unit_mean)
-                .iter()
-                .map(|p| p.map(|c| c * r))
-                .collect()
-        })
-        .collect();
-    let spec: Vec<Vec<f64>> = (0..samples)
-        .into_par_iter()
-        .map(|k| {
-            use rand::SeedableRng;
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
-                seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-            );
-            let mut w = vec![0.0; full.num_modes()];
-            (0..mm)
-                .map(|m| {
-                    w[m] = crate::model::standard_normal(&mut rng) * full.eigenvalues[m].sqrt();
-                    let inst = full.instance(&w);
-                    training
-                        .iter()
-                        .map(|t| mean_distance(&inst, t, r))
-                        .fold(f64::INFINITY, f64::min)
-                })
-                .collect()
-        })
-        .collect();
+    let spec = pop.specificity_distances(&full, mm, samples, seed);
     for m in 0..mm {
         let (s, sd) = mean_sd(&spec.iter().map(|e| e[m]).collect::<Vec<_>>());
         out.specificity.push(s);
         out.specificity_sd.push(sd);
     }
     Ok(out)
+}
+
+/// A population being measured: its shapes, their points and the unit distances are given in.
+struct Measured<'a, const D: usize> {
+    shapes: &'a [Shape<D>],
+    raw: Vec<Vec<Point<D>>>,
+    /// Shape units per Procrustes unit: the mean centroid size (the Procrustes mean has
+    /// norm 1).
+    unit: f64,
+    /// Every model keeps all its modes; `truncate` gives the first M.
+    params: AtlasParams,
+}
+
+impl<'a, const D: usize> Measured<'a, D> {
+    fn of(shapes: &'a [Shape<D>]) -> Self {
+        let raw: Vec<Vec<Point<D>>> = shapes.iter().map(|s| s.points.clone()).collect();
+        let unit = raw.iter().map(|s| centroid_size(s)).sum::<f64>() / shapes.len() as f64;
+        Measured {
+            shapes,
+            raw,
+            unit,
+            params: AtlasParams {
+                modes: ModeSelection::Variance(1.0),
+                ..AtlasParams::default()
+            },
+        }
+    }
+
+    fn model_of(&self, shapes: &[Shape<D>]) -> Result<Atlas<D>> {
+        Atlas::build_model(shapes, &self.params).map_err(|e| match e {
+            Error::Population(m) if m.contains("identical") => Error::Population(
+                "the shapes are identical after alignment: no variance to model".into(),
+            ),
+            e => e,
+        })
+    }
+
+    /// The mean distance between corresponding points of `a` and `b` (a model's reference
+    /// frame of mean norm `r`), in shape units.
+    fn mean_distance(&self, a: &[Point<D>], b: &[Point<D>], r: f64) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| dist2(*p, *q).sqrt())
+            .sum::<f64>()
+            / a.len() as f64
+            * self.unit
+            / r
+    }
+
+    /// Shape `i`'s points in `model`'s reference frame: aligned to its unit mean (tangent
+    /// space), then scaled back by `r`.
+    fn in_frame(&self, i: usize, unit_mean: &[Point<D>], r: f64) -> Vec<Point<D>> {
+        align_to_mean(&self.raw[i], unit_mean)
+            .iter()
+            .map(|p| p.map(|c| c * r))
+            .collect()
+    }
+
+    /// Generalization: per left-out shape, the model of the others truncated to M modes, the
+    /// shape projected into it (`truncate(M).project`); its mean distance for every M.
+    fn generalization_errors(&self, mm: usize) -> Result<Vec<Vec<f64>>> {
+        (0..self.shapes.len())
+            .into_par_iter()
+            .map(|i| {
+                let rest: Vec<Shape<D>> = self
+                    .shapes
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != i)
+                    .map(|(_, s)| s.clone())
+                    .collect();
+                let model = self.model_of(&rest)?;
+                let (unit_mean, r) = frame(&model);
+                let x = self.in_frame(i, &unit_mean, r);
+                (0..mm)
+                    .map(|m| {
+                        // A left-out model with fewer modes: its projection stays.
+                        let kept = (m + 1).min(model.num_modes());
+                        let projected = model.truncate(kept)?.project(&x);
+                        Ok(self.mean_distance(&projected, &x, r))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Specificity: per sample, the distance of the instance of the first M weights to the
+    /// nearest training shape, for every M; the same weights for every M, seeded per sample;
+    /// the training shapes aligned to the full model's mean as the left-out ones above.
+    fn specificity_distances(
+        &self,
+        full: &Atlas<D>,
+        mm: usize,
+        samples: usize,
+        seed: u64,
+    ) -> Vec<Vec<f64>> {
+        let (unit_mean, r) = frame(full);
+        let training: Vec<Vec<Point<D>>> = (0..self.raw.len())
+            .map(|i| self.in_frame(i, &unit_mean, r))
+            .collect();
+        (0..samples)
+            .into_par_iter()
+            .map(|k| {
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
+                    seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                );
+                let mut w = vec![0.0; full.num_modes()];
+                (0..mm)
+                    .map(|m| {
+                        w[m] = standard_normal(&mut rng) * full.eigenvalues[m].sqrt();
+                        let inst = full.instance(&w);
+                        training
+                            .iter()
+                            .map(|t| self.mean_distance(&inst, t, r))
+                            .fold(f64::INFINITY, f64::min)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// A model's reference frame is its Procrustes frame scaled to a mean of norm `r`: its unit
+/// mean and `r`. (Distances there are brought to shape units by `unit / r`.)
+fn frame<const D: usize>(a: &Atlas<D>) -> (Vec<Point<D>>, f64) {
+    let r = a
+        .mean
+        .iter()
+        .map(|p| p.iter().map(|c| c * c).sum::<f64>())
+        .sum::<f64>()
+        .sqrt();
+    (a.mean.iter().map(|p| p.map(|c| c / r)).collect(), r)
+}
+
+/// The mean of `v` and its standard error.
+fn mean_sd(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0).max(1.0);
+    (m, (var / n).sqrt())
 }

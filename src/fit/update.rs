@@ -6,7 +6,9 @@ use super::resolution::Level;
 use super::scratch::Scratches;
 use super::state::{Sampling, State, Step, Subject};
 use crate::error::{Error, Result};
-use crate::geometry::{Point, QueryMemo, REFERENCE_POINTS, add, dot, scale, sub};
+use crate::geometry::{
+    ClosestPointIndex, Point, QueryMemo, REFERENCE_POINTS, Similarity, add, dot, scale, sub,
+};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
@@ -65,17 +67,20 @@ impl<const D: usize> Fitter<D> {
             _ => &mut scratches.full,
         };
         let m = self.m;
-        let r = rotation_params(D);
-        let pose = 1 + r + D;
+        let pose = 1 + rotation_params(D) + D;
         let p = if gamma.is_some() { pose + m } else { pose };
-        let cols = p + 1;
         let sim = st.sim;
         scratch.set_weights(model, &st.w, true);
-        let x = &scratch.x;
+        let rows = Rows {
+            x: &scratch.x,
+            psi: &model.psi,
+            m,
+            p,
+        };
         let buf = &mut scratch.rows;
         buf.clear();
         // One allocation for all the rows, not a doubling series.
-        buf.reserve(cols * (sampling.forward.len() + sampling.backward.len()));
+        buf.reserve((p + 1) * (sampling.forward.len() + sampling.backward.len()));
         if st.memos_for != Some(sampling.pass) {
             st.forward_memo.clear();
             st.forward_memo
@@ -85,88 +90,22 @@ impl<const D: usize> Fitter<D> {
                 .resize(sampling.backward.len(), QueryMemo::default());
             st.memos_for = Some(sampling.pass);
         }
-        // Appends the row of the model point combination `(ids, bw)` with unit normal `nr`
-        // and target `z` (both in the reference frame), scaled by `sw` (root of its weight).
-        let push =
-            |buf: &mut Vec<f64>, ids: &[usize], bw: &[f64], nr: Point<D>, z: Point<D>, sw: f64| {
-                let at = buf.len();
-                buf.resize(at + cols, 0.0);
-                let row = &mut buf[at..];
-                let mut xc = [0.0; D];
-                for (&i, &b) in ids.iter().zip(bw) {
-                    xc = add(xc, scale(x[i], b));
-                }
-                row[0] = sw * dot(nr, xc);
-                for k in 0..r {
-                    row[1 + k] = sw * dot(nr, generator(k, &xc));
-                }
-                for d in 0..D {
-                    row[1 + r + d] = sw * nr[d];
-                }
-                if p > pose {
-                    let rw = &mut row[pose..pose + m];
-                    for (&i, &b) in ids.iter().zip(bw) {
-                        if b == 0.0 {
-                            continue;
-                        }
-                        for d in 0..D {
-                            let f = sw * b * nr[d];
-                            let pr = &model.psi[(i * D + d) * m..(i * D + d + 1) * m];
-                            for (o, v) in rw.iter_mut().zip(pr) {
-                                *o += f * v;
-                            }
-                        }
-                    }
-                }
-                row[p] = sw * dot(nr, sub(xc, z));
-            };
-        // Forward pairs: model point -> closest point on the subject (subject frame).
-        let mut forward = 0.0;
-        for (&j, memo) in sampling.forward.iter().zip(&mut st.forward_memo) {
-            let c = subj.index.closest_memo(&sim.apply(&x[j]), memo);
-            forward += c.dist2;
-            // From the index, which the search has just read.
-            let Some(n) = subj.index.normal_at(&c) else {
-                continue;
-            };
-            let n = scale(n, subj.sign);
-            let nr = sim.rotate_inverse(&n);
-            let cw = compatibility(dot(nr, scratch.normals[j]));
-            if cw == 0.0 {
-                continue;
-            }
-            push(buf, &[j], &[1.0], nr, sim.apply_inverse(&c.point), cw);
-        }
-        // Backward pairs: subject vertex -> closest point on the instance, searched in the
-        // reference frame (a similarity keeps closest points), so the instance's index
-        // changes only with `w`.
-        let mut backward = 0.0;
-        if !sampling.backward.is_empty() {
-            // Backward pairs weigh as much as the forward ones together; alone (a partial
-            // subject), as much as both directions would (so that `gamma` acts alike).
-            let total = if sampling.forward.is_empty() {
-                2.0
-            } else {
-                1.0
-            };
-            let sw = (total * sampling.pairs() as f64 / sampling.backward.len() as f64).sqrt();
-            for (&i, memo) in sampling.backward.iter().zip(&mut st.backward_memo) {
-                let z = sim.apply_inverse(&subj.shape.points[i]);
-                let c = scratch.index.closest_memo(&z, memo);
-                backward += c.dist2 * sim.s * sim.s;
-                let (Some(n), Some(f)) = (
-                    scratch.index.normal_at(&c),
-                    scratch.index.facet_vertices(&c),
-                ) else {
-                    continue;
-                };
-                let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
-                if cw == 0.0 {
-                    continue;
-                }
-                push(buf, &f, &c.weights, n, z, sw * cw);
-            }
-        }
+        let forward = rows.forward(
+            subj,
+            &sim,
+            &scratch.normals,
+            sampling,
+            &mut st.forward_memo,
+            buf,
+        );
+        let backward = rows.backward(
+            subj,
+            &sim,
+            &scratch.index,
+            sampling,
+            &mut st.backward_memo,
+            buf,
+        );
         let two_way_ms = if sampling.backward.is_empty() {
             forward / sampling.forward.len() as f64
         } else if sampling.forward.is_empty() {
@@ -299,5 +238,133 @@ impl<const D: usize> Fitter<D> {
         // (the root mean square move times the root of 2001), the tolerance means the same
         // at every resolution.
         (weight_change * REFERENCE_POINTS / self.atlas.mean.len() as f64).sqrt()
+    }
+}
+
+/// The rows of the linearized problem of eq. 5 at an instance `x` (reference frame): each
+/// `p + 1` numbers, the derivatives by scale, rotations, translations and (when `p` exceeds
+/// the pose's parameters) the `m` weights, then the residual.
+struct Rows<'a, const D: usize> {
+    x: &'a [Point<D>],
+    /// The model's modes, `(i * D + d) * m + k`.
+    psi: &'a [f64],
+    m: usize,
+    p: usize,
+}
+
+impl<const D: usize> Rows<'_, D> {
+    /// Appends the row of the model point combination `(ids, bw)` with unit normal `nr` and
+    /// target `z` (both in the reference frame), scaled by `sw` (root of its weight).
+    fn push(
+        &self,
+        buf: &mut Vec<f64>,
+        ids: &[usize],
+        bw: &[f64],
+        nr: Point<D>,
+        z: Point<D>,
+        sw: f64,
+    ) {
+        let (r, m, p) = (rotation_params(D), self.m, self.p);
+        let pose = 1 + r + D;
+        let at = buf.len();
+        buf.resize(at + p + 1, 0.0);
+        let row = &mut buf[at..];
+        let mut xc = [0.0; D];
+        for (&i, &b) in ids.iter().zip(bw) {
+            xc = add(xc, scale(self.x[i], b));
+        }
+        row[0] = sw * dot(nr, xc);
+        for k in 0..r {
+            row[1 + k] = sw * dot(nr, generator(k, &xc));
+        }
+        for d in 0..D {
+            row[1 + r + d] = sw * nr[d];
+        }
+        if p > pose {
+            let rw = &mut row[pose..pose + m];
+            for (&i, &b) in ids.iter().zip(bw) {
+                if b == 0.0 {
+                    continue;
+                }
+                for d in 0..D {
+                    let f = sw * b * nr[d];
+                    let pr = &self.psi[(i * D + d) * m..(i * D + d + 1) * m];
+                    for (o, v) in rw.iter_mut().zip(pr) {
+                        *o += f * v;
+                    }
+                }
+            }
+        }
+        row[p] = sw * dot(nr, sub(xc, z));
+    }
+
+    /// The forward pairs' rows: model point -> closest point on the subject (searched in the
+    /// subject's frame). `normals` are the instance's. Returns the sum of squared distances.
+    fn forward(
+        &self,
+        subj: &Subject<D>,
+        sim: &Similarity<D>,
+        normals: &[Point<D>],
+        sampling: &Sampling,
+        memos: &mut [QueryMemo<D>],
+        buf: &mut Vec<f64>,
+    ) -> f64 {
+        let mut forward = 0.0;
+        for (&j, memo) in sampling.forward.iter().zip(memos) {
+            let c = subj.index.closest_memo(&sim.apply(&self.x[j]), memo);
+            forward += c.dist2;
+            // From the index, which the search has just read.
+            let Some(n) = subj.index.normal_at(&c) else {
+                continue;
+            };
+            let n = scale(n, subj.sign);
+            let nr = sim.rotate_inverse(&n);
+            let cw = compatibility(dot(nr, normals[j]));
+            if cw == 0.0 {
+                continue;
+            }
+            self.push(buf, &[j], &[1.0], nr, sim.apply_inverse(&c.point), cw);
+        }
+        forward
+    }
+
+    /// The backward pairs' rows: subject vertex -> closest point on the instance (`index`),
+    /// searched in the reference frame (a similarity keeps closest points), so the instance's
+    /// index changes only with `w`. Returns the sum of squared distances (subject's units).
+    fn backward(
+        &self,
+        subj: &Subject<D>,
+        sim: &Similarity<D>,
+        index: &ClosestPointIndex<D>,
+        sampling: &Sampling,
+        memos: &mut [QueryMemo<D>],
+        buf: &mut Vec<f64>,
+    ) -> f64 {
+        let mut backward = 0.0;
+        if sampling.backward.is_empty() {
+            return backward;
+        }
+        // Backward pairs weigh as much as the forward ones together; alone (a partial
+        // subject), as much as both directions would (so that `gamma` acts alike).
+        let total = if sampling.forward.is_empty() {
+            2.0
+        } else {
+            1.0
+        };
+        let sw = (total * sampling.pairs() as f64 / sampling.backward.len() as f64).sqrt();
+        for (&i, memo) in sampling.backward.iter().zip(memos) {
+            let z = sim.apply_inverse(&subj.shape.points[i]);
+            let c = index.closest_memo(&z, memo);
+            backward += c.dist2 * sim.s * sim.s;
+            let (Some(n), Some(f)) = (index.normal_at(&c), index.facet_vertices(&c)) else {
+                continue;
+            };
+            let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
+            if cw == 0.0 {
+                continue;
+            }
+            self.push(buf, &f, &c.weights, n, z, sw * cw);
+        }
+        backward
     }
 }

@@ -213,6 +213,19 @@ impl<const D: usize> Atlas<D> {
                     .map_err(|e| Error::Numerical(format!("atlas tensor {name}: {e}")))?,
             ));
         }
+        let mut meta = self.metadata();
+        // The checksum covers the tensors' bytes and the other metadata: serialize once to
+        // learn the data section, then again with the checksum in the header.
+        let first = safetensors::serialize(views.clone(), Some(meta.clone()))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
+        let crc = atlas_checksum(data_section(&first).unwrap_or_default(), &meta);
+        meta.insert("checksum_crc32".to_string(), format!("{crc:08x}"));
+        safetensors::serialize(views, Some(meta))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))
+    }
+
+    /// The atlas file's metadata (everything but the tensors and the checksum).
+    fn metadata(&self) -> HashMap<String, String> {
         let mut meta = HashMap::new();
         meta.insert("format".to_string(), "atlasmesh-atlas".to_string());
         // An atlas without its data frame is one of version 2 (read from such a file).
@@ -254,14 +267,7 @@ impl<const D: usize> Atlas<D> {
                 serde_json::to_string(&DataFrame::of(t)).unwrap_or_default(),
             );
         }
-        // The checksum covers the tensors' bytes and the other metadata: serialize once to
-        // learn the data section, then again with the checksum in the header.
-        let first = safetensors::serialize(views.clone(), Some(meta.clone()))
-            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
-        let crc = atlas_checksum(data_section(&first).unwrap_or_default(), &meta);
-        meta.insert("checksum_crc32".to_string(), format!("{crc:08x}"));
-        safetensors::serialize(views, Some(meta))
-            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))
+        meta
     }
 
     /// Loads an atlas written by [`Atlas::save`], checking format, version, dimension and
@@ -272,6 +278,10 @@ impl<const D: usize> Atlas<D> {
     }
 
     /// [`Atlas::load`] of an atlas file's bytes (`path` only names the file in messages).
+    #[allow(
+        clippy::too_many_lines,
+        reason = "a parser: the file's tensors and metadata checked in the order the format lists them"
+    )]
     pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self> {
         use safetensors::{Dtype, SafeTensors};
         let bad = |m: String| Error::Atlas {

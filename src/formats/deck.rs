@@ -98,6 +98,10 @@ fn numbers<T: std::str::FromStr>(path: &Path, s: &str, what: &str) -> Result<Vec
 
 impl FebDeck {
     /// Parses an FEBio file: nodes with ids 1..N, elements of one kind.
+    #[allow(
+        clippy::too_many_lines,
+        reason = "a parser: one pass over the FEBio deck's sections, each section's branch beside the others"
+    )]
     pub fn parse(path: &Path, text: &str) -> Result<FebDeck> {
         let bad = |m: String| Error::parse(path, 0, m);
         let mut r = quick_xml::Reader::from_str(text);

@@ -31,6 +31,10 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
 }
 
 /// The ASCII `.msh` file's sections.
+#[allow(
+    clippy::too_many_lines,
+    reason = "a parser: one pass over the file's sections, each section's branch beside the others"
+)]
 fn parse_ascii(path: &Path, text: &str) -> Result<Parsed> {
     let section = |name: &str| -> Option<(usize, Vec<&str>)> {
         let start = text
@@ -270,6 +274,10 @@ fn parse_ascii(path: &Path, text: &str) -> Result<Parsed> {
 
 /// The FE mesh of a parsed file: the elements of the highest dimension, of one kind; physical
 /// groups of the lower dimensions as node sets (points) and surfaces (faces).
+#[allow(
+    clippy::too_many_lines,
+    reason = "a parser: the parse's second half: elements, then the physical groups as sets, one error path"
+)]
 fn assemble(path: &Path, p: Parsed) -> Result<FeMesh<3>> {
     let Parsed {
         names,

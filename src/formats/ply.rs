@@ -87,6 +87,10 @@ pub(crate) struct Element {
 
 /// PLY: elements `vertex` (properties `x`, `y`, `z`) and `face` (list `vertex_indices` or
 /// `vertex_index`); other elements and properties are skipped.
+#[allow(
+    clippy::too_many_lines,
+    reason = "a parser: the header's grammar and the element reading share one cursor"
+)]
 pub(crate) fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Parsed> {
     let err = |line: usize, m: String| Error::parse(path, line, m);
     let end = find_header_end(bytes).ok_or_else(|| {

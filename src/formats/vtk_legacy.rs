@@ -225,6 +225,10 @@ fn read_cells(c: &mut Cursor, f: &[&str], v5: bool, points: usize) -> Result<Vec
 }
 
 /// Parses a legacy VTK file of any version from 2.0 to 5.1.
+#[allow(
+    clippy::too_many_lines,
+    reason = "a parser: one pass over the file's keywords, each keyword's branch beside the others"
+)]
 fn parse_legacy(path: &Path, bytes: &[u8]) -> Result<Legacy> {
     let mut c = Cursor {
         path,

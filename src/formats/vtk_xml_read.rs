@@ -87,6 +87,10 @@ impl<'a> Document<'a> {
 
     /// Parses the XML part of `bytes` (everything before `<AppendedData>`, which may hold raw
     /// binary); `path` only names the file in messages.
+    #[allow(
+        clippy::too_many_lines,
+        reason = "a parser: one walk over the XML events, each element's branch beside the others"
+    )]
     pub fn parse(path: &'a Path, bytes: &'a [u8]) -> Result<Self> {
         let bad = |m: String| Error::parse(path, 0, m);
         let appended_at = find(bytes, b"<AppendedData");

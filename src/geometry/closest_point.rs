@@ -172,6 +172,149 @@ pub(super) fn box_dist2<const D: usize>(p: &Point<D>, lo: &Point<D>, hi: &Point<
     d2
 }
 
+/// The bounding-volume hierarchy over the facets: nodes (root first) and the facet order its
+/// leaves' ranges index. Each node's box holds its facets (padded by a hair so box tests stay
+/// conservative under rounding); a node splits at the median centroid of its longest extent.
+fn build_hierarchy<const D: usize>(
+    points: &[Point<D>],
+    facets: &[[usize; D]],
+) -> (Vec<BvhNode<D>>, Vec<u32>) {
+    let centroids: Vec<Point<D>> = facets
+        .iter()
+        .map(|f| {
+            let c = f.iter().fold([0.0; D], |acc, &i| add(acc, points[i]));
+            scale(c, 1.0 / D as f64)
+        })
+        .collect();
+    let mut order: Vec<u32> = (0..facets.len() as u32).collect();
+    let mut nodes = Vec::with_capacity(2 * facets.len() / LEAF_FACETS + 2);
+    nodes.push(BvhNode {
+        lo: [0.0; D],
+        hi: [0.0; D],
+        child: 0,
+        start: 0,
+        count: facets.len() as u32,
+    });
+    let mut stack = vec![0usize];
+    while let Some(ni) = stack.pop() {
+        let (start, count) = (nodes[ni].start as usize, nodes[ni].count as usize);
+        let range = &mut order[start..start + count];
+        let ([lo, hi], [clo, chi]) = node_bounds(points, facets, &centroids, range);
+        // A hair of padding keeps the box tests conservative under rounding.
+        let pad = 1e-9 * (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max) + 1e-300;
+        nodes[ni].lo = lo.map(|v| v - pad);
+        nodes[ni].hi = hi.map(|v| v + pad);
+        if count <= LEAF_FACETS {
+            continue;
+        }
+        let axis = (0..D)
+            .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
+            .unwrap_or(0);
+        let half = count / 2;
+        range.select_nth_unstable_by(half, |&a, &b| {
+            centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+        });
+        let child = nodes.len();
+        nodes[ni].child = child as u32;
+        for (s, c) in [(start, half), (start + half, count - half)] {
+            nodes.push(BvhNode {
+                lo: [0.0; D],
+                hi: [0.0; D],
+                child: 0,
+                start: s as u32,
+                count: c as u32,
+            });
+        }
+        stack.push(child);
+        stack.push(child + 1);
+    }
+    (nodes, order)
+}
+
+/// The box of the facets in `range` and the box of their centroids.
+fn node_bounds<const D: usize>(
+    points: &[Point<D>],
+    facets: &[[usize; D]],
+    centroids: &[Point<D>],
+    range: &[u32],
+) -> ([Point<D>; 2], [Point<D>; 2]) {
+    let mut lo = [f64::INFINITY; D];
+    let mut hi = [f64::NEG_INFINITY; D];
+    let mut clo = [f64::INFINITY; D];
+    let mut chi = [f64::NEG_INFINITY; D];
+    for &fi in range {
+        for &v in &facets[fi as usize] {
+            for d in 0..D {
+                lo[d] = lo[d].min(points[v][d]);
+                hi[d] = hi[d].max(points[v][d]);
+            }
+        }
+        let c = centroids[fi as usize];
+        for d in 0..D {
+            clo[d] = clo[d].min(c[d]);
+            chi[d] = chi[d].max(c[d]);
+        }
+    }
+    ([lo, hi], [clo, chi])
+}
+
+/// Each node's parent and each facet slot's leaf, for refitting the boxes bottom-up.
+fn hierarchy_links<const D: usize>(nodes: &[BvhNode<D>], n_facets: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut parent = vec![0u32; nodes.len()];
+    let mut leaf_of = vec![0u32; n_facets];
+    for (ni, node) in nodes.iter().enumerate() {
+        if node.child == 0 {
+            let s = node.start as usize;
+            leaf_of[s..s + node.count as usize].fill(ni as u32);
+        } else {
+            parent[node.child as usize] = ni as u32;
+            parent[node.child as usize + 1] = ni as u32;
+        }
+    }
+    (parent, leaf_of)
+}
+
+/// The facets' corners renumbered in hierarchy order (a compact, cache-friendly copy of the
+/// points the facets use).
+struct CornerSlots<const D: usize> {
+    /// Each slot's (facet in hierarchy order) corners, as corner numbers.
+    slots: Vec<[u32; D]>,
+    /// Each corner's point.
+    point: Vec<u32>,
+    /// Each point's corner (`u32::MAX` for a point no facet uses).
+    of: Vec<u32>,
+    /// Each facet's slot.
+    slot_of: Vec<u32>,
+}
+
+impl<const D: usize> CornerSlots<D> {
+    fn of(points: &[Point<D>], facets: &[[usize; D]], order: &[u32]) -> Self {
+        let mut of = vec![u32::MAX; points.len()];
+        let mut point = Vec::new();
+        let mut slot_of = vec![0u32; facets.len()];
+        let slots = order
+            .iter()
+            .enumerate()
+            .map(|(slot, &fi)| {
+                slot_of[fi as usize] = slot as u32;
+                facets[fi as usize].map(|v| {
+                    if of[v] == u32::MAX {
+                        of[v] = point.len() as u32;
+                        point.push(v as u32);
+                    }
+                    of[v]
+                })
+            })
+            .collect();
+        CornerSlots {
+            slots,
+            point,
+            of,
+            slot_of,
+        }
+    }
+}
+
 impl<const D: usize> ClosestPointIndex<D> {
     /// Builds the index. The shape must have at least one facet.
     #[track_caller]
@@ -180,99 +323,9 @@ impl<const D: usize> ClosestPointIndex<D> {
             !facets.is_empty(),
             "ClosestPointIndex needs at least one facet"
         );
-        let centroids: Vec<Point<D>> = facets
-            .iter()
-            .map(|f| {
-                let c = f.iter().fold([0.0; D], |acc, &i| add(acc, points[i]));
-                scale(c, 1.0 / D as f64)
-            })
-            .collect();
-        let mut order: Vec<u32> = (0..facets.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * facets.len() / LEAF_FACETS + 2);
-        nodes.push(BvhNode {
-            lo: [0.0; D],
-            hi: [0.0; D],
-            child: 0,
-            start: 0,
-            count: facets.len() as u32,
-        });
-        let mut stack = vec![0usize];
-        while let Some(ni) = stack.pop() {
-            let (start, count) = (nodes[ni].start as usize, nodes[ni].count as usize);
-            let range = &mut order[start..start + count];
-            let mut lo = [f64::INFINITY; D];
-            let mut hi = [f64::NEG_INFINITY; D];
-            let mut clo = [f64::INFINITY; D];
-            let mut chi = [f64::NEG_INFINITY; D];
-            for &fi in range.iter() {
-                for &v in &facets[fi as usize] {
-                    for d in 0..D {
-                        lo[d] = lo[d].min(points[v][d]);
-                        hi[d] = hi[d].max(points[v][d]);
-                    }
-                }
-                let c = centroids[fi as usize];
-                for d in 0..D {
-                    clo[d] = clo[d].min(c[d]);
-                    chi[d] = chi[d].max(c[d]);
-                }
-            }
-            // A hair of padding keeps the box tests conservative under rounding.
-            let pad = 1e-9 * (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max) + 1e-300;
-            nodes[ni].lo = lo.map(|v| v - pad);
-            nodes[ni].hi = hi.map(|v| v + pad);
-            if count <= LEAF_FACETS {
-                continue;
-            }
-            let axis = (0..D)
-                .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
-                .unwrap_or(0);
-            let half = count / 2;
-            range.select_nth_unstable_by(half, |&a, &b| {
-                centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
-            });
-            let child = nodes.len();
-            nodes[ni].child = child as u32;
-            for (s, c) in [(start, half), (start + half, count - half)] {
-                nodes.push(BvhNode {
-                    lo: [0.0; D],
-                    hi: [0.0; D],
-                    child: 0,
-                    start: s as u32,
-                    count: c as u32,
-                });
-            }
-            stack.push(child);
-            stack.push(child + 1);
-        }
-        let mut parent = vec![0u32; nodes.len()];
-        let mut leaf_of = vec![0u32; facets.len()];
-        for (ni, node) in nodes.iter().enumerate() {
-            if node.child == 0 {
-                let s = node.start as usize;
-                leaf_of[s..s + node.count as usize].fill(ni as u32);
-            } else {
-                parent[node.child as usize] = ni as u32;
-                parent[node.child as usize + 1] = ni as u32;
-            }
-        }
-        let mut corner_of = vec![u32::MAX; points.len()];
-        let mut corner_point = Vec::new();
-        let mut slot_of = vec![0u32; facets.len()];
-        let slots: Vec<[u32; D]> = order
-            .iter()
-            .enumerate()
-            .map(|(slot, &fi)| {
-                slot_of[fi as usize] = slot as u32;
-                facets[fi as usize].map(|v| {
-                    if corner_of[v] == u32::MAX {
-                        corner_of[v] = corner_point.len() as u32;
-                        corner_point.push(v as u32);
-                    }
-                    corner_of[v]
-                })
-            })
-            .collect();
+        let (nodes, order) = build_hierarchy(points, facets);
+        let (parent, leaf_of) = hierarchy_links(&nodes, facets.len());
+        let corners = CornerSlots::of(points, facets, &order);
         let mut index = ClosestPointIndex {
             id: next_index_id(),
             drift: 0.0,
@@ -280,12 +333,12 @@ impl<const D: usize> ClosestPointIndex<D> {
             facets: facets.to_vec(),
             nodes,
             order,
-            slots,
-            corners: corner_point.iter().map(|&v| points[v as usize]).collect(),
-            corner_point,
+            slots: corners.slots,
+            corners: corners.point.iter().map(|&v| points[v as usize]).collect(),
+            corner_point: corners.point,
             corner_normals: Vec::new(),
-            corner_of,
-            slot_of,
+            corner_of: corners.of,
+            slot_of: corners.slot_of,
             parent,
             leaf_of,
         };

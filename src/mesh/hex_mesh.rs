@@ -122,8 +122,44 @@ fn hex_mesh_once(
     let (mut nodes, mut hexes, boundary) = cube_hexahedra(&keep, &grid);
 
     // 3. Pillow layer.
+    let on_surface = pillow(&mut nodes, &mut hexes, &boundary, &index, h);
+    let mut mesh = FeMesh {
+        nodes,
+        kind: ElementKind::Hex8,
+        connectivity: hexes,
+        sets: Default::default(),
+    };
+
+    // 4. Smoothing that never lowers the worst incident element.
+    smooth(&mut mesh, &on_surface, &index, params.smoothing_passes, h);
+    let q = super::quality::summarize(&super::quality::mesh_quality(&mesh));
+    if q.inverted_elements > 0 {
+        return Err(Error::Mesh(format!(
+            "{}: the hexahedral mesh has {} inverted elements at element size {}; try another size",
+            surface.name, q.inverted_elements, params.element_size
+        )));
+    }
+    let (dmax, dmean) = pillow_distance(&mesh, boundary.len(), &index);
+    Ok(HexMesh {
+        mesh,
+        boundary_distance_max: dmax,
+        boundary_distance_mean: dmean,
+    })
+}
+
+/// The pillow layer (step 3): each boundary face of the cubes gets a hexahedron out to the
+/// surface, its outer corners at the closest surface points of the grid nodes. (Casting along
+/// the staircase's normals crosses over in concave places and folds the pillow there.)
+/// Appends the nodes and hexahedra; returns which nodes lie on the surface.
+fn pillow(
+    nodes: &mut Vec<Point<3>>,
+    hexes: &mut Vec<usize>,
+    boundary: &[[usize; 4]],
+    index: &ClosestPointIndex<3>,
+    h: f64,
+) -> Vec<bool> {
     let mut normal_sum: HashMap<usize, Point<3>> = HashMap::new();
-    for f in &boundary {
+    for f in boundary {
         let nrm = normalize(cross(
             sub(nodes[f[1]], nodes[f[0]]),
             sub(nodes[f[3]], nodes[f[0]]),
@@ -133,8 +169,6 @@ fn hex_mesh_once(
             *e = add(*e, nrm);
         }
     }
-    // Outer partners at the closest surface points. (Casting along the staircase's normals
-    // crosses over in concave places and folds the pillow there.)
     let mut outer: HashMap<usize, usize> = HashMap::new();
     let mut bnodes: Vec<usize> = normal_sum.keys().copied().collect();
     bnodes.sort_unstable();
@@ -152,7 +186,7 @@ fn hex_mesh_once(
         nodes.push(q);
         outer.insert(v, nodes.len() - 1);
     }
-    for f in &boundary {
+    for f in boundary {
         hexes.extend_from_slice(&[
             f[0],
             f[1],
@@ -164,34 +198,19 @@ fn hex_mesh_once(
             outer[&f[3]],
         ]);
     }
-    let on_surface: Vec<bool> = {
-        let mut s = vec![false; nodes.len()];
-        for &o in outer.values() {
-            s[o] = true;
-        }
-        s
-    };
-    let mut mesh = FeMesh {
-        nodes,
-        kind: ElementKind::Hex8,
-        connectivity: hexes,
-        sets: Default::default(),
-    };
-
-    // 4. Smoothing that never lowers the worst incident element.
-    smooth(&mut mesh, &on_surface, &index, params.smoothing_passes, h);
-    let q = super::quality::summarize(&super::quality::mesh_quality(&mesh));
-    if q.inverted_elements > 0 {
-        return Err(Error::Mesh(format!(
-            "{}: the hexahedral mesh has {} inverted elements at element size {}; try another size",
-            surface.name, q.inverted_elements, params.element_size
-        )));
+    let mut on_surface = vec![false; nodes.len()];
+    for &o in outer.values() {
+        on_surface[o] = true;
     }
-    // Boundary distance: centres of the outer faces of the pillow hexahedra.
+    on_surface
+}
+
+/// The largest and mean distance to the surface of the centres of the outer faces of the
+/// pillow hexahedra (the mesh's last `pillows` elements).
+fn pillow_distance(mesh: &FeMesh<3>, pillows: usize, index: &ClosestPointIndex<3>) -> (f64, f64) {
     let mut dmax: f64 = 0.0;
     let mut dsum = 0.0;
-    let nb = boundary.len();
-    for e in mesh.num_elements() - nb..mesh.num_elements() {
+    for e in mesh.num_elements() - pillows..mesh.num_elements() {
         let el = mesh.element(e);
         let c = scale(
             add(
@@ -204,11 +223,7 @@ fn hex_mesh_once(
         dmax = dmax.max(d);
         dsum += d;
     }
-    Ok(HexMesh {
-        mesh,
-        boundary_distance_max: dmax,
-        boundary_distance_mean: dsum / nb.max(1) as f64,
-    })
+    (dmax, dsum / pillows.max(1) as f64)
 }
 
 /// The mesher's grid of cubes: `n` per axis, of edge `h`, from the corner `origin`.

@@ -169,9 +169,7 @@ pub fn repair_with_quality<const D: usize>(
     quality: &[ElementQuality],
 ) -> Result<(RepairReport, Vec<ElementQuality>)> {
     crate::clear_simd_upper_state();
-    let kind = mesh.kind;
-    let k = kind.nodes();
-    let bound = params.bound.unwrap_or_else(|| default_bound(kind));
+    let bound = params.bound.unwrap_or_else(|| default_bound(mesh.kind));
     let before = summarize(quality);
     let below = |q: &[ElementQuality]| q.iter().filter(|e| e.scaled_jacobian_min < bound).count();
     let mut report = RepairReport {
@@ -181,185 +179,18 @@ pub fn repair_with_quality<const D: usize>(
         bound,
         ..Default::default()
     };
-    let mut q: Vec<f64> = quality.iter().map(|e| e.scaled_jacobian_min).collect();
     if report.below_bound_before == 0 {
         report.inverted_after = before.inverted_elements;
         report.scaled_jacobian_min = before.scaled_jacobian_min;
         return Ok((report, quality.to_vec()));
     }
     let nn = mesh.nodes.len();
-    let ne = mesh.num_elements();
-    // Incidence and neighbours.
-    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nn];
-    for e in 0..ne {
-        for &n in mesh.element(e) {
-            incident[n].push(e);
-        }
-    }
-    let neighbours = |n: usize, conn: &[usize]| -> Vec<usize> {
-        let mut v: Vec<usize> = incident[n]
-            .iter()
-            .flat_map(|&e| conn[e * k..(e + 1) * k].iter().copied())
-            .filter(|&m| m != n)
-            .collect();
-        v.sort_unstable();
-        v.dedup();
-        v
-    };
-    let Boundary {
-        role,
-        distance_before,
-        median_edge,
-        own_index,
-    } = Boundary::of(mesh, surface, params);
-    report.median_edge = median_edge;
-    let conn = mesh.connectivity.clone();
+    let repairer = Repairer::new(mesh, surface, params, bound);
+    report.median_edge = repairer.boundary.median_edge;
     let original = mesh.nodes.clone();
+    let mut q: Vec<f64> = quality.iter().map(|e| e.scaled_jacobian_min).collect();
     let mut moved = vec![false; nn];
-    let mut ring = 1;
-    for sweep in 0..params.max_sweeps {
-        report.sweeps = sweep + 1;
-        let bad: Vec<usize> = (0..ne).filter(|&e| q[e] < bound).collect();
-        if bad.is_empty() {
-            break;
-        }
-        // Active nodes: those of the bad elements, widened by `ring - 1` rings.
-        let mut active: Vec<usize> = bad
-            .iter()
-            .flat_map(|&e| conn[e * k..(e + 1) * k].iter().copied())
-            .collect();
-        for _ in 1..ring {
-            let more: Vec<usize> = active.iter().flat_map(|&n| neighbours(n, &conn)).collect();
-            active.extend(more);
-        }
-        active.sort_unstable();
-        active.dedup();
-        // Worst first.
-        active.sort_by(|&a, &b| {
-            let wa = incident[a]
-                .iter()
-                .map(|&e| q[e])
-                .fold(f64::INFINITY, f64::min);
-            let wb = incident[b]
-                .iter()
-                .map(|&e| q[e])
-                .fold(f64::INFINITY, f64::min);
-            wa.total_cmp(&wb)
-        });
-        let worst_before = bad.iter().map(|&e| q[e]).fold(f64::INFINITY, f64::min);
-        let mut gained = false;
-        for &n in &active {
-            let x0 = mesh.nodes[n];
-            // The corners that move with node n, and the rest of its elements' corners.
-            let mut moving = Vec::new();
-            let mut fixed = (f64::INFINITY, 0.0, 0usize);
-            for &e in &incident[n] {
-                let el = &conn[e * k..(e + 1) * k];
-                for (c, frame) in kind.corner_frames().iter().enumerate() {
-                    // (A quadratic element's corner moves with the mid-edge nodes of its
-                    // frame's edges too.)
-                    if el[c] == n
-                        || frame.iter().any(|&m| {
-                            el[m] == n || kind.mid_node(c, m).is_some_and(|mid| el[mid] == n)
-                        })
-                    {
-                        moving.push((e, c));
-                    } else {
-                        let (j, sj) = corner(kind, el, &mesh.nodes, c);
-                        fixed.0 = f64::min(fixed.0, sj);
-                        fixed.1 += corner_penalty(kind, el, &mesh.nodes, c, j, sj, bound);
-                        fixed.2 += usize::from(j <= 0.0);
-                    }
-                }
-            }
-            let mut best = score(kind, &conn, &moving, &mesh.nodes, bound, fixed);
-            let mut bx = x0;
-            let place = |p: Point<D>| -> Point<D> {
-                match (role[n], surface) {
-                    (1, Some(s)) => s.closest(&p).point,
-                    (2, _) => own_index.closest(&p).point,
-                    _ => p,
-                }
-            };
-            let nb = neighbours(n, &conn);
-            // The first step: a third of the median distance to the neighbours (not the
-            // least: a node next to a collapsed edge must be able to move far).
-            let h0 = {
-                let mut d: Vec<f64> = nb
-                    .iter()
-                    .map(|&m| dist2(mesh.nodes[m], x0).sqrt())
-                    .collect();
-                d.sort_by(f64::total_cmp);
-                d.get(d.len() / 2)
-                    .copied()
-                    .unwrap_or(median_edge)
-                    .min(median_edge)
-                    * 0.3
-            };
-            // The centroid of the neighbours first (untangles folded stars).
-            let c: Point<D> = std::array::from_fn(|d| {
-                nb.iter().map(|&m| mesh.nodes[m][d]).sum::<f64>() / nb.len().max(1) as f64
-            });
-            let trial = |p: Point<D>,
-                         nodes: &mut [Point<D>],
-                         best: &mut (f64, f64, usize),
-                         bx: &mut Point<D>| {
-                let p = place(p);
-                nodes[n] = p;
-                let s = score(kind, &conn, &moving, nodes, bound, fixed);
-                if better(s, *best) {
-                    *best = s;
-                    *bx = p;
-                    true
-                } else {
-                    nodes[n] = *bx;
-                    false
-                }
-            };
-            trial(c, &mut mesh.nodes, &mut best, &mut bx);
-            let mut h = h0;
-            let mut trials = 0;
-            while h > 1e-2 * h0 && h > 0.0 && trials < MAX_TRIALS {
-                trials += 3usize.pow(D as u32) - 1;
-                let mut improved = false;
-                // The axes and the diagonals (3^D - 1 directions), normalized to length h.
-                for code in 0..3usize.pow(D as u32) {
-                    let dir: [f64; D] =
-                        std::array::from_fn(|d| (code / 3usize.pow(d as u32) % 3) as f64 - 1.0);
-                    let len = dir.iter().map(|v| v * v).sum::<f64>().sqrt();
-                    if len == 0.0 {
-                        continue;
-                    }
-                    let p: Point<D> = std::array::from_fn(|d| bx[d] + h * dir[d] / len);
-                    if trial(p, &mut mesh.nodes, &mut best, &mut bx) {
-                        improved = true;
-                    }
-                }
-                if !improved {
-                    h *= 0.5;
-                }
-            }
-            mesh.nodes[n] = bx;
-            if bx != x0 {
-                moved[n] = true;
-                gained = true;
-                for &e in &incident[n] {
-                    q[e] = element_quality_at(kind, &conn[e * k..(e + 1) * k], &mesh.nodes)
-                        .scaled_jacobian_min;
-                }
-            }
-        }
-        let worst_after = (0..ne)
-            .filter(|&e| q[e] < bound)
-            .map(|e| q[e])
-            .fold(f64::INFINITY, f64::min);
-        if !gained || worst_after <= worst_before + 1e-9 {
-            if ring >= 3 && !gained {
-                break;
-            }
-            ring = (ring + 1).min(3);
-        }
-    }
+    report.sweeps = repairer.sweeps(&mut mesh.nodes, &mut q, &mut moved, params.max_sweeps);
     let mut after = mesh_quality(mesh);
     let mut s = summarize(&after);
     // Never worse than before: the penalty descent may trade the worst element for many
@@ -377,12 +208,240 @@ pub fn repair_with_quality<const D: usize>(
     report.below_bound_after = below(&after);
     report.moved_nodes = moved.iter().filter(|m| **m).count();
     if let Some(surf) = surface {
+        let role = &repairer.boundary.role;
+        let distance_before = &repairer.boundary.distance_before;
         report.surface_distance_change = (0..nn)
             .filter(|&n| moved[n] && role[n] == 1)
             .map(|n| surf.closest(&mesh.nodes[n]).dist2.sqrt() - distance_before[n])
             .fold(0.0, f64::max);
     }
     Ok((report, after))
+}
+
+/// What the sweeps of a repair share: the mesh's connectivity, incidence and boundary, the
+/// subject's surface and the bound.
+struct Repairer<'a, const D: usize> {
+    kind: ElementKind,
+    conn: Vec<usize>,
+    /// Each node's elements.
+    incident: Vec<Vec<usize>>,
+    boundary: Boundary<D>,
+    surface: Option<&'a ClosestPointIndex<D>>,
+    bound: f64,
+}
+
+impl<'a, const D: usize> Repairer<'a, D> {
+    fn new(
+        mesh: &FeMesh<D>,
+        surface: Option<&'a ClosestPointIndex<D>>,
+        params: &RepairParams,
+        bound: f64,
+    ) -> Self {
+        let mut incident: Vec<Vec<usize>> = vec![Vec::new(); mesh.nodes.len()];
+        for e in 0..mesh.num_elements() {
+            for &n in mesh.element(e) {
+                incident[n].push(e);
+            }
+        }
+        Repairer {
+            kind: mesh.kind,
+            conn: mesh.connectivity.clone(),
+            incident,
+            boundary: Boundary::of(mesh, surface, params),
+            surface,
+            bound,
+        }
+    }
+
+    fn element(&self, e: usize) -> &[usize] {
+        let k = self.kind.nodes();
+        &self.conn[e * k..(e + 1) * k]
+    }
+
+    /// The nodes sharing an element with `n`, sorted.
+    fn neighbours(&self, n: usize) -> Vec<usize> {
+        let mut v: Vec<usize> = self.incident[n]
+            .iter()
+            .flat_map(|&e| self.element(e).iter().copied())
+            .filter(|&m| m != n)
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// Runs up to `max_sweeps` sweeps over the nodes around the elements below the bound
+    /// (`q`: each element's scaled Jacobian, kept up to date), widening to two and three rings
+    /// of neighbours when a sweep gains nothing. Returns the sweeps run.
+    fn sweeps(
+        &self,
+        nodes: &mut [Point<D>],
+        q: &mut [f64],
+        moved: &mut [bool],
+        max_sweeps: usize,
+    ) -> usize {
+        let mut ring = 1;
+        let mut sweeps = 0;
+        for sweep in 0..max_sweeps {
+            sweeps = sweep + 1;
+            let bad: Vec<usize> = (0..q.len()).filter(|&e| q[e] < self.bound).collect();
+            if bad.is_empty() {
+                break;
+            }
+            let worst_before = bad.iter().map(|&e| q[e]).fold(f64::INFINITY, f64::min);
+            let mut gained = false;
+            for n in self.active_nodes(&bad, ring, q) {
+                let x0 = nodes[n];
+                let bx = self.relax(n, nodes);
+                nodes[n] = bx;
+                if bx != x0 {
+                    moved[n] = true;
+                    gained = true;
+                    for &e in &self.incident[n] {
+                        q[e] = element_quality_at(self.kind, self.element(e), nodes)
+                            .scaled_jacobian_min;
+                    }
+                }
+            }
+            let worst_after = q
+                .iter()
+                .filter(|&&v| v < self.bound)
+                .fold(f64::INFINITY, |a, &v| a.min(v));
+            if !gained || worst_after <= worst_before + 1e-9 {
+                if ring >= 3 && !gained {
+                    break;
+                }
+                ring = (ring + 1).min(3);
+            }
+        }
+        sweeps
+    }
+
+    /// The nodes of the `bad` elements widened by `ring - 1` rings of neighbours, those of the
+    /// worst elements first.
+    fn active_nodes(&self, bad: &[usize], ring: usize, q: &[f64]) -> Vec<usize> {
+        let mut active: Vec<usize> = bad
+            .iter()
+            .flat_map(|&e| self.element(e).iter().copied())
+            .collect();
+        for _ in 1..ring {
+            let more: Vec<usize> = active.iter().flat_map(|&n| self.neighbours(n)).collect();
+            active.extend(more);
+        }
+        active.sort_unstable();
+        active.dedup();
+        let worst = |n: usize| {
+            self.incident[n]
+                .iter()
+                .map(|&e| q[e])
+                .fold(f64::INFINITY, f64::min)
+        };
+        active.sort_by(|&a, &b| worst(a).total_cmp(&worst(b)));
+        active
+    }
+
+    /// The corners that move with node `n` (element and corner; a quadratic element's corner
+    /// moves with the mid-edge nodes of its frame's edges too), and the score of the rest of
+    /// its elements' corners.
+    fn corners_of(&self, n: usize, nodes: &[Point<D>]) -> (Vec<(usize, usize)>, (f64, f64, usize)) {
+        let kind = self.kind;
+        let mut moving = Vec::new();
+        let mut fixed = (f64::INFINITY, 0.0, 0usize);
+        for &e in &self.incident[n] {
+            let el = self.element(e);
+            for (c, frame) in kind.corner_frames().iter().enumerate() {
+                if el[c] == n
+                    || frame
+                        .iter()
+                        .any(|&m| el[m] == n || kind.mid_node(c, m).is_some_and(|mid| el[mid] == n))
+                {
+                    moving.push((e, c));
+                } else {
+                    let (j, sj) = corner(kind, el, nodes, c);
+                    fixed.0 = f64::min(fixed.0, sj);
+                    fixed.1 += corner_penalty(kind, el, nodes, c, j, sj, self.bound);
+                    fixed.2 += usize::from(j <= 0.0);
+                }
+            }
+        }
+        (moving, fixed)
+    }
+
+    /// Where node `n` goes: the best of the centroid of its neighbours (which untangles folded
+    /// stars) and a compass search over the axes and diagonals, each trial placed on the
+    /// surface it slides on. `nodes[n]` is left at the best position found.
+    fn relax(&self, n: usize, nodes: &mut [Point<D>]) -> Point<D> {
+        let x0 = nodes[n];
+        let (moving, fixed) = self.corners_of(n, nodes);
+        let score_at =
+            |nodes: &[Point<D>]| score(self.kind, &self.conn, &moving, nodes, self.bound, fixed);
+        let mut best = score_at(nodes);
+        let mut bx = x0;
+        let nb = self.neighbours(n);
+        let median_edge = self.boundary.median_edge;
+        // The first step: a third of the median distance to the neighbours (not the
+        // least: a node next to a collapsed edge must be able to move far).
+        let h0 = {
+            let mut d: Vec<f64> = nb.iter().map(|&m| dist2(nodes[m], x0).sqrt()).collect();
+            d.sort_by(f64::total_cmp);
+            d.get(d.len() / 2)
+                .copied()
+                .unwrap_or(median_edge)
+                .min(median_edge)
+                * 0.3
+        };
+        let mut trial = |p: Point<D>, nodes: &mut [Point<D>]| {
+            let p = self.place(n, p);
+            nodes[n] = p;
+            let s = score_at(nodes);
+            if better(s, best) {
+                best = s;
+                bx = p;
+                true
+            } else {
+                nodes[n] = bx;
+                false
+            }
+        };
+        let c: Point<D> = std::array::from_fn(|d| {
+            nb.iter().map(|&m| nodes[m][d]).sum::<f64>() / nb.len().max(1) as f64
+        });
+        trial(c, nodes);
+        let mut h = h0;
+        let mut trials = 0;
+        while h > 1e-2 * h0 && h > 0.0 && trials < MAX_TRIALS {
+            trials += 3usize.pow(D as u32) - 1;
+            let mut improved = false;
+            // The axes and the diagonals (3^D - 1 directions), normalized to length h.
+            for code in 0..3usize.pow(D as u32) {
+                let dir: [f64; D] =
+                    std::array::from_fn(|d| (code / 3usize.pow(d as u32) % 3) as f64 - 1.0);
+                let len = dir.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if len == 0.0 {
+                    continue;
+                }
+                // (nodes[n] is the best position so far.)
+                let p: Point<D> = std::array::from_fn(|d| nodes[n][d] + h * dir[d] / len);
+                if trial(p, nodes) {
+                    improved = true;
+                }
+            }
+            if !improved {
+                h *= 0.5;
+            }
+        }
+        nodes[n]
+    }
+
+    /// A trial position of node `n` on what it slides on: the subject's surface, the mesh's
+    /// own boundary, or nowhere (free).
+    fn place(&self, n: usize, p: Point<D>) -> Point<D> {
+        match (self.boundary.role[n], self.surface) {
+            (1, Some(s)) => s.closest(&p).point,
+            (2, _) => self.boundary.own_index.closest(&p).point,
+            _ => p,
+        }
+    }
 }
 
 /// The boundary of a mesh as the repair sees it.

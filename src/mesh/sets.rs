@@ -245,127 +245,179 @@ impl SetsConfig {
         mesh: &FeMesh<D>,
         landmarks: &[Point<D>],
     ) -> Result<MeshSets> {
-        let bad = |m: String| Error::parse(&self.source, 0, m);
-        let (lo, hi) = bounding_box(&mesh.nodes);
-        let ext: Point<D> = std::array::from_fn(|d| (hi[d] - lo[d]).max(f64::MIN_POSITIVE));
-        let largest = ext.iter().copied().fold(0.0, f64::max);
-        let frac = |p: &Point<D>| -> Point<D> { std::array::from_fn(|d| (p[d] - lo[d]) / ext[d]) };
-        let region = |s: &SetSpec, p: &Point<D>| -> Result<bool> {
-            let f = frac(p);
-            if let Some(b) = &s.bbox {
-                if b.min.len() != D || b.max.len() != D {
-                    return Err(bad(format!(
-                        "{}: box min and max need {D} values each",
-                        s.name
-                    )));
-                }
-                if (0..D).any(|d| f[d] < b.min[d] - 1e-12 || f[d] > b.max[d] + 1e-12) {
-                    return Ok(false);
-                }
-            }
-            if let Some(h) = &s.half_space {
-                let a = match h.axis.as_str() {
-                    "x" => 0,
-                    "y" => 1,
-                    "z" => 2,
-                    // The longest side of the bounding box.
-                    _ => (0..D).fold(0, |b, d| if ext[d] > ext[b] { d } else { b }),
-                };
-                if a >= D {
-                    return Err(bad(format!("{}: axis {} in a {D}D mesh", s.name, h.axis)));
-                }
-                if h.below.is_some_and(|b| f[a] > b + 1e-12)
-                    || h.above.is_some_and(|b| f[a] < b - 1e-12)
-                {
-                    return Ok(false);
-                }
-            }
-            if let (Some(l), Some(r)) = (s.landmark, s.radius) {
-                let q = landmarks.get(l).ok_or_else(|| {
-                    bad(format!(
-                        "{}: landmark {l}, but the atlas has {} landmarks",
-                        s.name,
-                        landmarks.len()
-                    ))
-                })?;
-                if dist2(*p, *q).sqrt() > r * largest {
-                    return Ok(false);
-                }
-            }
-            Ok(true)
-        };
+        let select = Selector::new(&self.source, mesh, landmarks);
         let faces = boundary_faces(mesh);
-        let facing = |s: &SetSpec, f: &BoundaryFace<D>| -> Result<bool> {
-            let Some(fc) = &s.facing else {
-                return Ok(true);
-            };
-            if fc.direction.len() != D {
-                return Err(bad(format!("{}: direction needs {D} values", s.name)));
-            }
-            let n: f64 = fc.direction.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if n == 0.0 || !n.is_finite() {
-                return Err(bad(format!("{}: direction is zero", s.name)));
-            }
-            let cos: f64 = (0..D).map(|d| f.normal[d] * fc.direction[d]).sum::<f64>() / n;
-            Ok(cos >= fc.angle.to_radians().cos() - 1e-12)
-        };
         let mut sets = MeshSets::default();
         for s in &self.node_set {
-            let mut members = Vec::new();
-            if s.facing.is_some() {
-                for f in &faces {
-                    if facing(s, f)? {
-                        for &n in f.nodes.iter().chain(&f.mids) {
-                            if region(s, &mesh.nodes[n])? {
-                                members.push(n);
-                            }
-                        }
-                    }
-                }
-                members.sort_unstable();
-                members.dedup();
-            } else {
-                for (i, p) in mesh.nodes.iter().enumerate() {
-                    if region(s, p)? {
-                        members.push(i);
-                    }
-                }
-            }
-            if members.is_empty() {
-                return Err(bad(format!("node_set {} selects no node", s.name)));
-            }
+            let members = select.nodes(s, mesh, &faces)?;
             sets.node_sets.insert(s.name.clone(), members);
         }
         for s in &self.element_set {
-            let mut members = Vec::new();
-            for e in 0..mesh.num_elements() {
-                let el = mesh.element(e);
-                let c: Point<D> = std::array::from_fn(|d| {
-                    el.iter().map(|&n| mesh.nodes[n][d]).sum::<f64>() / el.len() as f64
-                });
-                if region(s, &c)? {
-                    members.push(e);
-                }
-            }
-            if members.is_empty() {
-                return Err(bad(format!("element_set {} selects no element", s.name)));
-            }
+            let members = select.elements(s, mesh)?;
             sets.element_sets.insert(s.name.clone(), members);
         }
         for s in &self.surface {
-            let mut members = Vec::new();
-            for f in &faces {
-                if facing(s, f)? && region(s, &f.centroid)? {
-                    members.push((f.element, f.face));
-                }
-            }
-            if members.is_empty() {
-                return Err(bad(format!("surface {} selects no boundary face", s.name)));
-            }
-            members.sort_unstable();
+            let members = select.faces(s, &faces)?;
             sets.surfaces.insert(s.name.clone(), members);
         }
         Ok(sets)
+    }
+}
+
+/// The geometry a set's region is judged in: the mesh's bounding box (regions are fractions
+/// of it) and the atlas's landmarks.
+struct Selector<'a, const D: usize> {
+    source: &'a Path,
+    lo: Point<D>,
+    /// The box's extent (never zero).
+    ext: Point<D>,
+    /// Its longest side.
+    largest: f64,
+    landmarks: &'a [Point<D>],
+}
+
+impl<'a, const D: usize> Selector<'a, D> {
+    fn new(source: &'a Path, mesh: &FeMesh<D>, landmarks: &'a [Point<D>]) -> Self {
+        let (lo, hi) = bounding_box(&mesh.nodes);
+        let ext: Point<D> = std::array::from_fn(|d| (hi[d] - lo[d]).max(f64::MIN_POSITIVE));
+        Selector {
+            source,
+            lo,
+            ext,
+            largest: ext.iter().copied().fold(0.0, f64::max),
+            landmarks,
+        }
+    }
+
+    fn bad(&self, m: String) -> Error {
+        Error::parse(self.source, 0, m)
+    }
+
+    /// Whether `p` lies in the set's region (box, half space, ball around a landmark).
+    fn region(&self, s: &SetSpec, p: &Point<D>) -> Result<bool> {
+        let f: Point<D> = std::array::from_fn(|d| (p[d] - self.lo[d]) / self.ext[d]);
+        if let Some(b) = &s.bbox {
+            if b.min.len() != D || b.max.len() != D {
+                return Err(self.bad(format!("{}: box min and max need {D} values each", s.name)));
+            }
+            if (0..D).any(|d| f[d] < b.min[d] - 1e-12 || f[d] > b.max[d] + 1e-12) {
+                return Ok(false);
+            }
+        }
+        if let Some(h) = &s.half_space {
+            let ext = &self.ext;
+            let a = match h.axis.as_str() {
+                "x" => 0,
+                "y" => 1,
+                "z" => 2,
+                // The longest side of the bounding box.
+                _ => (0..D).fold(0, |b, d| if ext[d] > ext[b] { d } else { b }),
+            };
+            if a >= D {
+                return Err(self.bad(format!("{}: axis {} in a {D}D mesh", s.name, h.axis)));
+            }
+            if h.below.is_some_and(|b| f[a] > b + 1e-12)
+                || h.above.is_some_and(|b| f[a] < b - 1e-12)
+            {
+                return Ok(false);
+            }
+        }
+        if let (Some(l), Some(r)) = (s.landmark, s.radius) {
+            let q = self.landmarks.get(l).ok_or_else(|| {
+                self.bad(format!(
+                    "{}: landmark {l}, but the atlas has {} landmarks",
+                    s.name,
+                    self.landmarks.len()
+                ))
+            })?;
+            if dist2(*p, *q).sqrt() > r * self.largest {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// Whether the boundary face faces the set's direction (always, when it has none).
+    fn facing(&self, s: &SetSpec, f: &BoundaryFace<D>) -> Result<bool> {
+        let Some(fc) = &s.facing else {
+            return Ok(true);
+        };
+        if fc.direction.len() != D {
+            return Err(self.bad(format!("{}: direction needs {D} values", s.name)));
+        }
+        let n: f64 = fc.direction.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if n == 0.0 || !n.is_finite() {
+            return Err(self.bad(format!("{}: direction is zero", s.name)));
+        }
+        let cos: f64 = (0..D).map(|d| f.normal[d] * fc.direction[d]).sum::<f64>() / n;
+        Ok(cos >= fc.angle.to_radians().cos() - 1e-12)
+    }
+
+    /// A node set's nodes: in its region, and on a boundary face facing its way if it has a
+    /// direction.
+    fn nodes(
+        &self,
+        s: &SetSpec,
+        mesh: &FeMesh<D>,
+        faces: &[BoundaryFace<D>],
+    ) -> Result<Vec<usize>> {
+        let mut members = Vec::new();
+        if s.facing.is_some() {
+            for f in faces {
+                if self.facing(s, f)? {
+                    for &n in f.nodes.iter().chain(&f.mids) {
+                        if self.region(s, &mesh.nodes[n])? {
+                            members.push(n);
+                        }
+                    }
+                }
+            }
+            members.sort_unstable();
+            members.dedup();
+        } else {
+            for (i, p) in mesh.nodes.iter().enumerate() {
+                if self.region(s, p)? {
+                    members.push(i);
+                }
+            }
+        }
+        if members.is_empty() {
+            return Err(self.bad(format!("node_set {} selects no node", s.name)));
+        }
+        Ok(members)
+    }
+
+    /// An element set's elements: those whose centroid lies in its region.
+    fn elements(&self, s: &SetSpec, mesh: &FeMesh<D>) -> Result<Vec<usize>> {
+        let mut members = Vec::new();
+        for e in 0..mesh.num_elements() {
+            let el = mesh.element(e);
+            let c: Point<D> = std::array::from_fn(|d| {
+                el.iter().map(|&n| mesh.nodes[n][d]).sum::<f64>() / el.len() as f64
+            });
+            if self.region(s, &c)? {
+                members.push(e);
+            }
+        }
+        if members.is_empty() {
+            return Err(self.bad(format!("element_set {} selects no element", s.name)));
+        }
+        Ok(members)
+    }
+
+    /// A surface's boundary faces (element, local face): facing its way, centroid in its region.
+    fn faces(&self, s: &SetSpec, faces: &[BoundaryFace<D>]) -> Result<Vec<(usize, u8)>> {
+        let mut members = Vec::new();
+        for f in faces {
+            if self.facing(s, f)? && self.region(s, &f.centroid)? {
+                members.push((f.element, f.face));
+            }
+        }
+        if members.is_empty() {
+            return Err(self.bad(format!("surface {} selects no boundary face", s.name)));
+        }
+        members.sort_unstable();
+        Ok(members)
     }
 }
 

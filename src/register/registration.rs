@@ -151,24 +151,8 @@ impl<const D: usize> Registration<D> {
     }
 }
 
-/// Registers `template` to `target` (section 2.1, eq. 2): pre-alignment ([`pre_align`](super::pre_align)),
-/// then, with the template's points `p_j` fixed as the FFD's sources, for each `alpha` of the
-/// schedule `iterations_per_alpha` times: the closest point `c_j` on the target of every
-/// deformed point `f(p_j)`, and the control points minimizing
-/// `Σ_j ||f(p_j) - c_j||² + alpha E_smooth + beta Σ_l ||f(p_l) - q_l||²` (the last over the
-/// landmark pairs), a sparse linear least-squares problem (faer's sparse Cholesky). Last, the
-/// deformed template is projected onto the target along its normals.
-///
-/// Units: `E_smooth` is in lattice units (see [`crate::ffd`]) and positions in units of the
-/// lattice's extent, so `alpha` means the same for a unit hand and a femur in mm; `beta` is
-/// relative to the data term and scaled by `N / 2001` (the paper's hands had 2001 points).
-/// Pairs whose normals differ by more than 60° (facing sides) do not pull, as in the fit.
-pub fn register<const D: usize>(
-    template: &Shape<D>,
-    target: &Shape<D>,
-    target_index: &ClosestPointIndex<D>,
-    params: &RegisterParams,
-) -> Result<Registration<D>> {
+/// Refuses a pair that cannot be registered: invalid shapes, point sets, unpaired landmarks.
+fn check_pair<const D: usize>(template: &Shape<D>, target: &Shape<D>) -> Result<()> {
     template.validate()?;
     target.validate()?;
     if template.facets.is_empty() || target.facets.is_empty() {
@@ -189,7 +173,18 @@ pub fn register<const D: usize>(
             target.landmarks.len()
         )));
     }
-    let (sim, misfit) = pre_align_scored(template, target, target_index, params.starts)?;
+    Ok(())
+}
+
+/// The pre-alignment of `template` to `target` and its misfit, refused when it is not finite
+/// or its misfit exceeds [`MAX_ALIGNMENT_MISFIT`].
+fn aligned<const D: usize>(
+    template: &Shape<D>,
+    target: &Shape<D>,
+    target_index: &ClosestPointIndex<D>,
+    starts: usize,
+) -> Result<(Similarity<D>, f64)> {
+    let (sim, misfit) = pre_align_scored(template, target, target_index, starts)?;
     let finite = sim.s.is_finite()
         && sim.s > 0.0
         && sim
@@ -208,18 +203,85 @@ pub fn register<const D: usize>(
             100.0 * MAX_ALIGNMENT_MISFIT
         )));
     }
+    Ok((sim, misfit))
+}
+
+/// The data and landmark terms of eq. 2 folded per point: point `j`'s weight `1 + beta` when it
+/// is a template landmark (1 otherwise) and the target landmark it is drawn to.
+struct LandmarkPull<const D: usize> {
+    weight: Vec<f64>,
+    target: Vec<Option<Point<D>>>,
+}
+
+impl<const D: usize> LandmarkPull<D> {
+    fn of(template: &Shape<D>, target: &Shape<D>, beta: f64) -> Self {
+        let n = template.points.len();
+        let mut weight = vec![1.0; n];
+        let mut to: Vec<Option<Point<D>>> = vec![None; n];
+        if template.landmarks.len() == target.landmarks.len() && !target.landmarks.is_empty() {
+            for (&a, &b) in template.landmarks.iter().zip(&target.landmarks) {
+                weight[a] += beta;
+                to[a] = Some(target.points[b]);
+            }
+        }
+        LandmarkPull { weight, target: to }
+    }
+
+    /// Each deformed point's target: its closest point on the target (itself where the sides
+    /// face each other: facing sides do not pull), averaged with its landmark by the weights;
+    /// and the mean squared closest-point distance.
+    fn targets(
+        &self,
+        deformed: &[Point<D>],
+        facets: &[[usize; D]],
+        target_index: &ClosestPointIndex<D>,
+        memos: &mut [QueryMemo<D>],
+    ) -> (Vec<Point<D>>, f64) {
+        let normals = vertex_normals(deformed, facets);
+        let mut ms = 0.0;
+        let targets = (0..deformed.len())
+            .map(|j| {
+                let c = target_index.closest_memo(&deformed[j], &mut memos[j]);
+                ms += c.dist2;
+                let facing = target_index
+                    .normal_at(&c)
+                    .is_some_and(|nt| dot(nt, normals[j]) < 0.5);
+                let c_point = if facing { deformed[j] } else { c.point };
+                let w = self.weight[j];
+                match self.target[j] {
+                    Some(q) => std::array::from_fn(|d| (c_point[d] + (w - 1.0) * q[d]) / w),
+                    None => c_point,
+                }
+            })
+            .collect();
+        (targets, ms / deformed.len().max(1) as f64)
+    }
+}
+
+/// Registers `template` to `target` (section 2.1, eq. 2): pre-alignment ([`pre_align`](super::pre_align)),
+/// then, with the template's points `p_j` fixed as the FFD's sources, for each `alpha` of the
+/// schedule `iterations_per_alpha` times: the closest point `c_j` on the target of every
+/// deformed point `f(p_j)`, and the control points minimizing
+/// `Σ_j ||f(p_j) - c_j||² + alpha E_smooth + beta Σ_l ||f(p_l) - q_l||²` (the last over the
+/// landmark pairs), a sparse linear least-squares problem (faer's sparse Cholesky). Last, the
+/// deformed template is projected onto the target along its normals.
+///
+/// Units: `E_smooth` is in lattice units (see [`crate::ffd`]) and positions in units of the
+/// lattice's extent, so `alpha` means the same for a unit hand and a femur in mm; `beta` is
+/// relative to the data term and scaled by `N / 2001` (the paper's hands had 2001 points).
+/// Pairs whose normals differ by more than 60° (facing sides) do not pull, as in the fit.
+pub fn register<const D: usize>(
+    template: &Shape<D>,
+    target: &Shape<D>,
+    target_index: &ClosestPointIndex<D>,
+    params: &RegisterParams,
+) -> Result<Registration<D>> {
+    check_pair(template, target)?;
+    let (sim, misfit) = aligned(template, target, target_index, params.starts)?;
     let sources: Vec<Point<D>> = template.points.iter().map(|p| sim.apply(p)).collect();
     let n = sources.len();
-    let beta = params.beta * n as f64 / REFERENCE_POINTS;
-    let paired = template.landmarks.len() == target.landmarks.len() && !target.landmarks.is_empty();
-    let mut weight = vec![1.0; n];
-    let mut landmark_target: Vec<Option<Point<D>>> = vec![None; n];
-    if paired {
-        for (&a, &b) in template.landmarks.iter().zip(&target.landmarks) {
-            weight[a] += beta;
-            landmark_target[a] = Some(target.points[b]);
-        }
-    }
+    let pull = LandmarkPull::of(template, target, params.beta * n as f64 / REFERENCE_POINTS);
+    let weight = &pull.weight;
     let mut deformed = sources.clone();
     let mut history = Vec::new();
     let mut memos = vec![QueryMemo::default(); n];
@@ -235,30 +297,12 @@ pub fn register<const D: usize>(
         (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max)
     };
     let lattice = crate::ffd::Lattice::around_isotropic(&sources, params.grid, 0.1);
-    let mut system = FfdSystem::on_lattice(lattice, &sources, Some(&weight))?;
+    let mut system = FfdSystem::on_lattice(lattice, &sources, Some(weight))?;
     loop {
         let fit = system.factor(alpha)?;
         for _ in 0..params.iterations_per_alpha.max(1) {
-            let normals = vertex_normals(&deformed, &template.facets);
-            let mut ms = 0.0;
-            let targets: Vec<Point<D>> = (0..n)
-                .map(|j| {
-                    let c = target_index.closest_memo(&deformed[j], &mut memos[j]);
-                    ms += c.dist2;
-                    // Facing sides do not pull: the point is asked to stay.
-                    let facing = target_index
-                        .normal_at(&c)
-                        .is_some_and(|nt| dot(nt, normals[j]) < 0.5);
-                    let c_point = if facing { deformed[j] } else { c.point };
-                    match landmark_target[j] {
-                        Some(q) => std::array::from_fn(|d| {
-                            (c_point[d] + (weight[j] - 1.0) * q[d]) / weight[j]
-                        }),
-                        None => c_point,
-                    }
-                })
-                .collect();
-            history.push(ms / n as f64);
+            let (targets, ms) = pull.targets(&deformed, &template.facets, target_index, &mut memos);
+            history.push(ms);
             let f = fit.solve(&targets);
             let next: Vec<Point<D>> = sources.iter().map(|p| f.apply(p)).collect();
             let moved = next

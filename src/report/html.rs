@@ -482,6 +482,14 @@ pub fn write_instances(path: &Path, report: &super::InstancesReport, dir: &Path)
         }
         h.push_str("</tbody></table>\n");
     }
+    instances_table(&mut h, report, dir);
+    let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");
+    crate::formats::write_atomic(path, h.as_bytes())
+}
+
+/// The sortable table of `instances.html`: a row per instance (its weights of the first five
+/// modes, its mesh's quality and distance to its surface, its files and thumbnail).
+fn instances_table(h: &mut String, report: &super::InstancesReport, dir: &Path) {
     let shown = report.modes.min(5);
     h.push_str("<h2>Instances</h2>\n<table class=\"sortable\"><thead><tr><th>instance</th><th>Mahalanobis</th>");
     for k in 1..=shown {
@@ -530,8 +538,6 @@ pub fn write_instances(path: &Path, report: &super::InstancesReport, dir: &Path)
         h.push_str("</td></tr>\n");
     }
     h.push_str("</tbody></table>\n");
-    let _ = write!(h, "<script>{SCRIPT}</script>\n</body></html>\n");
-    crate::formats::write_atomic(path, h.as_bytes())
 }
 
 /// An inline SVG of the instances' weights of mode 1 (x) against mode 2 (y), in standard

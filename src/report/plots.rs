@@ -392,116 +392,172 @@ pub fn plot_subject(
         let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.55 + 1e-12;
         let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         // y up, as the mesh files show in ParaView or Gmsh.
-        let xr = c[0] - ext..c[0] + ext;
-        let yr = c[1] - ext..c[1] + ext;
-        let line = |pts: &[Point<2>]| -> Vec<(f64, f64)> {
-            let mut v: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
-            if closed && let Some(f) = v.first().copied() {
-                v.push(f);
-            }
-            v
+        let panel = Panel {
+            path,
+            text,
+            xr: c[0] - ext..c[0] + ext,
+            yr: c[1] - ext..c[1] + ext,
+            closed,
         };
-        {
-            let mut b = ChartBuilder::on(&left);
-            b.margin(10);
-            if text {
-                b.caption(format!("{title}: fit"), ("sans-serif", 18));
-            }
-            let mut ch = b
-                .build_cartesian_2d(xr.clone(), yr.clone())
-                .map_err(perr(path))?;
-            for (k, l) in locus.iter().enumerate() {
-                let s = ch
-                    .draw_series(LineSeries::new(line(l), GREEN.mix(0.5).stroke_width(1)))
-                    .map_err(perr(path))?;
-                if k == 0 {
-                    s.label("locus of the fit").legend(|(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], GREEN.mix(0.5).stroke_width(2))
-                    });
-                }
-            }
-            ch.draw_series(LineSeries::new(line(mean), RED.stroke_width(2)))
-                .map_err(perr(path))?
-                .label("mean")
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
-            ch.draw_series(LineSeries::new(line(subject), BLUE.stroke_width(2)))
-                .map_err(perr(path))?
-                .label("subject")
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
-            if text {
-                ch.configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK.mix(0.4))
-                    .label_font(("sans-serif", 14))
-                    .position(SeriesLabelPosition::UpperRight)
-                    .draw()
-                    .map_err(perr(path))?;
-            }
-        }
+        panel.fit(&left, title, mean, subject, locus)?;
         // The mesh panel, with its colour bar under it.
         let (right, bar) = right.split_vertically(500);
+        panel.jacobian_bar(&bar)?;
+        panel.mesh(&right, title, mesh, subject)
+    })
+}
+
+/// A picture's drawing area.
+type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// What the panels of a subject's figure share: the file (for messages), whether there is a
+/// font, the common axes, whether outlines close.
+struct Panel<'p> {
+    path: &'p Path,
+    text: bool,
+    xr: std::ops::Range<f64>,
+    yr: std::ops::Range<f64>,
+    closed: bool,
+}
+
+impl Panel<'_> {
+    /// An outline as plotters' points, closed when the outlines are.
+    fn line(&self, pts: &[Point<2>]) -> Vec<(f64, f64)> {
+        let mut v: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
+        if self.closed
+            && let Some(f) = v.first().copied()
         {
-            let (x0, x1) = (120i32, 430i32);
-            for x in x0..x1 {
-                let s = f64::from(x - x0) / f64::from(x1 - x0 - 1);
-                bar.draw(&Rectangle::new(
-                    [(x, 6), (x + 1, 18)],
-                    jacobian_color(s.max(1e-6)).filled(),
+            v.push(f);
+        }
+        v
+    }
+
+    /// The fit: the locus of the instance, the mean and the subject, with their legend.
+    fn fit(
+        &self,
+        area: &Area<'_>,
+        title: &str,
+        mean: &[Point<2>],
+        subject: &[Point<2>],
+        locus: &[Vec<Point<2>>],
+    ) -> Result<()> {
+        let path = self.path;
+        let mut b = ChartBuilder::on(area);
+        b.margin(10);
+        if self.text {
+            b.caption(format!("{title}: fit"), ("sans-serif", 18));
+        }
+        let mut ch = b
+            .build_cartesian_2d(self.xr.clone(), self.yr.clone())
+            .map_err(perr(path))?;
+        for (k, l) in locus.iter().enumerate() {
+            let s = ch
+                .draw_series(LineSeries::new(
+                    self.line(l),
+                    GREEN.mix(0.5).stroke_width(1),
                 ))
                 .map_err(perr(path))?;
-            }
-            if text {
-                let font = ("sans-serif", 13).into_font().color(&BLACK);
-                bar.draw(&Text::new(
-                    "scaled Jacobian: ≤ 0",
-                    (x0 - 118, 5),
-                    font.clone(),
-                ))
-                .map_err(perr(path))?;
-                bar.draw(&Text::new("0.5", ((x0 + x1) / 2 - 8, 21), font.clone()))
-                    .map_err(perr(path))?;
-                bar.draw(&Text::new("1", (x1 + 6, 5), font))
-                    .map_err(perr(path))?;
+            if k == 0 {
+                s.label("locus of the fit").legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], GREEN.mix(0.5).stroke_width(2))
+                });
             }
         }
-        {
-            let mut b = ChartBuilder::on(&right);
-            b.margin(10);
-            if text {
-                b.caption(
-                    format!("{title}: mesh (scaled Jacobian)"),
-                    ("sans-serif", 18),
-                );
-            }
-            let mut ch = b.build_cartesian_2d(xr, yr).map_err(perr(path))?;
-            let q = mesh_quality(mesh);
-            ch.draw_series((0..mesh.num_elements()).map(|e| {
-                let pts: Vec<(f64, f64)> = mesh
-                    .element(e)
-                    .iter()
-                    .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
-                    .collect();
-                Polygon::new(pts, jacobian_color(q[e].scaled_jacobian_min).filled())
-            }))
-            .map_err(perr(path))?;
-            ch.draw_series((0..mesh.num_elements()).map(|e| {
-                let mut pts: Vec<(f64, f64)> = mesh
-                    .element(e)
-                    .iter()
-                    .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
-                    .collect();
-                pts.push(pts[0]);
-                PathElement::new(pts, BLACK.mix(0.6).stroke_width(1))
-            }))
-            .map_err(perr(path))?;
-            ch.draw_series(LineSeries::new(
-                line(subject),
-                BLUE.mix(0.7).stroke_width(1),
+        ch.draw_series(LineSeries::new(self.line(mean), RED.stroke_width(2)))
+            .map_err(perr(path))?
+            .label("mean")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
+        ch.draw_series(LineSeries::new(self.line(subject), BLUE.stroke_width(2)))
+            .map_err(perr(path))?
+            .label("subject")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE.stroke_width(2)));
+        if self.text {
+            ch.configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK.mix(0.4))
+                .label_font(("sans-serif", 14))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(perr(path))?;
+        }
+        Ok(())
+    }
+
+    /// The scaled Jacobian's colour bar.
+    fn jacobian_bar(&self, bar: &Area<'_>) -> Result<()> {
+        let path = self.path;
+        let (x0, x1) = (120i32, 430i32);
+        for x in x0..x1 {
+            let s = f64::from(x - x0) / f64::from(x1 - x0 - 1);
+            bar.draw(&Rectangle::new(
+                [(x, 6), (x + 1, 18)],
+                jacobian_color(s.max(1e-6)).filled(),
             ))
             .map_err(perr(path))?;
         }
+        if self.text {
+            let font = ("sans-serif", 13).into_font().color(&BLACK);
+            bar.draw(&Text::new(
+                "scaled Jacobian: ≤ 0",
+                (x0 - 118, 5),
+                font.clone(),
+            ))
+            .map_err(perr(path))?;
+            bar.draw(&Text::new("0.5", ((x0 + x1) / 2 - 8, 21), font.clone()))
+                .map_err(perr(path))?;
+            bar.draw(&Text::new("1", (x1 + 6, 5), font))
+                .map_err(perr(path))?;
+        }
         Ok(())
-    })
+    }
+
+    /// The mesh, each element coloured by its scaled Jacobian, over the subject's outline.
+    fn mesh(
+        &self,
+        area: &Area<'_>,
+        title: &str,
+        mesh: &FeMesh<2>,
+        subject: &[Point<2>],
+    ) -> Result<()> {
+        let path = self.path;
+        let mut b = ChartBuilder::on(area);
+        b.margin(10);
+        if self.text {
+            b.caption(
+                format!("{title}: mesh (scaled Jacobian)"),
+                ("sans-serif", 18),
+            );
+        }
+        let mut ch = b
+            .build_cartesian_2d(self.xr.clone(), self.yr.clone())
+            .map_err(perr(path))?;
+        let q = mesh_quality(mesh);
+        let corners = |e: usize| -> Vec<(f64, f64)> {
+            mesh.element(e)
+                .iter()
+                .map(|&i| (mesh.nodes[i][0], mesh.nodes[i][1]))
+                .collect()
+        };
+        ch.draw_series((0..mesh.num_elements()).map(|e| {
+            Polygon::new(
+                corners(e),
+                jacobian_color(q[e].scaled_jacobian_min).filled(),
+            )
+        }))
+        .map_err(perr(path))?;
+        ch.draw_series((0..mesh.num_elements()).map(|e| {
+            let mut pts = corners(e);
+            pts.push(pts[0]);
+            PathElement::new(pts, BLACK.mix(0.6).stroke_width(1))
+        }))
+        .map_err(perr(path))?;
+        ch.draw_series(LineSeries::new(
+            self.line(subject),
+            BLUE.mix(0.7).stroke_width(1),
+        ))
+        .map_err(perr(path))?;
+        Ok(())
+    }
 }
 
 /// The mean shape and the instances at -2σ and +2σ along each of the first 3 modes (figs. 4
@@ -517,66 +573,7 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
         atlas.instance(&w)
     };
     if D == 3 {
-        use render::{Image, Legend, View, annotated, render, signed_color};
-        let to3 = |v: &[Point<D>]| -> Vec<Point<3>> {
-            v.iter().map(|p| std::array::from_fn(|d| p[d])).collect()
-        };
-        let tris: Vec<[usize; 3]> = atlas
-            .facets
-            .iter()
-            .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
-            .collect();
-        let mean_shape = atlas.mean_shape();
-        let normals = mean_shape.vertex_normals();
-        let mean = to3(&atlas.mean);
-        let view = View::fitting(&mean);
-        let (w, h) = (320, 240);
-        let mut tiles = Vec::new();
-        for m in 0..modes {
-            let shapes = [to3(&at(m, -2.0)), mean.clone(), to3(&at(m, 2.0))];
-            // Displacement from the mean along its outward normal, in the reference frame
-            // (the mean's largest side is 1).
-            let moved: Vec<Vec<f64>> = shapes
-                .iter()
-                .map(|s| {
-                    s.iter()
-                        .zip(&mean)
-                        .zip(&normals)
-                        .map(|((a, b), n)| {
-                            (0..3).map(|d| (a[d] - b[d]) * n[d.min(D - 1)]).sum::<f64>()
-                        })
-                        .collect()
-                })
-                .collect();
-            let max = moved
-                .iter()
-                .flatten()
-                .fold(0.0f64, |a, b| a.max(b.abs()))
-                .max(f64::MIN_POSITIVE);
-            let color = signed_color(max);
-            let legend = Legend {
-                color: &color,
-                lo: -max,
-                hi: max,
-                lo_label: format!("in {:.1} %", 100.0 * max),
-                hi_label: format!("out {:.1} %", 100.0 * max),
-            };
-            for (c, (s, d)) in shapes.iter().zip(&moved).enumerate() {
-                let title = match c {
-                    0 => format!("mode {}: -2σ", m + 1),
-                    1 => "mean; normal displacement, % of size".to_string(),
-                    _ => format!("mode {}: +2σ", m + 1),
-                };
-                let picture = render(s, &tris, Some(d), None, &color, &view, w, h);
-                tiles.push(annotated(&picture, &title, Some(&legend)));
-            }
-        }
-        let th = tiles.first().map_or(h, |t| t.height);
-        let mut img = Image::new(3 * w, modes * th);
-        for (k, t) in tiles.iter().enumerate() {
-            img.paste(t, (k % 3) * w, (k / 3) * th);
-        }
-        return crate::formats::write_atomic(path, &img.png()?);
+        return plot_modes_3d(path, atlas, modes, at);
     }
     let text = super::render::font_available();
     Canvas::new(360 * modes as u32, 380).draw(path, |root| {
@@ -630,6 +627,75 @@ pub fn plot_modes<const D: usize>(path: &Path, atlas: &crate::model::Atlas<D>) -
         }
         Ok(())
     })
+}
+
+/// [`plot_modes`] of a 3D atlas: a row per mode (-2σ, mean, +2σ), shaded renders coloured by
+/// the displacement along the mean's outward normal; `at(m, k)` the instance at `k` σ of
+/// mode `m`.
+fn plot_modes_3d<const D: usize>(
+    path: &Path,
+    atlas: &crate::model::Atlas<D>,
+    modes: usize,
+    at: impl Fn(usize, f64) -> Vec<Point<D>>,
+) -> Result<()> {
+    use render::{Image, Legend, View, annotated, render, signed_color};
+    let to3 = |v: &[Point<D>]| -> Vec<Point<3>> {
+        v.iter().map(|p| std::array::from_fn(|d| p[d])).collect()
+    };
+    let tris: Vec<[usize; 3]> = atlas
+        .facets
+        .iter()
+        .map(|f| std::array::from_fn(|k| f[k.min(D - 1)]))
+        .collect();
+    let mean_shape = atlas.mean_shape();
+    let normals = mean_shape.vertex_normals();
+    let mean = to3(&atlas.mean);
+    let view = View::fitting(&mean);
+    let (w, h) = (320, 240);
+    let mut tiles = Vec::new();
+    for m in 0..modes {
+        let shapes = [to3(&at(m, -2.0)), mean.clone(), to3(&at(m, 2.0))];
+        // Displacement from the mean along its outward normal, in the reference frame
+        // (the mean's largest side is 1).
+        let moved: Vec<Vec<f64>> = shapes
+            .iter()
+            .map(|s| {
+                s.iter()
+                    .zip(&mean)
+                    .zip(&normals)
+                    .map(|((a, b), n)| (0..3).map(|d| (a[d] - b[d]) * n[d.min(D - 1)]).sum::<f64>())
+                    .collect()
+            })
+            .collect();
+        let max = moved
+            .iter()
+            .flatten()
+            .fold(0.0f64, |a, b| a.max(b.abs()))
+            .max(f64::MIN_POSITIVE);
+        let color = signed_color(max);
+        let legend = Legend {
+            color: &color,
+            lo: -max,
+            hi: max,
+            lo_label: format!("in {:.1} %", 100.0 * max),
+            hi_label: format!("out {:.1} %", 100.0 * max),
+        };
+        for (c, (s, d)) in shapes.iter().zip(&moved).enumerate() {
+            let title = match c {
+                0 => format!("mode {}: -2σ", m + 1),
+                1 => "mean; normal displacement, % of size".to_string(),
+                _ => format!("mode {}: +2σ", m + 1),
+            };
+            let picture = render(s, &tris, Some(d), None, &color, &view, w, h);
+            tiles.push(annotated(&picture, &title, Some(&legend)));
+        }
+    }
+    let th = tiles.first().map_or(h, |t| t.height);
+    let mut img = Image::new(3 * w, modes * th);
+    for (k, t) in tiles.iter().enumerate() {
+        img.paste(t, (k % 3) * w, (k / 3) * th);
+    }
+    crate::formats::write_atomic(path, &img.png()?)
 }
 
 /// The paper's comparison (fig. 12/20): per subject (sorted by the SSM fit's value) the

@@ -1,6 +1,8 @@
 //! The `atlasmesh` command-line tool: one file per command, each parsing its arguments and
 //! calling the library's study layer ([`atlasmesh::study`]); progress is drawn here.
 
+#![warn(clippy::too_many_lines)]
+
 mod args;
 mod build;
 mod convert;

@@ -29,7 +29,7 @@ fn bench(c: &mut Criterion) {
             let paths: Vec<_> = (1..=30)
                 .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
                 .collect();
-            load_surfaces(&paths).expect("femur data")
+            load_surfaces(&paths, &Default::default()).expect("femur data")
         }
         None => {
             // 7322 vertices, about the femurs' 7313 (and above their landmark indices).

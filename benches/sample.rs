@@ -16,7 +16,7 @@ fn population() -> (Vec<atlasmesh::geometry::Shape<3>>, &'static str) {
             .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
             .collect();
         return (
-            atlasmesh::study::load_surfaces(&paths).expect("femur data"),
+            atlasmesh::study::load_surfaces(&paths, &Default::default()).expect("femur data"),
             "femurs",
         );
     }

@@ -74,7 +74,7 @@ fn femurs() -> Option<Vec<Shape<3>>> {
     let paths: Vec<_> = (1..=21)
         .map(|k| dir.join(format!("S{k:03}_Femur.ply")))
         .collect();
-    Some(atlasmesh::study::load_surfaces(&paths).expect("femur data"))
+    Some(atlasmesh::study::load_surfaces(&paths, &Default::default()).expect("femur data"))
 }
 
 /// (family, shapes) at each size, atlas and subject together; `femurs` as given.

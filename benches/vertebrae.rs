@@ -33,7 +33,7 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("vertebra_atlas_build_register_10_shapes", |b| {
         b.iter(|| {
-            let mut shapes = load_surfaces(&surfaces).expect("surfaces");
+            let mut shapes = load_surfaces(&surfaces, &Default::default()).expect("surfaces");
             attach_landmarks(&mut shapes, &landmarks).expect("landmarks");
             clean_shapes(&mut shapes, ISLAND_SHARE);
             let r = register_population(&shapes, Template::Nearest, &register, 0, &Silent)

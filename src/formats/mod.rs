@@ -20,6 +20,7 @@
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
 //! | `sets_file` | the sets file (TOML) |
 //! | `atlas_file` | the atlas file (safetensors) |
+//! | `image_file`, `image_data`, `nifti`, `nrrd`, `metaimage` | images (label maps, CT): the dispatch; what the readers share (decompression within the announced size); NIfTI-1/2, NRRD, MetaImage |
 //! | `input` | input files: regular files only, of bounded size |
 //! | `atomic` | output folders and atomic writes |
 
@@ -34,8 +35,13 @@ pub mod gmsh;
 mod gmsh_binary;
 mod gmsh_parsed;
 mod helpers;
+mod image_data;
+pub mod image_file;
 pub mod input;
 pub mod landmarks;
+pub mod metaimage;
+pub mod nifti;
+pub mod nrrd;
 pub mod obj;
 pub mod outline;
 pub mod outline_csv;
@@ -60,6 +66,7 @@ pub use fe_mesh::{
     MeshFormat, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh,
 };
 pub use gmsh::{parse_msh, read_msh};
+pub use image_file::{ImageFile, ImageFormat, is_image_file, read_image};
 pub(crate) use input::check_points;
 pub use input::{DEFAULT_MAX_POINTS, max_points, read_input, read_input_text};
 pub use outline::{parse_outlines, parse_outlines_with, read_outlines, read_outlines_with};

@@ -534,13 +534,36 @@ fn is_csv(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
 }
 
-/// Reads the triangle surfaces in `paths` (PLY, STL, OBJ), in the order given. Shapes in
-/// correspondence must share their vertex count and facets (checked when the atlas is built).
-pub fn load_surfaces(paths: &[PathBuf]) -> Result<Vec<Shape<3>>> {
+/// Reads the triangle surfaces in `paths` (PLY, STL, OBJ, VTP, VTK, or a label map's label
+/// by `labels`), in the order given. Shapes in correspondence must share their vertex count
+/// and facets (checked when the atlas is built).
+pub fn load_surfaces(paths: &[PathBuf], labels: &super::LabelReading) -> Result<Vec<Shape<3>>> {
+    Ok(load_surfaces_noted(paths, labels)?
+        .into_iter()
+        .map(|(s, _)| s)
+        .collect())
+}
+
+/// [`load_surfaces`] with what a user should know about each (a label map's islands dropped,
+/// cavities filled, cut by the image's border).
+pub fn load_surfaces_noted(
+    paths: &[PathBuf],
+    labels: &super::LabelReading,
+) -> Result<Vec<(Shape<3>, Vec<String>)>> {
     if paths.is_empty() {
         return Err(Error::Population("no input file given".into()));
     }
-    paths.par_iter().map(|p| read_surface_file(p)).collect()
+    paths
+        .par_iter()
+        .map(|p| {
+            if crate::formats::is_image_file(p) {
+                let s = super::read_label_surface(p, labels)?;
+                Ok((s.shape, s.warnings))
+            } else {
+                Ok((read_surface_file(p)?, Vec::new()))
+            }
+        })
+        .collect()
 }
 
 /// The triangle surface in `path` ([`crate::formats::read_surface`]); a CSV of 3D points is
@@ -567,6 +590,9 @@ pub fn is_surface_file(path: &Path) -> Result<bool> {
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
+    if crate::formats::is_image_file(path) {
+        return Ok(true);
+    }
     let v = match ext.as_str() {
         "ply" | "stl" | "obj" => return Ok(true),
         "csv" => return crate::formats::csv_holds_3d_points(path),

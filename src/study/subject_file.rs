@@ -15,6 +15,8 @@ pub struct SubjectReading {
     pub open: bool,
     /// The columns of CSV files, where their names are not the usual ones.
     pub columns: CsvColumns,
+    /// Which labels of a label map make the subject's shape.
+    pub labels: super::LabelReading,
 }
 
 /// A subject ready to fit: its shape, checked and cleaned, and what a user should know about
@@ -25,6 +27,9 @@ pub struct Subject<const D: usize> {
     pub shape: Shape<D>,
     /// Warnings about the input (floating components dropped, several remaining).
     pub warnings: Vec<String>,
+    /// The shape is a part (a label cut by its image's border): it is fitted as `--partial`
+    /// fits, whatever the run's parameters say.
+    pub partial: bool,
 }
 
 /// `shape` ready to fit: checked ([`Shape::validate`]) and its floating components under
@@ -40,12 +45,16 @@ pub fn prepare_subject<const D: usize>(shape: Shape<D>, origin: &Path) -> Result
     let report = clean_shapes(&mut one, ISLAND_SHARE);
     let [shape] = one;
     let warnings = report.into_iter().flat_map(|r| r.warnings).collect();
-    Ok(Subject { shape, warnings })
+    Ok(Subject {
+        shape,
+        warnings,
+        partial: false,
+    })
 }
 
 /// The subjects in the file `path` for an atlas of dimension `D`: a surface (PLY, STL, OBJ,
-/// VTK, VTP) in 3D, one or more outlines (CSV, text, VTK, VTP) in 2D, each prepared by
-/// [`prepare_subject`].
+/// VTK, VTP) or a label map's label in 3D, one or more outlines (CSV, text, VTK, VTP) in 2D,
+/// each prepared by [`prepare_subject`].
 ///
 /// # Errors
 /// [`Error::Population`] for a file of the other dimension (naming what it holds), the
@@ -54,6 +63,13 @@ pub fn read_subjects<const D: usize>(
     path: &Path,
     reading: &SubjectReading,
 ) -> Result<Vec<Subject<D>>> {
+    if D == 3 && crate::formats::is_image_file(path) {
+        let s = super::read_label_surface(path, &reading.labels)?;
+        let mut subject = prepare_subject(s.shape.into_dim(), path)?;
+        subject.warnings.splice(0..0, s.warnings);
+        subject.partial = s.partial;
+        return Ok(vec![subject]);
+    }
     let surface = is_surface_file(path)?;
     let shapes: Vec<Shape<D>> = match (D, surface) {
         (3, true) => vec![super::population::read_surface_file(path)?.into_dim()],

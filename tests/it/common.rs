@@ -52,7 +52,7 @@ pub fn femurs(data: &std::path::Path) -> Vec<atlasmesh::geometry::Shape<3>> {
             ))
         })
         .collect();
-    atlasmesh::study::load_surfaces(&paths).unwrap()
+    atlasmesh::study::load_surfaces(&paths, &Default::default()).unwrap()
 }
 
 pub use crate::raw_femurs::{FEMUR_LANDMARKS, raw_femurs};

@@ -35,7 +35,7 @@ fn vertebrae(test: &str) -> Option<Vertebrae> {
 
 /// The subjects as the tool measures them: read, islands dropped.
 fn subjects(v: &Vertebrae) -> Vec<Shape<3>> {
-    let mut s = atlasmesh::study::load_surfaces(&v.surfaces).unwrap();
+    let mut s = atlasmesh::study::load_surfaces(&v.surfaces, &Default::default()).unwrap();
     atlasmesh::study::clean_shapes(&mut s, atlasmesh::study::ISLAND_SHARE);
     s
 }

@@ -54,6 +54,8 @@ pub struct PopArgs {
     /// landmark, x, y), as ROLE=COLUMN pairs: `shape=specimen,point=lm,x=X,y=Y`.
     #[arg(long, value_name = "MAP")]
     pub columns: Option<atlasmesh::formats::CsvColumns>,
+    #[command(flatten)]
+    pub labels: LabelArgs,
     /// Resample every outline to N points along a smooth curve through its points.
     #[arg(long, value_name = "N", value_parser = count::<3, 1_000_000>)]
     pub resample: Option<usize>,
@@ -260,4 +262,27 @@ fn open_share(s: &str) -> Result<f64, String> {
         .ok()
         .filter(|x| *x > 0.0 && *x < 1.0)
         .ok_or_else(|| format!("{s:?}: a number between 0 and 1 (exclusive) expected"))
+}
+
+/// Which labels of label maps (NIfTI, NRRD, MetaImage) make the shapes.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct LabelArgs {
+    /// The label(s) of label-map inputs that make the shape: a number (31), several as one
+    /// shape (1,7: a bone with its lesions), or a name from --label-table or a .seg.nrrd's
+    /// segment names (vertebrae_L1).
+    #[arg(long, value_name = "LABEL")]
+    pub label: Option<atlasmesh::image::LabelChoice>,
+    /// Names of the labels: a CSV of `label,name` rows (e.g. TotalSegmentator's classes).
+    #[arg(long, value_name = "CSV")]
+    pub label_table: Option<PathBuf>,
+}
+
+impl LabelArgs {
+    /// The library's label reading (the table read).
+    pub fn reading(&self) -> anyhow::Result<atlasmesh::study::LabelReading> {
+        Ok(atlasmesh::study::LabelReading::new(
+            self.label.clone(),
+            self.label_table.as_deref(),
+        )?)
+    }
 }

@@ -45,6 +45,8 @@ pub struct FitArgs {
     #[arg(long, value_name = "MAP")]
     columns: Option<atlasmesh::formats::CsvColumns>,
     #[command(flatten)]
+    labels: crate::args::LabelArgs,
+    #[command(flatten)]
     run: RunArgs,
     /// Output folder.
     #[arg(long)]
@@ -100,6 +102,7 @@ fn run_in<const D: usize>(a: &FitArgs, term: &Terminal) -> anyhow::Result<()> {
     let reading = study::SubjectReading {
         open: a.open,
         columns: a.columns.clone().unwrap_or_default(),
+        labels: a.labels.reading()?,
     };
     let r =
         pool.install(|| batch::fit_batch(&ctx, &files, &reading, &dataset_name(&files), term))?;

@@ -53,13 +53,26 @@ pub fn surfaces_and_params(
 ) -> anyhow::Result<Population<3>> {
     let mut params = run.params_for(3)?;
     apply_pop(&mut params, pop);
-    let mut shapes = if point_sets && !pop.register {
-        study::load_point_sets(&pop.shapes, &pop.columns.clone().unwrap_or_default())?
+    let (mut shapes, notes) = if point_sets && !pop.register {
+        let s = study::load_point_sets(&pop.shapes, &pop.columns.clone().unwrap_or_default())?;
+        let n = vec![Vec::new(); s.len()];
+        (s, n)
     } else {
-        study::load_surfaces(&pop.shapes)?
+        study::load_surfaces_noted(&pop.shapes, &pop.labels.reading()?)?
+            .into_iter()
+            .unzip()
     };
     let pairing = study::attach_landmarks(&mut shapes, &pop.landmarks)?;
-    let inputs = clean(pop, &mut shapes, &pairing, term)?;
+    let mut inputs = clean(pop, &mut shapes, &pairing, term)?;
+    // What the label maps' reading found, first.
+    for (i, n) in inputs.iter_mut().zip(notes) {
+        if !term.is_quiet() {
+            for w in &n {
+                eprintln!("warning: {}: {w}", i.name);
+            }
+        }
+        i.warnings.splice(0..0, n);
+    }
     let meshes = if pop.template_mesh.is_empty() {
         None
     } else {
@@ -118,7 +131,9 @@ fn template_file<const D: usize>(
 ) -> anyhow::Result<Shape<D>> {
     let files = [path.to_path_buf()];
     let mut t: Shape<D> = if D == 3 {
-        study::load_surfaces(&files)?.remove(0).into_dim()
+        study::load_surfaces(&files, &pop.labels.reading()?)?
+            .remove(0)
+            .into_dim()
     } else {
         let opts = PopulationOptions {
             closed: !pop.open,

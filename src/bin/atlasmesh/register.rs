@@ -19,6 +19,8 @@ pub struct RegisterArgs {
     /// Outlines in CSV/text files are open.
     #[arg(long)]
     open: bool,
+    #[command(flatten)]
+    labels: crate::args::LabelArgs,
     /// FFD control points along the template's longest axis (default: 20 in 2D, 16 in 3D).
     #[arg(long, value_name = "N", value_parser = crate::args::count::<4, 32>)]
     grid: Option<usize>,
@@ -31,7 +33,7 @@ pub struct RegisterArgs {
 pub fn run(a: RegisterArgs) -> anyhow::Result<()> {
     let files = [a.template.clone(), a.target.clone()];
     let r: PairRegistration = if study::inputs_are_surfaces(&files)? {
-        let shapes = study::load_surfaces(&files)?;
+        let shapes = study::load_surfaces(&files, &a.labels.reading()?)?;
         study::register_pair(shapes, &a.landmarks, a.grid, &a.out)?
     } else {
         let shapes = study::load_outlines_raw(

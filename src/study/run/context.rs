@@ -169,7 +169,13 @@ impl<const D: usize> RunContext<D> {
     /// # Errors
     /// Those of [`RunContext::fit_subject`].
     pub fn fit(&self, subject: &Subject<D>, params: &RunParams) -> Result<SubjectOutcome<D>> {
-        let mut outcome = self.fit_subject(&subject.shape, params)?;
+        let mut outcome = if subject.partial && !params.fit.partial {
+            let mut partial = params.clone();
+            partial.fit.partial = true;
+            self.fit_subject(&subject.shape, &partial)?
+        } else {
+            self.fit_subject(&subject.shape, params)?
+        };
         outcome
             .report
             .warnings

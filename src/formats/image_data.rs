@@ -1,0 +1,115 @@
+//! What the image readers share: the image as read, decompression within the size the
+//! header announces, and detached data files named beside their header.
+
+use crate::error::{Error, Result};
+use crate::image::{Image, LabelTable};
+use std::io::Read as _;
+use std::path::{Path, PathBuf};
+
+/// An image as read: the image (world RAS, mm) and the label names its file carries (3D
+/// Slicer's segment names in a `.seg.nrrd`; empty otherwise).
+#[derive(Clone, Debug)]
+pub struct ImageFile {
+    /// The image.
+    pub image: Image,
+    /// The labels' names the file carries.
+    pub labels: LabelTable,
+}
+
+/// The bytes a header announces, checked against the input limit before anything is
+/// allocated: `count` voxels of `size` bytes.
+pub(super) fn announced_bytes(path: &Path, dims: &[usize], size: usize) -> Result<usize> {
+    let cap = super::input::max_input_bytes();
+    let n = dims
+        .iter()
+        .try_fold(size, |a, &d| a.checked_mul(d))
+        .filter(|&n| n as u64 <= cap);
+    n.ok_or_else(|| {
+        Error::parse(
+            path,
+            0,
+            format!(
+                "the header announces {dims:?} voxels of {size} bytes, beyond the input limit of \
+                 {cap} bytes (set ATLASMESH_MAX_INPUT_BYTES to raise it)"
+            ),
+        )
+    })
+}
+
+/// How a data section is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Packing {
+    /// As is.
+    Raw,
+    /// A gzip stream (one or several members).
+    Gzip,
+    /// A zlib stream.
+    Zlib,
+}
+
+/// Exactly `want` bytes of voxel data from `data`, unpacked: never more is inflated (a
+/// decompression bomb stops at the size its header announces), and fewer is an error naming
+/// what is missing. Raw data may have more bytes than needed (the last `want` are taken, as
+/// NRRD and MetaImage readers do for a header they skip).
+pub(super) fn unpack(path: &Path, data: &[u8], packing: Packing, want: usize) -> Result<Vec<u8>> {
+    let truncated = |got: usize| {
+        Error::parse(
+            path,
+            0,
+            format!("truncated: the header announces {want} bytes of voxels, the file holds {got}"),
+        )
+    };
+    if packing == Packing::Raw {
+        if data.len() < want {
+            return Err(truncated(data.len()));
+        }
+        return Ok(data[data.len() - want..].to_vec());
+    }
+    let out = inflate(path, data, packing, want)?;
+    if out.len() < want {
+        return Err(truncated(out.len()));
+    }
+    Ok(out)
+}
+
+/// At most `limit` bytes of the compressed stream `data` (fewer where it ends).
+pub(super) fn inflate(path: &Path, data: &[u8], packing: Packing, limit: usize) -> Result<Vec<u8>> {
+    let mut out = Vec::with_capacity(limit.min(data.len().saturating_mul(8)).min(1 << 30));
+    let r: Box<dyn std::io::Read + '_> = match packing {
+        Packing::Raw => Box::new(data),
+        Packing::Gzip => Box::new(flate2::read::MultiGzDecoder::new(data)),
+        Packing::Zlib => Box::new(flate2::read::ZlibDecoder::new(data)),
+    };
+    r.take(limit as u64).read_to_end(&mut out).map_err(|e| {
+        Error::parse(
+            path,
+            0,
+            format!("the compressed data is corrupt or cut short: {e}"),
+        )
+    })?;
+    Ok(out)
+}
+
+/// A detached data file named in a header (`name`, as written there), beside the header:
+/// a plain file name, or a path relative to the header's folder that stays in it.
+pub(super) fn beside(header: &Path, name: &str) -> Result<PathBuf> {
+    let rel = Path::new(name.trim());
+    let plain = rel
+        .components()
+        .all(|c| matches!(c, std::path::Component::Normal(_)));
+    if name.trim().is_empty() || !plain {
+        return Err(Error::parse(
+            header,
+            0,
+            format!(
+                "the data file {name:?} must be named relative to the header's folder, inside it"
+            ),
+        ));
+    }
+    Ok(header.parent().unwrap_or(Path::new(".")).join(rel))
+}
+
+/// Whether the gzip magic starts `b`.
+pub(super) fn is_gzip(b: &[u8]) -> bool {
+    b.starts_with(&[0x1f, 0x8b])
+}

@@ -24,6 +24,7 @@
 
 mod closest_point;
 mod decimate;
+mod edge_collapse;
 mod normal_projection;
 mod normals;
 mod orientation;
@@ -38,12 +39,13 @@ mod thickness;
 mod topology;
 
 pub use closest_point::{ClosestPointIndex, LEAF_FACETS, SurfacePoint};
+pub use edge_collapse::collapse_short_edges;
 pub use normal_projection::{COMPATIBLE_NORMALS_COS, project_along_normals};
 pub use normals::{facet_normal, vertex_normals};
 pub use orientation::{is_closed_surface, prepare_surface, signed_volume};
 pub use point::{
-    MAX_COORDINATE, Point, add, bounding_box, centroid, centroid_size, coordinate_problem, dist2,
-    dot, in_3d, norm, normalize, same_dim, scale, sub,
+    MAX_COORDINATE, Point, add, bounding_box, centroid, centroid_size, coordinate_problem, cross,
+    dist2, dot, in_3d, norm, normalize, same_dim, scale, sub,
 };
 pub use principal_axes::{principal_axes_of, start_rotations};
 pub use query_memo::QueryMemo;

@@ -60,6 +60,15 @@ pub fn scale<const D: usize>(a: Point<D>, s: f64) -> Point<D> {
 pub fn dot<const D: usize>(a: Point<D>, b: Point<D>) -> f64 {
     (0..D).map(|d| a[d] * b[d]).sum()
 }
+/// `a × b` (3D).
+#[inline]
+pub fn cross(a: Point<3>, b: Point<3>) -> Point<3> {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
 /// `|a|`.
 #[inline]
 pub fn norm<const D: usize>(a: Point<D>) -> f64 {

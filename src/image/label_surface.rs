@@ -10,7 +10,7 @@
 //! out right.
 
 use super::{Image, LabelMask};
-use crate::geometry::{Point, Shape};
+use crate::geometry::{Point, Shape, collapse_short_edges};
 use std::collections::HashMap;
 
 /// A label's surface and what was found on the way.
@@ -27,6 +27,9 @@ pub struct LabelSurface {
     /// What a user should know (islands dropped, cavities filled, cut by the border).
     pub warnings: Vec<String>,
 }
+
+/// Edges shorter than this (voxels, index frame) are collapsed after the extraction.
+const COLLAPSE_BELOW: f64 = 0.8;
 
 /// Smoothing iterations (each a λ and a μ step).
 const SMOOTHING_ITERATIONS: usize = 12;
@@ -75,7 +78,13 @@ pub fn label_surface(image: &Image, mask: &LabelMask, name: &str) -> LabelSurfac
             cut_at.join(", ")
         ));
     }
-    let Tessellation { points, facets, .. } = verts;
+    let Tessellation {
+        mut points,
+        mut facets,
+        ..
+    } = verts;
+    // Marching tetrahedra's many small triangles: edges under COLLAPSE_BELOW voxels go.
+    collapse_short_edges(&mut points, &mut facets, COLLAPSE_BELOW);
     let (points, facets) = compact(points, facets);
     let smoothed = smooth_within_half_voxel(&points, &facets);
     let world: Vec<Point<3>> = smoothed
@@ -164,11 +173,7 @@ impl Tessellation {
         let [a, b, c] = t.map(|i| self.points[i]);
         let u: Point<3> = std::array::from_fn(|k| b[k] - a[k]);
         let v: Point<3> = std::array::from_fn(|k| c[k] - a[k]);
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
+        let n = crate::geometry::cross(u, v);
         if crate::geometry::dot(n, outward) < 0.0 {
             t.swap(1, 2);
         }

@@ -25,7 +25,7 @@ use super::quality::{edge_ratio, element_quality_at};
 use super::{ElementKind, FeMesh};
 use crate::error::{Error, Result};
 use crate::geometry::{
-    ClosestPointIndex, Point, Shape, add, bounding_box, dot, normalize, scale, sub,
+    ClosestPointIndex, Point, Shape, add, bounding_box, cross, dot, normalize, scale, sub,
 };
 use std::collections::HashMap;
 
@@ -483,14 +483,6 @@ fn cube_hexahedra(keep: &[bool], g: &Grid) -> (Vec<Point<3>>, Vec<usize>, Vec<[u
         }
     }
     (nodes, hexes, boundary)
-}
-
-fn cross(a: Point<3>, b: Point<3>) -> Point<3> {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 /// Face-connected groups among the (up to 8) present cubes around a grid vertex; cube `b` is

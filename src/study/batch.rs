@@ -346,9 +346,7 @@ pub fn merge_reports(paths: &[PathBuf]) -> Result<Report> {
     super::run::merge(paths)
 }
 
-/// A file's stem: the name of its subject.
+/// A file's stem: the name of its subject (`.nii.gz` and `.seg.nrrd` whole).
 fn stem(p: &Path) -> String {
-    p.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
+    super::label_map::shape_name(p)
 }

@@ -104,8 +104,9 @@ pub fn read_label_surface(path: &Path, reading: &LabelReading) -> Result<LabelSu
     Ok(surface)
 }
 
-/// The shape's name: the file's name without its image extension (`.nii.gz` whole).
-fn shape_name(path: &Path) -> String {
+/// The shape's name: the file's name without its extension (an image's `.nii.gz` and
+/// `.seg.nrrd` whole).
+pub(crate) fn shape_name(path: &Path) -> String {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

@@ -17,6 +17,7 @@ mod hostile_inputs;
 mod hostile_outputs;
 mod html;
 mod instances;
+mod label_maps;
 mod model_only;
 mod posterior;
 mod register;

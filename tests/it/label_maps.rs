@@ -1,0 +1,468 @@
+//! Label maps in: the 10 VerSe L1 vertebrae as NIfTI (RAS), NRRD and MetaImage (LPS) label
+//! maps on oblique grids, written by nibabel and SimpleITK, whose true boundaries are the
+//! source surfaces; TotalSegmentator's L1 fitted with an atlas of the VerSe vertebrae; and the
+//! ways label maps go wrong.
+
+use crate::common;
+use atlasmesh::geometry::{ClosestPointIndex, Point, Shape};
+use atlasmesh::study::{LabelReading, read_label_surface};
+use std::path::{Path, PathBuf};
+
+fn label_maps(data: &Path) -> Vec<PathBuf> {
+    let dir = data.join("verse-L1-labelmaps-3d");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| atlasmesh::formats::is_image_file(p))
+        .collect();
+    v.sort();
+    assert_eq!(v.len(), 10, "10 label maps in {}", dir.display());
+    v
+}
+
+fn label(s: &str) -> LabelReading {
+    LabelReading {
+        choice: Some(s.parse().unwrap()),
+        ..Default::default()
+    }
+}
+
+/// The distances from every point of `a` to the surface `b`.
+fn distances(a: &Shape<3>, b: &Shape<3>) -> Vec<f64> {
+    let index = ClosestPointIndex::from_shape(b);
+    let mut d: Vec<f64> = a
+        .points
+        .iter()
+        .map(|p| index.closest(p).dist2.sqrt())
+        .collect();
+    d.sort_by(f64::total_cmp);
+    d
+}
+
+fn quantile(d: &[f64], q: f64) -> f64 {
+    d[((d.len() - 1) as f64 * q).round() as usize]
+}
+
+#[test]
+fn each_label_surface_lies_on_its_true_surface_in_every_format_and_frame() {
+    let Some(data) = common::data_dir("label surfaces") else {
+        return;
+    };
+    for map in label_maps(&data) {
+        let s = read_label_surface(&map, &label("20")).unwrap();
+        let name = s.shape.name.clone();
+        let truth = atlasmesh::formats::read_surface(
+            &data.join(format!("verse-L1-vertebrae-3d/raw/{name}.ply")),
+        )
+        .unwrap();
+        let voxel = s.spacing.iter().copied().fold(f64::INFINITY, f64::min);
+        let out = distances(&s.shape, &truth);
+        let back = distances(&truth, &s.shape);
+        eprintln!(
+            "{name}: {} points; to the truth median {:.3} p95 {:.3} mm, back median {:.3} p95 {:.3} mm (voxel {voxel} mm)",
+            s.shape.points.len(),
+            quantile(&out, 0.5),
+            quantile(&out, 0.95),
+            quantile(&back, 0.5),
+            quantile(&back, 0.95)
+        );
+        for (what, d) in [("label to truth", &out), ("truth to label", &back)] {
+            assert!(
+                quantile(d, 0.5) <= 0.5 * voxel,
+                "{name} {what}: median {}",
+                quantile(d, 0.5)
+            );
+            assert!(
+                quantile(d, 0.95) <= voxel,
+                "{name} {what}: p95 {}",
+                quantile(d, 0.95)
+            );
+        }
+        assert!(!s.partial, "{name}: the vertebra is whole in its image");
+        // A closed surface, oriented outwards (positive volume).
+        assert!(atlasmesh::geometry::is_closed_surface(&s.shape), "{name}");
+        assert!(atlasmesh::geometry::signed_volume(&s.shape) > 0.0, "{name}");
+    }
+}
+
+#[test]
+fn labels_are_chosen_by_number_several_at_once_or_by_name() {
+    let Some(data) = common::data_dir("label choice") else {
+        return;
+    };
+    let map = data.join("verse-L1-labelmaps-3d/sub-verse013_segment_20.nrrd");
+    let l20 = read_label_surface(&map, &label("20")).unwrap();
+    let l19 = read_label_surface(&map, &label("19")).unwrap();
+    // The neighbours are other vertebrae, shrunk: smaller and elsewhere.
+    let centre = |s: &Shape<3>| atlasmesh::geometry::centroid(&s.points);
+    let gap = atlasmesh::geometry::dist2(centre(&l20.shape), centre(&l19.shape)).sqrt();
+    assert!(
+        gap > 10.0,
+        "label 19 is not label 20: centres {gap} mm apart"
+    );
+    assert!(l19.voxels < l20.voxels);
+    // Three labels that do not touch: the largest kept, the two others dropped as islands.
+    let all = read_label_surface(&map, &label("19,20,21")).unwrap();
+    assert_eq!(all.voxels, l20.voxels.max(l19.voxels));
+    assert!(
+        all.warnings
+            .iter()
+            .any(|w| w.contains("2 floating islands")),
+        "{:?}",
+        all.warnings
+    );
+    // By name from a table.
+    let dir = common::temp_dir("label-table");
+    let table = dir.join("names.csv");
+    std::fs::write(
+        &table,
+        "label,name\n19,vertebrae_T12\n20,vertebrae_L1\n21,vertebrae_L2\n",
+    )
+    .unwrap();
+    let by_name = LabelReading::new(Some("vertebrae_L1".parse().unwrap()), Some(&table)).unwrap();
+    let named = read_label_surface(&map, &by_name).unwrap();
+    assert_eq!(named.shape.points, l20.shape.points);
+    // An absent label lists those present, with their names.
+    let e = read_label_surface(&map, &label("7"))
+        .unwrap_err()
+        .to_string();
+    for want in [
+        "sub-verse013_segment_20.nrrd",
+        "label 7",
+        "19 (",
+        "20 (",
+        "21 (",
+    ] {
+        assert!(e.contains(want), "{e}");
+    }
+    let with_names = LabelReading::new(Some("7".parse().unwrap()), Some(&table)).unwrap();
+    let e = read_label_surface(&map, &with_names)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vertebrae_L1"), "{e}");
+    let unknown = LabelReading::new(Some("femur_left".parse().unwrap()), Some(&table)).unwrap();
+    let e = read_label_surface(&map, &unknown).unwrap_err().to_string();
+    assert!(
+        e.contains("femur_left") && e.contains("vertebrae_T12"),
+        "{e}"
+    );
+    // No label given: the message asks for one.
+    let e = read_label_surface(&map, &LabelReading::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--label"), "{e}");
+    // TotalSegmentator's T12 is cut by the CT's last slice: an open, partial surface.
+    let seg = data.join("totalseg-example-ct-3d/example_seg.nii.gz");
+    let t12 = read_label_surface(&seg, &label("32")).unwrap();
+    assert!(t12.partial);
+    assert!(!atlasmesh::geometry::is_closed_surface(&t12.shape));
+    assert!(
+        t12.warnings.iter().any(|w| w.contains("k = last")),
+        "{:?}",
+        t12.warnings
+    );
+    let l1 = read_label_surface(&seg, &label("31")).unwrap();
+    assert!(!l1.partial && atlasmesh::geometry::is_closed_surface(&l1.shape));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn convert_writes_the_label_surface_that_meshio_reads_back() {
+    let Some(data) = common::data_dir("convert label map") else {
+        return;
+    };
+    let dir = common::temp_dir("convert-label");
+    let map = data.join("verse-L1-labelmaps-3d/sub-verse016_segment_20.mha");
+    let mut files = Vec::new();
+    for ext in ["ply", "stl", "vtk"] {
+        let out = dir.join(format!("l1.{ext}"));
+        let o = common::atlasmesh(&[
+            "convert".into(),
+            map.display().to_string(),
+            out.display().to_string(),
+            "--label".into(),
+            "20".into(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        files.push(out);
+    }
+    let s = read_label_surface(&map, &label("20")).unwrap();
+    if let Some(read) = common::meshio_meshes(&files) {
+        for ((points, cells), f) in read.iter().zip(&files) {
+            assert_eq!(cells.len(), s.shape.facets.len(), "{}", f.display());
+            // STL repeats corners per triangle; the others keep the points.
+            if !f.display().to_string().ends_with(".stl") {
+                assert_eq!(points.len(), s.shape.points.len(), "{}", f.display());
+                for (p, q) in points.iter().zip(&s.shape.points) {
+                    assert!(
+                        (0..3).all(|k| (p[k] - q[k]).abs() < 1e-6),
+                        "{}",
+                        f.display()
+                    );
+                }
+            }
+        }
+    }
+    // --label on a mesh is refused, and a label map without --label.
+    let o = common::atlasmesh(&[
+        "convert".into(),
+        map.display().to_string(),
+        dir.join("x.ply").display().to_string(),
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--label"));
+    assert!(!dir.join("x.ply").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A NIfTI-1 file (single, little-endian) of `dims` voxels of NIfTI type `datatype` from
+/// `data`, voxel sizes `pixdim`, the sform its diagonal (code 1) when `sform`.
+fn nifti1(
+    dims: [i16; 3],
+    datatype: i16,
+    bitpix: i16,
+    pixdim: [f32; 3],
+    sform: bool,
+    data: &[u8],
+) -> Vec<u8> {
+    let mut h = vec![0u8; 352];
+    h[0..4].copy_from_slice(&348i32.to_le_bytes());
+    let dim = [3i16, dims[0], dims[1], dims[2], 1, 1, 1, 1];
+    for (k, d) in dim.iter().enumerate() {
+        h[40 + 2 * k..42 + 2 * k].copy_from_slice(&d.to_le_bytes());
+    }
+    h[70..72].copy_from_slice(&datatype.to_le_bytes());
+    h[72..74].copy_from_slice(&bitpix.to_le_bytes());
+    let pd = [1.0f32, pixdim[0], pixdim[1], pixdim[2]];
+    for (k, v) in pd.iter().enumerate() {
+        h[76 + 4 * k..80 + 4 * k].copy_from_slice(&v.to_le_bytes());
+    }
+    h[108..112].copy_from_slice(&352f32.to_le_bytes());
+    if sform {
+        h[254..256].copy_from_slice(&1i16.to_le_bytes());
+        for (r, v) in pixdim.iter().enumerate() {
+            let at = 280 + 16 * r + 4 * r;
+            h[at..at + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    }
+    h[344..348].copy_from_slice(b"n+1\0");
+    h.extend_from_slice(data);
+    h
+}
+
+/// A 6³ block of label 1 inside an 8³ image.
+fn block() -> Vec<u8> {
+    let mut v = vec![0u8; 512];
+    for z in 1..7 {
+        for y in 1..7 {
+            for x in 1..7 {
+                v[x + 8 * (y + 8 * z)] = 1;
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn bad_label_maps_are_refused_with_the_file_and_the_problem() {
+    let dir = common::temp_dir("bad-label-maps");
+    let gz = |b: &[u8]| {
+        use std::io::Write;
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        e.write_all(b).unwrap();
+        e.finish().unwrap()
+    };
+    let good = nifti1([8, 8, 8], 2, 8, [1.0, 1.0, 2.0], true, &block());
+    let mut floats = Vec::new();
+    for (k, v) in block().iter().enumerate() {
+        let f = if k == 100 { f32::NAN } else { f32::from(*v) };
+        floats.extend_from_slice(&f.to_le_bytes());
+    }
+    let mut cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        ("truncated.nii.gz", gz(&good)[..60].to_vec(), "cut short"),
+        ("short.nii", good[..600].to_vec(), "truncated"),
+        (
+            "huge.nii.gz",
+            gz(&nifti1(
+                [30000, 30000, 30000],
+                2,
+                8,
+                [1.0; 3],
+                true,
+                &block(),
+            )),
+            "input limit",
+        ),
+        (
+            "complex.nii",
+            nifti1([8, 8, 8], 32, 64, [1.0; 3], true, &[0u8; 4096]),
+            "datatype 32",
+        ),
+        (
+            "nan.nii",
+            nifti1([8, 8, 8], 16, 32, [1.0; 3], true, &floats),
+            "NaN",
+        ),
+        (
+            "flat.nii",
+            nifti1([8, 8, 8], 2, 8, [1.0, 0.0, 1.0], false, &block()),
+            "degenerate",
+        ),
+        (
+            "empty.nii",
+            nifti1([8, 8, 8], 2, 8, [1.0; 3], true, &[0u8; 512]),
+            "all 0",
+        ),
+        ("not.nii", b"hello, not an image".to_vec(), "not a NIfTI"),
+    ];
+    cases.push((
+        "bzip.nrrd",
+        b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 8 8 8\nencoding: bzip2\n\n".to_vec(),
+        "encoding \"bzip2\"",
+    ));
+    cases.push((
+        "away.mhd",
+        b"ObjectType = Image\nNDims = 3\nDimSize = 8 8 8\nElementType = MET_UCHAR\nElementDataFile = ../../etc/passwd\n".to_vec(),
+        "inside it",
+    ));
+    // The good one reads (the cases fail for their own reason).
+    std::fs::write(dir.join("good.nii.gz"), gz(&good)).unwrap();
+    let s = read_label_surface(&dir.join("good.nii.gz"), &label("1")).unwrap();
+    let (lo, hi) = atlasmesh::geometry::bounding_box(&s.shape.points);
+    // The block spans voxel centres 1..6: its boundary half a voxel beyond (x, y 1 mm; z 2 mm).
+    for (k, (want_lo, want_hi)) in [(0.5, 6.5), (0.5, 6.5), (1.0, 13.0)].iter().enumerate() {
+        assert!(
+            (lo[k] - want_lo).abs() <= 0.5 && (hi[k] - want_hi).abs() <= 0.5,
+            "{k}: {lo:?} {hi:?}"
+        );
+    }
+    for (name, bytes, want) in &cases {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let e = read_label_surface(&path, &label("1"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(name), "{name}: {e}");
+        assert!(e.contains(want), "{name}: {e}");
+        // The command line: a non-zero exit, the message, nothing written.
+        let out = dir.join(format!("{name}.ply"));
+        let o = common::atlasmesh(&[
+            "convert".into(),
+            path.display().to_string(),
+            out.display().to_string(),
+            "--label".into(),
+            "1".into(),
+        ]);
+        assert!(!o.status.success(), "{name}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains(name), "{name}");
+        assert!(!out.exists(), "{name}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The index of world point `p` (RAS) in `image`, rounded.
+fn voxel_of(image: &atlasmesh::image::Image, p: Point<3>) -> [i64; 3] {
+    let a = &image.affine;
+    let m = [
+        [a[0][0], a[0][1], a[0][2]],
+        [a[1][0], a[1][1], a[1][2]],
+        [a[2][0], a[2][1], a[2][2]],
+    ];
+    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    let q = [p[0] - a[0][3], p[1] - a[1][3], p[2] - a[2][3]];
+    // Cramer's rule.
+    let solve = |c: usize| {
+        let mut mm = m;
+        for r in 0..3 {
+            mm[r][c] = q[r];
+        }
+        (mm[0][0] * (mm[1][1] * mm[2][2] - mm[1][2] * mm[2][1])
+            - mm[0][1] * (mm[1][0] * mm[2][2] - mm[1][2] * mm[2][0])
+            + mm[0][2] * (mm[1][0] * mm[2][1] - mm[1][1] * mm[2][0]))
+            / det
+    };
+    std::array::from_fn(|c| solve(c).round() as i64)
+}
+
+#[test]
+fn totalsegmentators_l1_is_fitted_with_an_atlas_of_verse_vertebrae_in_the_cts_frame() {
+    let Some(data) = common::data_dir("TotalSegmentator L1") else {
+        return;
+    };
+    let dir = common::temp_dir("totalseg-l1");
+    let raw = data.join("verse-L1-vertebrae-3d/raw");
+    let mut shapes: Vec<String> = std::fs::read_dir(&raw)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ply"))
+        .map(|p| p.display().to_string())
+        .collect();
+    shapes.sort();
+    let atlas = dir.join("atlas.safetensors");
+    let mut args = vec!["build".to_string(), "--register".into(), "--shapes".into()];
+    args.extend(shapes);
+    args.extend(["--out".into(), atlas.display().to_string()]);
+    let o = common::atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ts = data.join("totalseg-example-ct-3d");
+    let seg = ts.join("example_seg.nii.gz");
+    let out = dir.join("fit");
+    let o = common::atlasmesh(&[
+        "fit".into(),
+        "--atlas".into(),
+        atlas.display().to_string(),
+        "--subjects".into(),
+        seg.display().to_string(),
+        "--label".into(),
+        "vertebrae_L1".into(),
+        "--label-table".into(),
+        ts.join("labels_total.csv").display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+    ]);
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stderr),
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let r: atlasmesh::report::Report =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let s = &r.subjects[0];
+    eprintln!(
+        "TotalSegmentator L1: mesh RMS {:.3} mm p95 {:.3} max {:.3}; success {}; {:?}",
+        s.mesh_rms_distance, s.mesh_p95_distance, s.mesh_max_distance, s.success, s.warnings
+    );
+    assert!(s.mesh_rms_distance <= 1.5, "{}", s.mesh_rms_distance);
+    assert!(s.success, "{:?}", s.failed_checks);
+    // The delivered mesh lies on the label in the CT's frame: every node inside label 31 or
+    // within one voxel of it.
+    let mesh: atlasmesh::mesh::FeMesh<3> =
+        atlasmesh::formats::read_fe_mesh(&out.join(&s.name).join(format!("{}_mesh.vtu", s.name)))
+            .unwrap();
+    let image = atlasmesh::formats::read_image(&seg).unwrap().image;
+    let [nx, ny, nz] = image.dims.map(|d| d as i64);
+    let is31 = |i: i64, j: i64, k: i64| {
+        (0..nx).contains(&i)
+            && (0..ny).contains(&j)
+            && (0..nz).contains(&k)
+            && image.value((i + nx * (j + ny * k)) as usize) == 31.0
+    };
+    let far = mesh
+        .nodes
+        .iter()
+        .filter(|p| {
+            let [i, j, k] = voxel_of(&image, **p);
+            !(-1..=1).any(|a| (-1..=1).any(|b| (-1..=1).any(|c| is31(i + a, j + b, k + c))))
+        })
+        .count();
+    assert_eq!(
+        far,
+        0,
+        "{far} of {} nodes more than a voxel from label 31",
+        mesh.nodes.len()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -13,9 +13,11 @@ from ._atlasmesh import (  # noqa: F401
     FitResult,
     InvalidMeshError,
     IoError,
+    LabelMap,
     Mesh,
     NotConvergedError,
     __version__,
+    read_label_surface,
     read_shapes,
 )
 
@@ -52,6 +54,8 @@ Mesh.to_meshio = to_meshio
 
 __all__ = [
     "Atlas",
+    "LabelMap",
+    "read_label_surface",
     "FitResult",
     "Mesh",
     "Error",

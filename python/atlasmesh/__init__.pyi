@@ -10,7 +10,19 @@ __version__: str
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
-ShapeLike = Union[str, PathLike, Tuple[npt.ArrayLike, npt.ArrayLike]]
+class LabelMap:
+    """A label map's label as a shape, accepted wherever a shape file is: the image path
+    (NIfTI, NRRD, MetaImage), the label (a number, several as "1,7", or a name of
+    label_table, a CSV of label,name rows, or of a .seg.nrrd's segments)."""
+
+    def __init__(
+        self,
+        path: Union[str, PathLike],
+        label: Union[int, str],
+        label_table: Optional[Union[str, PathLike]] = None,
+    ) -> None: ...
+
+ShapeLike = Union[str, PathLike, LabelMap, Tuple[npt.ArrayLike, npt.ArrayLike]]
 
 class Error(Exception):
     """Any atlasmesh error; the message names the file and the problem."""
@@ -134,6 +146,14 @@ class Atlas:
         alpha: float = 50.0,
         jobs: int = 0,
     ) -> List[Union[FitResult, Error]]: ...
+
+def read_label_surface(
+    path: Union[str, PathLike],
+    label: Union[int, str],
+    label_table: Optional[Union[str, PathLike]] = None,
+) -> Tuple[str, FloatArray, IntArray]:
+    """The surface of a label map's label as (name, points, facets), world RAS in mm; what a
+    user should know (islands dropped, cavities filled, cut by the border) as warnings."""
 
 def read_shapes(
     path: Union[str, PathLike], closed: bool = True, resample: Optional[int] = None

@@ -22,6 +22,8 @@ fn _atlasmesh(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<result::Mesh>()?;
     m.add_class::<result::FitResult>()?;
     m.add_function(wrap_pyfunction!(read::read_shapes, m)?)?;
+    m.add_function(wrap_pyfunction!(read::read_label_surface, m)?)?;
+    m.add_class::<read::LabelMap>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

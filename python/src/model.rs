@@ -58,6 +58,14 @@ pub struct Atlas {
 /// line reads it ([`atlasmesh::study::read_subjects`], [`atlasmesh::study::prepare_subject`]);
 /// a surface given as arrays is checked and oriented as a surface file is.
 fn subject_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Subject<D>> {
+    if let Ok(map) = obj.extract::<PyRef<'_, crate::read::LabelMap>>() {
+        let reading = atlasmesh::study::SubjectReading {
+            labels: map.reading()?,
+            ..Default::default()
+        };
+        let mut v = atlasmesh::study::read_subjects::<D>(&map.path, &reading).map_err(to_py)?;
+        return Ok(v.remove(0));
+    }
     if let Ok(path) = obj.extract::<PathBuf>() {
         let mut v =
             atlasmesh::study::read_subjects::<D>(&path, &Default::default()).map_err(to_py)?;
@@ -94,6 +102,9 @@ fn subject_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Subj
 
 /// The dimension of `(points, facets)` or a file.
 fn dimension_of(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    if obj.extract::<PyRef<'_, crate::read::LabelMap>>().is_ok() {
+        return Ok(3);
+    }
     if let Ok(path) = obj.extract::<PathBuf>() {
         return Ok(
             if atlasmesh::study::is_surface_file(&path).map_err(to_py)? {

@@ -199,3 +199,40 @@ def test_a_model_of_3d_points_from_a_csv(tmp_path):
     for register in (False, True):
         with pytest.raises(atlasmesh.Error, match="without facets"):
             atlasmesh.Atlas.build([str(f)], modes=3, register=register)
+
+
+def test_a_label_maps_label_is_read_as_a_surface_and_fitted_as_a_subject(data, femur_atlas):
+    """A VerSe label map's label: a closed surface on the label's boundary, warnings as Python
+    warnings, and a LabelMap taken wherever a shape file is."""
+    import warnings
+
+    maps = data / "verse-L1-labelmaps-3d"
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        name, points, facets = atlasmesh.read_label_surface(
+            maps / "sub-verse010_segment_20.nii.gz", 20
+        )
+    assert name == "sub-verse010_segment_20"
+    assert points.shape[1] == 3 and facets.shape[1] == 3 and len(facets) > 1000
+    assert any("islands" in str(w.message) for w in seen)
+    # Every edge shared by two triangles: closed.
+    edges = np.sort(np.concatenate([facets[:, [0, 1]], facets[:, [1, 2]], facets[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    assert (counts == 2).all()
+    # The same surface through a LabelMap and through a table's name.
+    table = data / "totalseg-example-ct-3d" / "labels_total.csv"
+    seg = data / "totalseg-example-ct-3d" / "example_seg.nii.gz"
+    _, p31, _ = atlasmesh.read_label_surface(seg, 31)
+    _, pname, _ = atlasmesh.read_label_surface(seg, "vertebrae_L1", label_table=table)
+    assert np.array_equal(p31, pname)
+    # Errors of the package's family, naming the file.
+    with pytest.raises(atlasmesh.Error, match="labels present"):
+        atlasmesh.read_label_surface(seg, 999)
+    with pytest.raises(atlasmesh.Error):
+        atlasmesh.LabelMap(seg, 3.5)
+    with pytest.raises(atlasmesh.Error, match="no label named"):
+        atlasmesh.read_label_surface(seg, "no_such_bone", label_table=table)
+    # A label map where a shape goes: the femur atlas fits it (a vertebra: a poor fit, but
+    # the subject is read, named and fitted in the image's frame).
+    r = femur_atlas.fit(atlasmesh.LabelMap(seg, "vertebrae_L1", label_table=table), mesh=False)
+    assert np.isfinite(r.weights).all()

@@ -6,7 +6,7 @@
 //! affine needs nalgebra; the header is a fixed layout of ~30 fields.
 //!
 //! The affine follows the standard's precedence (nifti1.h, "3 different methods"): the
-//! sform when `sform_code > 0`, else the qform (quaternion, `qfac` = pixdim[0]) when
+//! sform when `sform_code > 0`, else the qform (quaternion, `qfac` = `pixdim[0]`) when
 //! `qform_code > 0`, else the voxel sizes alone (method 1). Values are
 //! `scl_slope · stored + scl_inter` when `scl_slope` is neither 0 nor NaN. Spatial units of
 //! metres or microns (`xyzt_units`) are brought to mm.

@@ -37,13 +37,19 @@ pub fn is_image_file(path: &Path) -> bool {
     ImageFormat::of(path).is_some()
 }
 
-/// Reads the image in `path` (format by its name; see [`ImageFormat`]).
+/// Reads the image in `path` (format by its name; see [`ImageFormat`]), or the DICOM series
+/// in the folder `path` ([`super::dicom_series`]).
 ///
 /// # Errors
 /// [`Error::Parse`] naming the file and the problem: an unknown name, a malformed or
 /// truncated header or data, an unsupported voxel type or encoding, a degenerate geometry;
 /// data larger than the input limit ([`crate::formats::input::max_input_bytes`]).
 pub fn read_image(path: &Path) -> Result<ImageFile> {
+    if path.is_dir() {
+        let file = super::dicom_series::read_dicom_series(path)?;
+        file.image.check(path)?;
+        return Ok(file);
+    }
     let file = match ImageFormat::of(path) {
         Some(ImageFormat::Nifti) => super::nifti::read_nifti(path)?,
         Some(ImageFormat::Nrrd) => super::nrrd::read_nrrd(path)?,

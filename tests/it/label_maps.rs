@@ -466,3 +466,164 @@ fn totalsegmentators_l1_is_fitted_with_an_atlas_of_verse_vertebrae_in_the_cts_fr
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The world positions (RAS) of every voxel centre of `image` that `keep` selects.
+fn centres(
+    image: &atlasmesh::image::Image,
+    keep: impl Fn([usize; 3]) -> bool,
+) -> Vec<(Point<3>, [usize; 3])> {
+    let [nx, ny, nz] = image.dims;
+    let mut v = Vec::new();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                if keep([i, j, k]) {
+                    v.push((image.world([i as f64, j as f64, k as f64]), [i, j, k]));
+                }
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn a_dicom_series_is_read_to_the_geometry_totalsegmentator_gave_it() {
+    let Some(data) = common::data_dir("DICOM series") else {
+        return;
+    };
+    let ts = data.join("totalseg-example-ct-3d");
+    let ct = atlasmesh::formats::read_image(&ts.join("example_ct_dicom"))
+        .unwrap()
+        .image;
+    let seg = atlasmesh::formats::read_image(&ts.join("example_seg_dicom.nii.gz"))
+        .unwrap()
+        .image;
+    assert_eq!(ct.voxel_count(), seg.voxel_count());
+    assert_eq!(ct.file_convention, atlasmesh::image::WorldConvention::Lps);
+    // Every voxel centre of the label map (dcm2niix's RAS grid, its own axis order) is a voxel
+    // centre of the series within 0.01 mm.
+    let every_7th = |[i, j, k]: [usize; 3]| (i + j + k) % 7 == 0 || i == 0 || j == 0 || k == 0;
+    let mut worst: f64 = 0.0;
+    for (p, ijk) in centres(&seg, every_7th) {
+        let [a, b, c] = voxel_of(&ct, p);
+        assert!(
+            (0..ct.dims[0] as i64).contains(&a)
+                && (0..ct.dims[1] as i64).contains(&b)
+                && (0..ct.dims[2] as i64).contains(&c),
+            "label voxel {ijk:?} at {p:?} falls outside the series"
+        );
+        let q = ct.world([a as f64, b as f64, c as f64]);
+        worst = worst.max(atlasmesh::geometry::dist2(p, q).sqrt());
+    }
+    eprintln!("DICOM series vs dcm2niix: worst voxel centre {worst:.2e} mm");
+    assert!(worst <= 0.01, "{worst} mm");
+    // Hounsfield units, the rescale applied: slice by slice as pydicom (with OpenJPEG)
+    // decodes the JPEG 2000 files (the slices sorted along z, LPS's superior).
+    let slices: Vec<(f64, f64, f64, f64)> = (0..ct.dims[2])
+        .map(|k| {
+            let n = ct.dims[0] * ct.dims[1];
+            let v: Vec<f64> = (k * n..(k + 1) * n).map(|i| ct.value(i)).collect();
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                });
+            (
+                ct.world([0.0, 0.0, k as f64])[2],
+                lo,
+                hi,
+                v.iter().sum::<f64>(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        slices.iter().map(|s| s.1).fold(f64::INFINITY, f64::min),
+        -1024.0
+    );
+    let Some(py) = common::python() else {
+        return;
+    };
+    let script = r#"
+import sys, glob, json, pydicom
+out = []
+for f in glob.glob(sys.argv[1] + "/*"):
+    d = pydicom.dcmread(f)
+    a = d.pixel_array.astype(float) * float(d.RescaleSlope) + float(d.RescaleIntercept)
+    out.append([float(d.ImagePositionPatient[2]), a.min(), a.max(), a.sum()])
+print(json.dumps(sorted(out)))
+"#;
+    let o = std::process::Command::new(py)
+        .arg("-c")
+        .arg(script)
+        .arg(ts.join("example_ct_dicom"))
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "pydicom: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let theirs: Vec<(f64, f64, f64, f64)> = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(theirs.len(), slices.len());
+    for (a, b) in slices.iter().zip(&theirs) {
+        assert!((a.0 - b.0).abs() < 1e-6, "slice order: {a:?} {b:?}");
+        assert_eq!((a.1, a.2, a.3), (b.1, b.2, b.3), "slice at z {}", a.0);
+    }
+}
+
+#[test]
+fn a_dicom_folder_with_a_missing_slice_or_two_series_is_refused() {
+    let Some(data) = common::data_dir("bad DICOM series") else {
+        return;
+    };
+    let series = data.join("totalseg-example-ct-3d/example_ct_dicom");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&series)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    let dir = common::temp_dir("bad-dicom");
+    let gap = dir.join("gap");
+    std::fs::create_dir_all(&gap).unwrap();
+    for (k, f) in files.iter().enumerate() {
+        if k != 7 {
+            std::fs::copy(f, gap.join(f.file_name().unwrap())).unwrap();
+        }
+    }
+    let e = atlasmesh::formats::read_image(&gap)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("gap") && e.contains("missing slices"), "{e}");
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    std::fs::write(empty.join("notes.txt"), "no images here").unwrap();
+    let e = atlasmesh::formats::read_image(&empty)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no DICOM file"), "{e}");
+    // A second series in the folder (one slice re-labelled by pydicom).
+    let Some(py) = common::python() else {
+        return;
+    };
+    let mixed = dir.join("mixed");
+    std::fs::create_dir_all(&mixed).unwrap();
+    for f in &files {
+        std::fs::copy(f, mixed.join(f.file_name().unwrap())).unwrap();
+    }
+    let one = mixed.join(files[3].file_name().unwrap());
+    let o = std::process::Command::new(py)
+        .arg("-c")
+        .arg("import sys, pydicom; d = pydicom.dcmread(sys.argv[1]); d.SeriesInstanceUID = '1.2.826.0.1.3680043.8.498.1'; d.save_as(sys.argv[1])")
+        .arg(&one)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e = atlasmesh::formats::read_image(&mixed)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("2 series mixed") && e.contains("1.2.826.0.1.3680043.8.498.1"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -124,6 +124,10 @@ pub struct SubjectReport {
     /// What a user should know about this subject (a subject that may be mirrored).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// For a subject read from a label map: its smallest voxel spacing (mm), the unit of the
+    /// distances in voxels its page shows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub voxel_size: Option<f64>,
     /// Whether the last inner loop of Algorithm 1 met its tolerance.
     pub converged: bool,
     /// `E_d` at every iteration.

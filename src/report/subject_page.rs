@@ -132,7 +132,7 @@ pub fn write_subject_page(path: &Path, page: &SubjectPage) -> Result<()> {
 }
 
 fn measures(h: &mut String, r: &SubjectReport) {
-    let rows: Vec<(&str, String)> = vec![
+    let mut rows: Vec<(&str, String)> = vec![
         (
             "mesh RMS distance to the subject",
             num(r.mesh_rms_distance, 4),
@@ -174,6 +174,24 @@ fn measures(h: &mut String, r: &SubjectReport) {
         ("largest edge ratio", num(r.edge_ratio_max, 2)),
         ("morph alpha (eq. 9)", num(r.morph_alpha, 1)),
     ];
+    if let Some(v) = r.voxel_size.filter(|v| *v > 0.0) {
+        // A label map's subject: the same distances in its voxels.
+        let at = rows.len().min(4);
+        rows.splice(
+            at..at,
+            [
+                ("voxel size (label map)", num(v, 4)),
+                (
+                    "mesh RMS distance in voxels",
+                    num(r.mesh_rms_distance / v, 3),
+                ),
+                (
+                    "mesh 95th-percentile distance in voxels",
+                    num(r.mesh_p95_distance / v, 3),
+                ),
+            ],
+        );
+    }
     h.push_str("<h2>Measures</h2>\n<p class=\"hint\">Lengths in the subject's unit.</p>\n<table class=\"measures\"><tbody>");
     for (k, v) in rows {
         let _ = write!(h, "<tr><td>{}</td><td>{v}</td></tr>", escape(k));

@@ -116,6 +116,7 @@ pub fn fit_subject<const D: usize>(
         failed_checks: Vec::new(),
         success: false,
         mirrored_rms_distance: mirrored_rms,
+        voxel_size: None,
         warnings,
         converged: fit.converged,
         e_d_history: fit.e_d_history.clone(),

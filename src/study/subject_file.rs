@@ -30,6 +30,8 @@ pub struct Subject<const D: usize> {
     /// The shape is a part (a label cut by its image's border): it is fitted as `--partial`
     /// fits, whatever the run's parameters say.
     pub partial: bool,
+    /// For a label map's label: the image's smallest voxel spacing (mm).
+    pub voxel_size: Option<f64>,
 }
 
 /// `shape` ready to fit: checked ([`Shape::validate`]) and its floating components under
@@ -49,6 +51,7 @@ pub fn prepare_subject<const D: usize>(shape: Shape<D>, origin: &Path) -> Result
         shape,
         warnings,
         partial: false,
+        voxel_size: None,
     })
 }
 
@@ -68,6 +71,7 @@ pub fn read_subjects<const D: usize>(
         let mut subject = prepare_subject(s.shape.into_dim(), path)?;
         subject.warnings.splice(0..0, s.warnings);
         subject.partial = s.partial;
+        subject.voxel_size = Some(s.spacing.iter().copied().fold(f64::INFINITY, f64::min));
         return Ok(vec![subject]);
     }
     let surface = is_surface_file(path)?;

@@ -436,6 +436,14 @@ fn totalsegmentators_l1_is_fitted_with_an_atlas_of_verse_vertebrae_in_the_cts_fr
         s.mesh_rms_distance, s.mesh_p95_distance, s.mesh_max_distance, s.success, s.warnings
     );
     assert!(s.mesh_rms_distance <= 1.5, "{}", s.mesh_rms_distance);
+    // Distances in voxels too: the report and the page.
+    assert!(
+        (s.voxel_size.unwrap() - 3.0).abs() < 1e-3,
+        "{:?}",
+        s.voxel_size
+    );
+    let page = std::fs::read_to_string(out.join(&s.name).join(format!("{}.html", s.name))).unwrap();
+    assert!(page.contains("mesh RMS distance in voxels"));
     assert!(s.success, "{:?}", s.failed_checks);
     // The delivered mesh lies on the label in the CT's frame: every node inside label 31 or
     // within one voxel of it.
@@ -625,5 +633,54 @@ fn a_dicom_folder_with_a_missing_slice_or_two_series_is_refused() {
         e.contains("2 series mixed") && e.contains("1.2.826.0.1.3680043.8.498.1"),
         "{e}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_same_label_map_as_other_writers_save_it_gives_the_same_surface() {
+    let Some(data) = common::data_dir("label map writers") else {
+        return;
+    };
+    let Some(py) = common::python() else {
+        return;
+    };
+    let src = data.join("verse-L1-labelmaps-3d/sub-verse018_segment_20.nii.gz");
+    let dir = common::temp_dir("label-writers");
+    // SimpleITK (ITK's writers: LPS) and nibabel (RAS): detached NRRD with raw data, attached
+    // raw NRRD, uncompressed MetaImage, NIfTI-2, big-endian NIfTI-1.
+    let script = r#"
+import sys, os, SimpleITK as sitk, nibabel as nib, numpy as np
+src, out = sys.argv[1], sys.argv[2]
+img = sitk.ReadImage(src)
+sitk.WriteImage(img, os.path.join(out, "m.nhdr"), useCompression=False)
+sitk.WriteImage(img, os.path.join(out, "m.nrrd"), useCompression=False)
+sitk.WriteImage(img, os.path.join(out, "m.mha"), useCompression=False)
+n = nib.load(src)
+nib.save(nib.Nifti2Image(np.asanyarray(n.dataobj), n.affine, dtype=np.int16), os.path.join(out, "m2.nii"))
+h = n.header.copy()
+h = h.as_byteswapped(">")
+nib.save(nib.Nifti1Image(np.asanyarray(n.dataobj).astype(">i2"), n.affine, h), os.path.join(out, "mbe.nii"))
+"#;
+    let o = std::process::Command::new(py)
+        .arg("-c")
+        .arg(script)
+        .arg(&src)
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let reference = read_label_surface(&src, &label("20")).unwrap();
+    for name in ["m.nhdr", "m.nrrd", "m.mha", "m2.nii", "mbe.nii"] {
+        let s = read_label_surface(&dir.join(name), &label("20")).unwrap();
+        assert_eq!(s.shape.facets, reference.shape.facets, "{name}");
+        let worst = s
+            .shape
+            .points
+            .iter()
+            .zip(&reference.shape.points)
+            .map(|(a, b)| atlasmesh::geometry::dist2(*a, *b).sqrt())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-4, "{name}: {worst} mm from the NIfTI's surface");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -180,6 +180,7 @@ impl<const D: usize> RunContext<D> {
             .report
             .warnings
             .splice(0..0, subject.warnings.iter().cloned());
+        outcome.report.voxel_size = subject.voxel_size;
         Ok(outcome)
     }
 }

@@ -38,7 +38,8 @@ impl super::run::UnitReport for SubjectReport {
 }
 
 /// The subject files named by `specs`: a folder gives every shape file in it (by extension:
-/// `.ply .stl .obj .vtk .vtp .csv .txt .xy`), sorted by name; a `.list` file gives the paths
+/// `.ply .stl .obj .vtk .vtp .csv .txt .xy`, and label maps `.nii .nii.gz .nrrd .nhdr .mha
+/// .mhd`), sorted by name; a `.list` file gives the paths
 /// on its lines (relative to the list's folder; blank lines and `#` comments skipped; a
 /// `.list` there is an error); any other file is itself a subject. In a folder, anything with
 /// a shape extension but a folder is a subject, so a broken link or a FIFO fails with its
@@ -58,11 +59,14 @@ pub fn subject_files(specs: &[PathBuf]) -> Result<Vec<PathBuf>> {
                 .filter_map(|e| e.ok().map(|e| e.path()))
                 // Anything but a folder: a link that loops or leads nowhere, a FIFO, is a
                 // subject that fails with its reason, never skipped without a word.
-                .filter(|p| !p.is_dir() && SHAPES.contains(&ext(p).as_str()))
+                .filter(|p| {
+                    !p.is_dir()
+                        && (SHAPES.contains(&ext(p).as_str()) || crate::formats::is_image_file(p))
+                })
                 .collect();
             if in_dir.is_empty() {
                 return Err(Error::Population(format!(
-                    "{}: no shape file (.ply .stl .obj .vtk .vtp .csv .txt .xy) in this folder",
+                    "{}: no shape file (.ply .stl .obj .vtk .vtp .csv .txt .xy) or label map (.nii .nii.gz .nrrd .nhdr .mha .mhd) in this folder",
                     spec.display()
                 )));
             }

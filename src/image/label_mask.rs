@@ -84,14 +84,7 @@ pub fn label_mask(
         inside: vec![false; dims[0] * dims[1] * dims[2]],
         labels: labels.to_vec(),
         voxels: 0,
-        cut: [
-            lo[0] == 0,
-            hi[0] == nx - 1,
-            lo[1] == 0,
-            hi[1] == ny - 1,
-            lo[2] == 0,
-            hi[2] == nz - 1,
-        ],
+        cut: [false; 6],
         warnings: Vec::new(),
     };
     for z in 1..dims[2] - 1 {
@@ -107,7 +100,30 @@ pub fn label_mask(
     keep_largest_component(&mut mask);
     fill_cavities(&mut mask);
     mask.voxels = mask.inside.iter().filter(|&&b| b).count();
+    mask.cut = cut_faces(&mask, image.dims);
     Ok(mask)
+}
+
+/// Which of the image's six borders the kept shape touches (a dropped island on a border does
+/// not make the shape partial).
+fn cut_faces(mask: &LabelMask, dims: [usize; 3]) -> [bool; 6] {
+    let mut cut = [false; 6];
+    let d = mask.dims;
+    for z in 0..d[2] {
+        for y in 0..d[1] {
+            for x in 0..d[0] {
+                if !mask.inside[mask.at(x, y, z)] {
+                    continue;
+                }
+                for (a, c) in [x, y, z].into_iter().enumerate() {
+                    let index = c as i64 + mask.origin[a];
+                    cut[2 * a] |= index == 0;
+                    cut[2 * a + 1] |= index == dims[a] as i64 - 1;
+                }
+            }
+        }
+    }
+    cut
 }
 
 /// The error for labels no voxel has: the labels present (up to 30, with their voxel counts
@@ -253,5 +269,88 @@ fn fill_cavities(mask: &mut LabelMask) {
         mask.warnings.push(format!(
             "{filled} voxels of cavities inside the label filled (the shape is its outer surface)"
         ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image::{VoxelType, WorldConvention, label_surface};
+    use std::path::Path;
+
+    /// An 8³ uint8 image of unit voxels holding `voxels` as label 1.
+    fn image(voxels: &[[usize; 3]]) -> Image {
+        let mut data = vec![0u8; 512];
+        for &[x, y, z] in voxels {
+            data[x + 8 * (y + 8 * z)] = 1;
+        }
+        Image {
+            dims: [8, 8, 8],
+            voxel_type: VoxelType::U8,
+            little_endian: true,
+            data,
+            slope: 1.0,
+            intercept: 0.0,
+            affine: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ],
+            file_convention: WorldConvention::Ras,
+        }
+    }
+
+    fn cube(from: usize, to: usize) -> Vec<[usize; 3]> {
+        let mut v = Vec::new();
+        for z in from..to {
+            for y in from..to {
+                for x in from..to {
+                    v.push([x, y, z]);
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn an_island_on_the_border_is_dropped_and_does_not_cut_the_shape() {
+        let mut voxels = cube(2, 6);
+        voxels.push([0, 0, 0]);
+        let img = image(&voxels);
+        let m = label_mask(&img, &[1], Path::new("t.nii"), &LabelTable::default()).unwrap();
+        assert_eq!(m.voxels, 64);
+        assert_eq!(m.cut, [false; 6]);
+        assert!(m.warnings.iter().any(|w| w.contains("1 floating islands")));
+        let s = label_surface(&img, &m, "t");
+        assert!(!s.partial);
+        assert!(crate::geometry::is_closed_surface(&s.shape));
+    }
+
+    #[test]
+    fn a_shape_on_the_border_is_cut_there_and_open() {
+        let voxels: Vec<[usize; 3]> = cube(2, 6)
+            .into_iter()
+            .map(|[_, y, z]| [0, y, z])
+            .chain(cube(0, 4))
+            .collect();
+        let img = image(&voxels);
+        let m = label_mask(&img, &[1], Path::new("t.nii"), &LabelTable::default()).unwrap();
+        assert_eq!(m.cut, [true, false, true, false, true, false]);
+        let s = label_surface(&img, &m, "t");
+        assert!(s.partial);
+        assert!(!crate::geometry::is_closed_surface(&s.shape));
+    }
+
+    #[test]
+    fn a_cavity_is_filled() {
+        let voxels: Vec<[usize; 3]> = cube(1, 7).into_iter().filter(|&v| v != [4, 4, 4]).collect();
+        let m = label_mask(
+            &image(&voxels),
+            &[1],
+            Path::new("t.nii"),
+            &LabelTable::default(),
+        )
+        .unwrap();
+        assert_eq!(m.voxels, 216);
     }
 }

@@ -113,3 +113,26 @@ pub(super) fn beside(header: &Path, name: &str) -> Result<PathBuf> {
 pub(super) fn is_gzip(b: &[u8]) -> bool {
     b.starts_with(&[0x1f, 0x8b])
 }
+
+/// Numbers separated by blanks (a header's field `what`).
+pub(super) fn numbers<T: std::str::FromStr>(path: &Path, s: &str, what: &str) -> Result<Vec<T>> {
+    s.split_whitespace()
+        .map(|t| {
+            t.parse::<T>()
+                .map_err(|_| Error::parse(path, 0, format!("{what}: {t:?} is not a number")))
+        })
+        .collect()
+}
+
+/// A header's parser: the header's bytes, and a reader of the data file it names.
+pub(super) type HeaderParser =
+    fn(&Path, &[u8], &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<ImageFile>;
+
+/// Reads the header file `path` with `parse`, a detached data file it names read from beside
+/// it ([`beside`]), both within the input limits.
+pub(super) fn read_with_data_file(path: &Path, parse: HeaderParser) -> Result<ImageFile> {
+    let bytes = super::read_input(path)?;
+    parse(path, &bytes, &|name| {
+        super::read_input(&beside(path, name)?)
+    })
+}

@@ -7,7 +7,9 @@
 //! Written by hand: no maintained crate reads MetaImage; the header is a few text lines
 //! (ITK's MetaIO).
 
-use super::image_data::{ImageFile, Packing, announced_bytes, beside, unpack};
+use super::image_data::{
+    ImageFile, Packing, announced_bytes, numbers, read_with_data_file, unpack,
+};
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
 use std::collections::HashMap;
@@ -15,11 +17,7 @@ use std::path::Path;
 
 /// Reads a MetaImage file (see the module doc).
 pub fn read_metaimage(path: &Path) -> Result<ImageFile> {
-    let bytes = super::read_input(path)?;
-    parse_metaimage(path, &bytes, &|name| {
-        let data = beside(path, name)?;
-        super::read_input(&data)
-    })
+    read_with_data_file(path, parse_metaimage)
 }
 
 /// [`read_metaimage`] of a header's bytes; `detached` reads the data file it names.
@@ -68,8 +66,9 @@ pub fn parse_metaimage(
         .is_some_and(|v| v.trim().eq_ignore_ascii_case("true"));
     let compressed = get("CompressedData").is_some_and(|v| v.trim().eq_ignore_ascii_case("true"));
     let data_file = need("ElementDataFile")?.trim();
-    let stored = if data_file.eq_ignore_ascii_case("local") {
-        bytes[data_at..].to_vec()
+    let detached_data;
+    let stored: &[u8] = if data_file.eq_ignore_ascii_case("local") {
+        &bytes[data_at..]
     } else if data_file.contains(' ') || data_file.eq_ignore_ascii_case("list") {
         return Err(Error::parse(
             path,
@@ -79,15 +78,15 @@ pub fn parse_metaimage(
             ),
         ));
     } else {
-        let raw = detached(data_file)?;
+        detached_data = detached(data_file)?;
         match get("HeaderSize").map(str::trim) {
             Some(n) if n != "-1" && n != "0" => {
                 let n: usize = n
                     .parse()
                     .map_err(|_| Error::parse(path, 0, "HeaderSize is not a count"))?;
-                raw.get(n..).unwrap_or(&[]).to_vec()
+                detached_data.get(n..).unwrap_or(&[])
             }
-            _ => raw,
+            _ => &detached_data,
         }
     };
     let packing = if compressed {
@@ -95,7 +94,7 @@ pub fn parse_metaimage(
     } else {
         Packing::Raw
     };
-    let data = unpack(path, &stored, packing, want)?;
+    let data = unpack(path, stored, packing, want)?;
     let affine = affine(path, &get)?;
     Ok(ImageFile {
         image: Image {
@@ -185,15 +184,6 @@ fn header(path: &Path, bytes: &[u8]) -> Result<(HashMap<String, String>, usize)>
         line_no,
         "not a MetaImage header: no ElementDataFile line",
     ))
-}
-
-fn numbers<T: std::str::FromStr>(path: &Path, s: &str, what: &str) -> Result<Vec<T>> {
-    s.split_whitespace()
-        .map(|t| {
-            t.parse::<T>()
-                .map_err(|_| Error::parse(path, 0, format!("{what}: {t:?} is not a number")))
-        })
-        .collect()
 }
 
 fn vec3(path: &Path, s: &str, what: &str) -> Result<[f64; 3]> {

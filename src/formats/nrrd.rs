@@ -7,19 +7,18 @@
 //! Written by hand: the crates for NRRD on crates.io are unmaintained or read no geometry;
 //! the header is `key: value` lines (the NRRD0005 specification, teem.sourceforge.net).
 
-use super::image_data::{ImageFile, Packing, announced_bytes, beside, unpack};
+use super::image_data::{
+    ImageFile, Packing, announced_bytes, numbers, read_with_data_file, unpack,
+};
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
 
 /// Reads a NRRD file (see the module doc).
 pub fn read_nrrd(path: &Path) -> Result<ImageFile> {
-    let bytes = super::read_input(path)?;
-    parse_nrrd(path, &bytes, &|name| {
-        let data = beside(path, name)?;
-        super::read_input(&data)
-    })
+    read_with_data_file(path, parse_nrrd)
 }
 
 /// [`read_nrrd`] of a header's bytes; `detached` reads a data file the header names.
@@ -68,19 +67,19 @@ pub fn parse_nrrd(
     let want = announced_bytes(path, &dims, voxel_type.size())?;
     let encoding = get("encoding").unwrap_or("raw").trim().to_lowercase();
     let data_file = get("data file").or(get("datafile"));
-    let (stored, source): (Vec<u8>, &Path) = match data_file {
-        Some(name) => (detached(name)?, path),
-        None => (bytes[data_at..].to_vec(), path),
+    let stored: Cow<'_, [u8]> = match data_file {
+        Some(name) => Cow::Owned(detached(name)?),
+        None => Cow::Borrowed(&bytes[data_at..]),
     };
     let little = get("endian").map(str::trim) != Some("big");
     let data = match encoding.as_str() {
         "raw" => unpack(
-            source,
-            &skip(path, &stored, get("byte skip"))?,
+            path,
+            skip(path, &stored, get("byte skip"))?,
             Packing::Raw,
             want,
         )?,
-        "gzip" | "gz" => unpack(source, &stored, Packing::Gzip, want)?,
+        "gzip" | "gz" => unpack(path, &stored, Packing::Gzip, want)?,
         "ascii" | "text" | "txt" => ascii(path, &stored, voxel_type, dims, little)?,
         other => {
             return Err(Error::parse(
@@ -171,26 +170,16 @@ fn header(path: &Path, bytes: &[u8]) -> Result<(Fields, Fields, usize)> {
 }
 
 /// The data after `byte skip` bytes (`-1`: the last bytes of the file, taken by `unpack`).
-fn skip(path: &Path, data: &[u8], byte_skip: Option<&str>) -> Result<Vec<u8>> {
+fn skip<'a>(path: &Path, data: &'a [u8], byte_skip: Option<&str>) -> Result<&'a [u8]> {
     match byte_skip.map(str::trim) {
-        None | Some("-1") => Ok(data.to_vec()),
+        None | Some("-1") => Ok(data),
         Some(n) => {
             let n: usize = n
                 .parse()
                 .map_err(|_| Error::parse(path, 0, format!("byte skip {n:?} is not a count")))?;
-            Ok(data.get(n..).unwrap_or(&[]).to_vec())
+            Ok(data.get(n..).unwrap_or(&[]))
         }
     }
-}
-
-/// Numbers separated by blanks.
-fn numbers<T: std::str::FromStr>(path: &Path, s: &str, what: &str) -> Result<Vec<T>> {
-    s.split_whitespace()
-        .map(|t| {
-            t.parse::<T>()
-                .map_err(|_| Error::parse(path, 0, format!("{what}: {t:?} is not a number")))
-        })
-        .collect()
 }
 
 /// NRRD's type names.

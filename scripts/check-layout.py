@@ -15,7 +15,7 @@ import os
 import re
 import sys
 
-FLOORS = ["error", "simd", "geometry", "image", "ffd", "mesh", "model", "register", "fit", "eval",
+FLOORS = ["error", "simd", "geometry", "image", "ffd", "mesh", "materials", "model", "register", "fit", "eval",
           "formats", "report", "study", "bin"]
 KNOWN = set()
 DEFINES = re.compile(

@@ -10,8 +10,10 @@
 //! | module | stage |
 //! |---|---|
 //! | [`geometry`] | points, shapes, normals, closest points, rays, similarities, distances |
+//! | [`image`] | images: voxels and their frame, label maps' surfaces |
 //! | [`ffd`] | the B-spline FFD (eq. 1), `E_smooth`, the fit of eq. 9 |
 //! | [`mesh`] | FE meshes: meshing the mean, morph (eq. 9), quality (section 5.3), repair |
+//! | [`materials`] | per-element bone properties from a CT (Bonemat's method) |
 //! | [`model`] | GPA, PCA and the atlas (sections 2.2-2.3, eq. 3-4) |
 //! | [`register`] | correspondence by registration (eq. 2) or by arc length |
 //! | [`fit`] | shape instantiation and projection (Algorithm 1, eq. 5-8) |
@@ -35,6 +37,7 @@ pub mod fit;
 pub mod formats;
 pub mod geometry;
 pub mod image;
+pub mod materials;
 pub mod mesh;
 pub mod model;
 pub mod register;

@@ -1,0 +1,359 @@
+//! The material map of a mesh: every element's HU, density and Young's modulus from a CT
+//! (Bonemat's method), the materials of the solver files, and the checks that say when the
+//! map should not be trusted.
+
+use super::binning::{MaterialBin, bin_moduli};
+use super::ct_field::CtField;
+use super::density_law::DensityKind;
+use super::element_integral::{ElementIntegral, IntegrationScratch, integrate_element};
+use super::recipe::{Calibration, IntegrationMethod, MaterialRecipe, ResolvedRecipe};
+use crate::error::{Error, Result};
+use crate::geometry::Point;
+use crate::mesh::FeMesh;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// An element more than this share outside the CT makes the map an error.
+pub const OUTSIDE_LIMIT: f64 = 0.5;
+
+/// A boundary element with more than this share of its volume below the soft-tissue
+/// threshold averages in soft tissue (partial volume).
+pub const PARTIAL_VOLUME_SHARE: f64 = 0.1;
+
+/// Per element: the CT's values, the materials they make, and the map's summary.
+#[derive(Clone, Debug)]
+pub struct MaterialMap {
+    /// Mean HU of each element.
+    pub hu: Vec<f64>,
+    /// The density the law takes (g/cm³) at each element's mean HU.
+    pub density: Vec<f64>,
+    /// Which density `density` is.
+    pub density_kind: DensityKind,
+    /// Young's modulus of each element (MPa).
+    pub modulus: Vec<f64>,
+    /// Each element's volume (mm³; mm² in 2D).
+    pub volume: Vec<f64>,
+    /// The materials of the solver files, by increasing E.
+    pub bins: Vec<MaterialBin>,
+    /// The material (index into `bins`) of each element.
+    pub element_bin: Vec<u32>,
+    /// Poisson's ratio of every material.
+    pub poisson: f64,
+    /// The summary and the checks' findings.
+    pub summary: MaterialSummary,
+}
+
+/// A histogram: `counts[i]` values in `[edges[i], edges[i + 1])` (the last bin closed).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Histogram {
+    /// Bin edges, one more than the counts.
+    pub edges: Vec<f64>,
+    /// Values per bin.
+    pub counts: Vec<usize>,
+}
+
+/// A material map in figures, for `report.json`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MaterialSummary {
+    /// The CT file (set by the caller).
+    pub ct: String,
+    /// The recipe as given.
+    pub recipe: MaterialRecipe,
+    /// The calibration used (`rho_qct = intercept + slope · HU`, fitted to the rods if any).
+    pub calibration: Calibration,
+    /// The law's name and source.
+    pub law: String,
+    /// Where the law comes from.
+    pub law_source: String,
+    /// `v2` or `v3`.
+    pub method: Option<IntegrationMethod>,
+    /// Elements mapped.
+    pub elements: usize,
+    /// The mesh's volume (mm³; mm² in 2D).
+    pub volume: f64,
+    /// Volume-weighted mean HU of the mesh.
+    pub mean_hu: f64,
+    /// The CT's smallest and largest value (HU).
+    pub ct_range: [f64; 2],
+    /// Smallest, volume-weighted mean, median and largest element E (MPa).
+    pub modulus_min: f64,
+    /// See `modulus_min`.
+    pub modulus_mean: f64,
+    /// See `modulus_min`.
+    pub modulus_median: f64,
+    /// See `modulus_min`.
+    pub modulus_max: f64,
+    /// Materials written and the gap that made them (MPa).
+    pub materials: usize,
+    /// See `materials`.
+    pub gap: f64,
+    /// Largest difference between an element's E and its material's (MPa).
+    pub binning_error_max: f64,
+    /// Elements at the E floor.
+    pub at_floor: usize,
+    /// Elements partly outside the CT, and the largest share outside.
+    pub partly_outside: usize,
+    /// See `partly_outside`.
+    pub outside_share_max: f64,
+    /// Elements holding HU above the metal threshold, and the largest HU inside the mesh.
+    pub metal_elements: usize,
+    /// See `metal_elements`.
+    pub hu_max: f64,
+    /// Elements whose mean HU is below the air threshold.
+    pub air_elements: usize,
+    /// Share of the boundary elements that average in soft tissue (partial volume).
+    pub partial_volume_share: f64,
+    /// Histogram of element E (MPa), 20 bins over the range.
+    pub histogram: Histogram,
+    /// What the checks found, one sentence each.
+    pub warnings: Vec<String>,
+}
+
+/// Maps a CT onto a mesh (Bonemat; Taddei et al. 2004, 2007): each element's mean HU by
+/// [`integrate_element`], its density by the recipe's calibration and chain, its E by the
+/// law (V3: per point, then averaged; V2: of the mean HU), the elements grouped into
+/// materials ([`bin_moduli`]), and the checks. The mesh is in the CT's world frame (mm,
+/// RAS); a 2D mesh lies in the plane of a one-slice image (`z = 0`).
+///
+/// # Errors
+/// [`Error::Parameter`] for a 2D mesh on a 3D CT, or when an element lies more than
+/// [`OUTSIDE_LIMIT`] outside the CT (the message gives how many and how much of the mesh,
+/// and both extents).
+pub fn map_materials<const D: usize>(
+    mesh: &FeMesh<D>,
+    ct: &CtField,
+    recipe: &ResolvedRecipe,
+) -> Result<MaterialMap> {
+    let a = &ct.affine;
+    let voxel_volume = if D == 2 {
+        if ct.dims[2] != 1 {
+            return Err(Error::Parameter(format!(
+                "a 2D mesh needs a 2D image (one slice), not one of {:?} voxels",
+                ct.dims
+            )));
+        }
+        (a[0][0] * a[1][1] - a[0][1] * a[1][0]).abs()
+    } else {
+        ct.voxel_volume()
+    };
+    let index_nodes: Vec<Point<3>> = mesh
+        .nodes
+        .iter()
+        .map(|p| ct.index_of(&std::array::from_fn(|d| if d < D { p[d] } else { 0.0 })))
+        .collect();
+    let ne = mesh.num_elements();
+    let integrals: Vec<ElementIntegral> = (0..ne)
+        .into_par_iter()
+        .map_init(
+            || (IntegrationScratch::default(), Vec::new()),
+            |(scratch, nodes), e| {
+                nodes.clear();
+                nodes.extend(mesh.element(e).iter().map(|&n| index_nodes[n]));
+                integrate_element(ct, mesh.kind, nodes, recipe, voxel_volume, scratch)
+            },
+        )
+        .collect();
+    check_outside(mesh, ct, &integrals)?;
+    let hu: Vec<f64> = integrals.iter().map(|i| i.hu).collect();
+    let modulus: Vec<f64> = integrals.iter().map(|i| i.modulus).collect();
+    let volume: Vec<f64> = integrals.iter().map(|i| i.volume).collect();
+    let bin = &recipe.recipe.materials;
+    let (bins, gap) = bin_moduli(&modulus, &volume, bin.gap, bin.max_materials);
+    let mut element_bin = vec![0u32; ne];
+    let mut binning_error_max: f64 = 0.0;
+    for (k, b) in bins.iter().enumerate() {
+        for &e in &b.elements {
+            element_bin[e] = k as u32;
+            binning_error_max = binning_error_max.max((modulus[e] - b.modulus).abs());
+        }
+    }
+    let mut summary = summarize(mesh, ct, recipe, &integrals);
+    summary.materials = bins.len();
+    summary.gap = gap;
+    summary.binning_error_max = binning_error_max;
+    Ok(MaterialMap {
+        density: hu.iter().map(|&h| recipe.density(h)).collect(),
+        density_kind: recipe.law.density,
+        hu,
+        modulus,
+        volume,
+        bins,
+        element_bin,
+        poisson: recipe.recipe.modulus.poisson,
+        summary,
+    })
+}
+
+/// The error for elements more than [`OUTSIDE_LIMIT`] outside the CT.
+fn check_outside<const D: usize>(
+    mesh: &FeMesh<D>,
+    ct: &CtField,
+    integrals: &[ElementIntegral],
+) -> Result<()> {
+    let out = integrals
+        .iter()
+        .filter(|i| i.outside > OUTSIDE_LIMIT)
+        .count();
+    if out == 0 {
+        return Ok(());
+    }
+    let total: f64 = integrals.iter().map(|i| i.volume).sum();
+    let outside: f64 = integrals.iter().map(|i| i.outside * i.volume).sum();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in &mesh.nodes {
+        for d in 0..D {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let [clo, chi] = ct.world_bounds();
+    let fmt = |l: &[f64; 3], h: &[f64; 3]| {
+        (0..D)
+            .map(|d| format!("{:.1}..{:.1}", l[d], h[d]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    Err(Error::Parameter(format!(
+        "the mesh lies outside the CT: {out} of {} elements are more than half outside, \
+         {:.1} % of the mesh's volume; the mesh spans ({}) mm, the CT ({}) mm (RAS). Is the \
+         mesh in the CT's frame (mm, RAS)?",
+        integrals.len(),
+        100.0 * outside / total.max(f64::MIN_POSITIVE),
+        fmt(&lo, &hi),
+        fmt(&clo, &chi)
+    )))
+}
+
+/// The summary and the checks of a map.
+fn summarize<const D: usize>(
+    mesh: &FeMesh<D>,
+    ct: &CtField,
+    recipe: &ResolvedRecipe,
+    integrals: &[ElementIntegral],
+) -> MaterialSummary {
+    let r = &recipe.recipe;
+    let volume: f64 = integrals.iter().map(|i| i.volume).sum();
+    let wmean = |f: &dyn Fn(&ElementIntegral) -> f64| {
+        integrals.iter().map(|i| i.volume * f(i)).sum::<f64>() / volume.max(f64::MIN_POSITIVE)
+    };
+    let mut sorted: Vec<f64> = integrals.iter().map(|i| i.modulus).collect();
+    sorted.sort_by(f64::total_cmp);
+    let floor = r.modulus.floor * (1.0 + 1e-12);
+    let mut boundary = vec![false; integrals.len()];
+    for f in crate::mesh::boundary_faces(mesh) {
+        boundary[f.element] = true;
+    }
+    let surface = boundary.iter().filter(|&&b| b).count();
+    let soft_surface = integrals
+        .iter()
+        .zip(&boundary)
+        .filter(|(i, b)| **b && i.soft > PARTIAL_VOLUME_SHARE)
+        .count();
+    let mut s = MaterialSummary {
+        recipe: r.clone(),
+        calibration: recipe.calibration.clone(),
+        law: recipe.law.name.clone(),
+        law_source: recipe.law.source.into(),
+        method: Some(r.integration.method),
+        elements: integrals.len(),
+        volume,
+        mean_hu: wmean(&|i| i.hu),
+        ct_range: ct.range,
+        modulus_min: sorted.first().copied().unwrap_or(0.0),
+        modulus_mean: wmean(&|i| i.modulus),
+        modulus_median: sorted.get(sorted.len() / 2).copied().unwrap_or(0.0),
+        modulus_max: sorted.last().copied().unwrap_or(0.0),
+        at_floor: sorted.iter().filter(|&&e| e <= floor).count(),
+        partly_outside: integrals.iter().filter(|i| i.outside > 0.0).count(),
+        outside_share_max: integrals.iter().map(|i| i.outside).fold(0.0, f64::max),
+        metal_elements: integrals
+            .iter()
+            .filter(|i| i.hu_max > r.checks.metal_hu)
+            .count(),
+        hu_max: integrals.iter().map(|i| i.hu_max).fold(f64::NEG_INFINITY, f64::max),
+        air_elements: integrals.iter().filter(|i| i.hu < r.checks.air_hu).count(),
+        partial_volume_share: soft_surface as f64 / surface.max(1) as f64,
+        histogram: histogram(&sorted, 20),
+        ..Default::default()
+    };
+    s.warnings = warnings(&s, recipe);
+    s
+}
+
+/// A histogram of sorted `values` in `bins` equal bins over their range.
+fn histogram(sorted: &[f64], bins: usize) -> Histogram {
+    let (Some(&lo), Some(&hi)) = (sorted.first(), sorted.last()) else {
+        return Histogram::default();
+    };
+    let width = if hi > lo { (hi - lo) / bins as f64 } else { 1.0 };
+    let edges: Vec<f64> = (0..=bins).map(|k| lo + k as f64 * width).collect();
+    let mut counts = vec![0; bins];
+    for &v in sorted {
+        let k = (((v - lo) / width) as usize).min(bins - 1);
+        counts[k] += 1;
+    }
+    Histogram { edges, counts }
+}
+
+/// The checks' findings: one sentence each, for the report and the summary line.
+fn warnings(s: &MaterialSummary, recipe: &ResolvedRecipe) -> Vec<String> {
+    let r = &recipe.recipe;
+    let mut w = Vec::new();
+    let share = |n: usize| 100.0 * n as f64 / s.elements.max(1) as f64;
+    if s.metal_elements > 0 {
+        w.push(format!(
+            "metal: {} elements hold values above {} HU (up to {:.0} HU), an implant or its \
+             streaks; their E is not bone's",
+            s.metal_elements, r.checks.metal_hu, s.hu_max
+        ));
+    }
+    if s.ct_range[0] >= 0.0 {
+        w.push(format!(
+            "the CT's values range over [{:.0}, {:.0}] with none below 0: not rescaled to HU \
+             (air is -1000 HU)? Check the file's rescale slope and intercept",
+            s.ct_range[0], s.ct_range[1]
+        ));
+    }
+    if s.air_elements > 0 {
+        w.push(format!(
+            "{} elements ({:.1} %) average below {} HU: air inside the bone's mesh",
+            s.air_elements,
+            share(s.air_elements),
+            r.checks.air_hu
+        ));
+    }
+    if s.partly_outside > 0 {
+        w.push(format!(
+            "{} elements lie partly outside the CT (up to {:.0} % of one); their values come \
+             from the part inside",
+            s.partly_outside,
+            100.0 * s.outside_share_max
+        ));
+    }
+    if s.at_floor > 0 {
+        w.push(format!(
+            "{} elements ({:.1} %) are at the E floor of {} MPa",
+            s.at_floor,
+            share(s.at_floor),
+            r.modulus.floor
+        ));
+    }
+    if s.partial_volume_share > 0.25 {
+        w.push(format!(
+            "{:.0} % of the boundary elements average in soft tissue (more than {:.0} % of \
+             their volume below {} HU): partial volume lowers E at the bone's surface",
+            100.0 * s.partial_volume_share,
+            100.0 * PARTIAL_VOLUME_SHARE,
+            r.checks.soft_tissue_hu
+        ));
+    }
+    if r.calibration.is_default() {
+        w.push(
+            "no phantom calibration: rho_qct = 0.0008 HU assumed; give the scan's calibration \
+             in the recipe for moduli to quote"
+                .into(),
+        );
+    }
+    w
+}

@@ -1,0 +1,470 @@
+//! The material recipe: how a CT's Hounsfield units become each element's Young's modulus.
+//! A small TOML file; every field has a default with its source (`docs/materials.md`), and
+//! the recipe used is stored in the run's `report.json`, so that the same map can be applied
+//! to any other mesh.
+
+use super::density_law::{DensityKind, LawPiece, ModulusLaw};
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A material recipe (TOML, every table optional):
+///
+/// ```toml
+/// [calibration]          # HU -> QCT density (g/cm³): rho_qct = intercept + slope * HU
+/// slope = 0.0008
+/// intercept = 0.0
+/// # or fitted from phantom rods (measured HU, known density in g/cm³):
+/// # rods = [{ hu = -3.0, density = 0.0 }, { hu = 245.0, density = 0.2 }]
+///
+/// [density]              # Schileo et al. 2008: rho_ash = 0.877 rho_qct + 0.079,
+/// ash_slope = 0.877      # rho_app = rho_ash / 0.6
+/// ash_intercept = 0.079
+/// ash_per_apparent = 0.6
+///
+/// [modulus]
+/// law = "morgan-2003-femoral-neck"   # a preset, or "custom" with `density` and `pieces`
+/// floor = 1.0            # MPa
+/// poisson = 0.3
+///
+/// [integration]
+/// method = "v3"          # "v3": E per point, then averaged; "v2": HU averaged, then E
+///
+/// [materials]
+/// gap = 10.0             # MPa: elements within this gap of E share a material
+/// max_materials = 500
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialRecipe {
+    /// HU → QCT-equivalent density.
+    #[serde(default)]
+    pub calibration: Calibration,
+    /// QCT → ash → apparent density.
+    #[serde(default)]
+    pub density: DensityChain,
+    /// Density → Young's modulus, its floor, Poisson's ratio.
+    #[serde(default)]
+    pub modulus: ModulusSettings,
+    /// How an element's values are integrated.
+    #[serde(default)]
+    pub integration: IntegrationSettings,
+    /// How elements are grouped into materials in the solver files.
+    #[serde(default)]
+    pub materials: BinSettings,
+    /// The thresholds of the checks.
+    #[serde(default)]
+    pub checks: CheckSettings,
+}
+
+/// One phantom rod: its mean HU in the scan and its known equivalent density (g/cm³).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rod {
+    /// Mean HU measured in the rod.
+    pub hu: f64,
+    /// The rod's known density (g/cm³).
+    pub density: f64,
+}
+
+/// HU → QCT-equivalent density (g/cm³): `ρ_QCT = intercept + slope · HU`, given or fitted by
+/// least squares to phantom rods.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Calibration {
+    /// g/cm³ per HU. Default 0.0008, a typical slope of clinical scanners against
+    /// hydroxyapatite phantoms; no default replaces the scan's own phantom (the report says
+    /// when the default was used).
+    #[serde(default = "default_slope")]
+    pub slope: f64,
+    /// g/cm³ at 0 HU. Default 0.
+    #[serde(default)]
+    pub intercept: f64,
+    /// Phantom rods; when given (two or more), `slope` and `intercept` are fitted to them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub rods: Vec<Rod>,
+}
+
+fn default_slope() -> f64 {
+    0.0008
+}
+
+impl Default for Calibration {
+    fn default() -> Self {
+        Calibration {
+            slope: default_slope(),
+            intercept: 0.0,
+            rods: Vec::new(),
+        }
+    }
+}
+
+impl Calibration {
+    /// Whether this is the default calibration (no phantom, the default line).
+    pub fn is_default(&self) -> bool {
+        *self == Calibration::default()
+    }
+
+    /// The calibration with `slope` and `intercept` fitted by least squares to the rods
+    /// (`ρ = a + b·HU`), and the fit's largest residual (g/cm³); itself and 0 without rods.
+    ///
+    /// # Errors
+    /// [`Error::Parameter`] for one rod, non-finite values, or rods of one HU.
+    pub fn fitted(&self) -> Result<(Calibration, f64)> {
+        if self.rods.is_empty() {
+            return Ok((self.clone(), 0.0));
+        }
+        let n = self.rods.len() as f64;
+        if self.rods.len() < 2 {
+            return Err(Error::Parameter(
+                "calibration: one phantom rod cannot fit a line; give two or more".into(),
+            ));
+        }
+        if let Some(r) = self
+            .rods
+            .iter()
+            .find(|r| !(r.hu.is_finite() && r.density.is_finite()))
+        {
+            return Err(Error::Parameter(format!(
+                "calibration: rod (hu {}, density {}) is not finite",
+                r.hu, r.density
+            )));
+        }
+        let mx = self.rods.iter().map(|r| r.hu).sum::<f64>() / n;
+        let my = self.rods.iter().map(|r| r.density).sum::<f64>() / n;
+        let sxx: f64 = self.rods.iter().map(|r| (r.hu - mx).powi(2)).sum();
+        let sxy: f64 = self
+            .rods
+            .iter()
+            .map(|r| (r.hu - mx) * (r.density - my))
+            .sum();
+        if sxx <= 1e-12 * (1.0 + mx * mx) {
+            return Err(Error::Parameter(
+                "calibration: the phantom rods all have the same HU".into(),
+            ));
+        }
+        let slope = sxy / sxx;
+        let intercept = my - slope * mx;
+        let worst = self
+            .rods
+            .iter()
+            .map(|r| (intercept + slope * r.hu - r.density).abs())
+            .fold(0.0, f64::max);
+        Ok((
+            Calibration {
+                slope,
+                intercept,
+                rods: self.rods.clone(),
+            },
+            worst,
+        ))
+    }
+}
+
+/// QCT → ash → apparent density (g/cm³): `ρ_ash = ash_slope · ρ_QCT + ash_intercept`,
+/// `ρ_app = ρ_ash / ash_per_apparent`. Defaults: Schileo et al. 2008 (J Biomech 41:2483),
+/// `ρ_ash = 0.877 ρ_QCT + 0.079` and `ρ_ash / ρ_app = 0.6`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DensityChain {
+    /// Slope of ash on QCT density (default 0.877).
+    #[serde(default = "default_ash_slope")]
+    pub ash_slope: f64,
+    /// Ash density at zero QCT density, g/cm³ (default 0.079).
+    #[serde(default = "default_ash_intercept")]
+    pub ash_intercept: f64,
+    /// Ash over apparent density (default 0.6).
+    #[serde(default = "default_ash_per_apparent")]
+    pub ash_per_apparent: f64,
+}
+
+fn default_ash_slope() -> f64 {
+    0.877
+}
+fn default_ash_intercept() -> f64 {
+    0.079
+}
+fn default_ash_per_apparent() -> f64 {
+    0.6
+}
+
+impl Default for DensityChain {
+    fn default() -> Self {
+        DensityChain {
+            ash_slope: default_ash_slope(),
+            ash_intercept: default_ash_intercept(),
+            ash_per_apparent: default_ash_per_apparent(),
+        }
+    }
+}
+
+/// The density-elasticity law and the elastic constants written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModulusSettings {
+    /// A preset's name (see [`ModulusLaw::PRESETS`]) or `custom`. Default
+    /// `morgan-2003-femoral-neck`, the law of Schileo et al. 2008's validated femur models.
+    #[serde(default = "default_law")]
+    pub law: String,
+    /// For `custom`: the density the law takes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<DensityKind>,
+    /// For `custom`: the pieces, by increasing `from`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pieces: Vec<LawPiece>,
+    /// The smallest E written (MPa, default 1): keeps an element of fat or air stiff enough
+    /// for the solver. Elements at the floor are counted in the report.
+    #[serde(default = "default_floor")]
+    pub floor: f64,
+    /// Poisson's ratio of every material (default 0.3).
+    #[serde(default = "default_poisson")]
+    pub poisson: f64,
+}
+
+fn default_law() -> String {
+    "morgan-2003-femoral-neck".into()
+}
+fn default_floor() -> f64 {
+    1.0
+}
+fn default_poisson() -> f64 {
+    0.3
+}
+
+impl Default for ModulusSettings {
+    fn default() -> Self {
+        ModulusSettings {
+            law: default_law(),
+            density: None,
+            pieces: Vec::new(),
+            floor: default_floor(),
+            poisson: default_poisson(),
+        }
+    }
+}
+
+/// The order of averaging over an element (Taddei et al. 2007's Bonemat versions).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum IntegrationMethod {
+    /// HU integrated over the element, then turned into E (Bonemat V2).
+    V2,
+    /// E computed at every integration point, then integrated (Bonemat V3; default).
+    #[default]
+    V3,
+}
+
+/// How each element's values are integrated.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IntegrationSettings {
+    /// V3 (default) or V2.
+    #[serde(default)]
+    pub method: IntegrationMethod,
+    /// Sub-cells per voxel of extent along each of the element's natural directions (default
+    /// 2.5; each sub-cell has a Gauss rule exact for the trilinear CT of a linear field). The
+    /// default keeps V3 within 0.3 % of a 12-per-voxel integration on a CT of pure noise
+    /// (elements 0.5-5 voxels across).
+    #[serde(default = "default_subcells")]
+    pub subcells_per_voxel: f64,
+}
+
+fn default_subcells() -> f64 {
+    2.5
+}
+
+impl Default for IntegrationSettings {
+    fn default() -> Self {
+        IntegrationSettings {
+            method: IntegrationMethod::V3,
+            subcells_per_voxel: default_subcells(),
+        }
+    }
+}
+
+/// Bonemat's grouping of elements into materials: sorted by E, a material takes elements
+/// while their E is within `gap` of its first one; its E is the volume-weighted mean of its
+/// elements'. When that makes more than `max_materials`, the gap grows to fit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BinSettings {
+    /// MPa (default 10).
+    #[serde(default = "default_gap")]
+    pub gap: f64,
+    /// At most this many materials (default 500).
+    #[serde(default = "default_max_materials")]
+    pub max_materials: usize,
+}
+
+fn default_gap() -> f64 {
+    10.0
+}
+fn default_max_materials() -> usize {
+    500
+}
+
+impl Default for BinSettings {
+    fn default() -> Self {
+        BinSettings {
+            gap: default_gap(),
+            max_materials: default_max_materials(),
+        }
+    }
+}
+
+/// The thresholds of the checks (HU).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckSettings {
+    /// Above this inside the mesh: metal (an implant, or its streaks). Default 3000.
+    #[serde(default = "default_metal")]
+    pub metal_hu: f64,
+    /// Below this: soft tissue, fat or air, not bone (default 100). A boundary element
+    /// with a tenth of its volume below it averages in soft tissue (partial volume).
+    #[serde(default = "default_soft")]
+    pub soft_tissue_hu: f64,
+    /// An element averaging below this holds air (default -300).
+    #[serde(default = "default_air")]
+    pub air_hu: f64,
+}
+
+fn default_metal() -> f64 {
+    3000.0
+}
+fn default_soft() -> f64 {
+    100.0
+}
+fn default_air() -> f64 {
+    -300.0
+}
+
+impl Default for CheckSettings {
+    fn default() -> Self {
+        CheckSettings {
+            metal_hu: default_metal(),
+            soft_tissue_hu: default_soft(),
+            air_hu: default_air(),
+        }
+    }
+}
+
+/// Largest number of phantom rods or law pieces read.
+const MAX_ITEMS: usize = 64;
+
+impl MaterialRecipe {
+    /// Parses and checks the text of a recipe (`path` names the file in messages).
+    ///
+    /// # Errors
+    /// [`Error::Parse`] naming the file, the line and the problem.
+    pub fn parse(path: &Path, text: &str) -> Result<Self> {
+        let r: MaterialRecipe = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
+                .unwrap_or(0);
+            Error::parse(path, line, e.message().to_string())
+        })?;
+        r.law()
+            .map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))?;
+        Ok(r)
+    }
+
+    /// The recipe ready to use: the calibration fitted to the rods, the law resolved, every
+    /// number checked.
+    ///
+    /// # Errors
+    /// [`Error::Parameter`] naming the field and its range.
+    pub fn law(&self) -> Result<ResolvedRecipe> {
+        let bad = |m: String| Err(Error::Parameter(format!("material recipe: {m}")));
+        if self.calibration.rods.len() > MAX_ITEMS || self.modulus.pieces.len() > MAX_ITEMS {
+            return bad(format!("at most {MAX_ITEMS} rods and {MAX_ITEMS} law pieces"));
+        }
+        let (calibration, rod_residual) = self.calibration.fitted()?;
+        let c = &calibration;
+        if !(c.slope.is_finite() && c.slope > 0.0 && c.intercept.is_finite()) {
+            return bad(format!(
+                "calibration slope {} must be positive and intercept {} finite",
+                c.slope, c.intercept
+            ));
+        }
+        let d = &self.density;
+        if !(d.ash_slope.is_finite() && d.ash_slope > 0.0 && d.ash_intercept.is_finite())
+            || !(d.ash_per_apparent > 0.0 && d.ash_per_apparent <= 1.0)
+        {
+            return bad(format!(
+                "density: ash_slope {} must be positive, ash_intercept {} finite and \
+                 ash_per_apparent {} in (0, 1]",
+                d.ash_slope, d.ash_intercept, d.ash_per_apparent
+            ));
+        }
+        let m = &self.modulus;
+        if !(m.floor.is_finite() && m.floor > 0.0) {
+            return bad(format!("modulus floor {} MPa must be positive", m.floor));
+        }
+        if !(m.poisson > -1.0 && m.poisson < 0.5) {
+            return bad(format!("Poisson's ratio {} must be in (-1, 0.5)", m.poisson));
+        }
+        let law = ModulusLaw::named(&m.law, m.density, &m.pieces)?;
+        let s = self.integration.subcells_per_voxel;
+        if !(s.is_finite() && (0.25..=16.0).contains(&s)) {
+            return bad(format!("subcells_per_voxel {s} must be in [0.25, 16]"));
+        }
+        let b = &self.materials;
+        if !(b.gap.is_finite() && b.gap >= 0.0) || !(1..=100_000).contains(&b.max_materials) {
+            return bad(format!(
+                "materials: gap {} MPa must be ≥ 0 and max_materials {} in 1..=100000",
+                b.gap, b.max_materials
+            ));
+        }
+        let k = &self.checks;
+        if ![k.metal_hu, k.soft_tissue_hu, k.air_hu]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return bad("checks: thresholds must be finite".into());
+        }
+        Ok(ResolvedRecipe {
+            recipe: self.clone(),
+            calibration,
+            rod_residual,
+            law,
+        })
+    }
+}
+
+/// A recipe checked and ready: the calibration line in use and the law.
+#[derive(Clone, Debug)]
+pub struct ResolvedRecipe {
+    /// The recipe as given.
+    pub recipe: MaterialRecipe,
+    /// The calibration in use (fitted to the rods when there are rods).
+    pub calibration: Calibration,
+    /// The largest residual of the rods' fit (g/cm³; 0 without rods).
+    pub rod_residual: f64,
+    /// The density-elasticity law.
+    pub law: ModulusLaw,
+}
+
+impl ResolvedRecipe {
+    /// The density the law takes (g/cm³) at `hu`: HU → ρ_QCT → ρ_ash → ρ_app as the law
+    /// needs (an affine map of HU).
+    #[inline]
+    pub fn density(&self, hu: f64) -> f64 {
+        let qct = self.calibration.intercept + self.calibration.slope * hu;
+        let d = &self.recipe.density;
+        match self.law.density {
+            DensityKind::Qct => qct,
+            DensityKind::Ash => d.ash_slope * qct + d.ash_intercept,
+            DensityKind::App => (d.ash_slope * qct + d.ash_intercept) / d.ash_per_apparent,
+        }
+    }
+
+    /// Young's modulus (MPa) at `hu`: the law at [`ResolvedRecipe::density`], at least the
+    /// floor.
+    #[inline]
+    pub fn modulus(&self, hu: f64) -> f64 {
+        self.law
+            .modulus(self.density(hu))
+            .max(self.recipe.modulus.floor)
+    }
+}

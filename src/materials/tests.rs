@@ -1,0 +1,354 @@
+//! The materials' figures: exact on ramps, the published ramp values, V3 against a dense
+//! integration, the recipe and the checks.
+
+use super::*;
+use crate::geometry::Point;
+use crate::image::{Image, VoxelType, WorldConvention};
+use crate::mesh::{ElementKind, FeMesh};
+use rand::{RngExt, SeedableRng};
+
+/// An image of `dims` f64 voxels of `f(world)` with the affine rows `affine`.
+fn image(dims: [usize; 3], affine: [[f64; 4]; 3], f: impl Fn(Point<3>) -> f64) -> Image {
+    let mut im = Image {
+        dims,
+        voxel_type: VoxelType::F64,
+        little_endian: true,
+        data: Vec::new(),
+        slope: 1.0,
+        intercept: 0.0,
+        affine,
+        file_convention: WorldConvention::Ras,
+    };
+    let mut data = Vec::with_capacity(dims.iter().product::<usize>() * 8);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                data.extend(f(im.world([i as f64, j as f64, k as f64])).to_le_bytes());
+            }
+        }
+    }
+    im.data = data;
+    im
+}
+
+fn recipe(text: &str) -> ResolvedRecipe {
+    MaterialRecipe::parse(std::path::Path::new("recipe.toml"), text)
+        .unwrap()
+        .law()
+        .unwrap()
+}
+
+/// One element's integral on `ct` (nodes in world mm).
+fn integral(ct: &CtField, kind: ElementKind, nodes: &[Point<3>], r: &ResolvedRecipe) -> ElementIntegral {
+    let idx: Vec<Point<3>> = nodes.iter().map(|p| ct.index_of(p)).collect();
+    integrate_element(ct, kind, &idx, r, ct.voxel_volume(), &mut IntegrationScratch::default())
+}
+
+/// A distorted hexahedron (planar-faced frustum, tilted) from `o`, about `size` mm.
+fn hex8(o: Point<3>, size: f64) -> Vec<Point<3>> {
+    let (a, b) = (size, 0.6 * size);
+    let c = (a - b) / 2.0;
+    let mut v = vec![
+        [0.0, 0.0, 0.0],
+        [a, 0.0, 0.0],
+        [a, a, 0.0],
+        [0.0, a, 0.0],
+        [c, c, 0.9 * size],
+        [c + b, c, 0.9 * size],
+        [c + b, c + b, 0.9 * size],
+        [c, c + b, 0.9 * size],
+    ];
+    for p in &mut v {
+        let q = *p;
+        *p = [o[0] + q[0] + 0.2 * q[2], o[1] + q[1] - 0.1 * q[0], o[2] + q[2] + 0.15 * q[1]];
+    }
+    v
+}
+
+/// The quadratic element of the linear `corners` of `kind` with every mid-edge node moved
+/// by `bend` (a curved element).
+fn curved(kind: ElementKind, corners: &[Point<3>], bend: Point<3>) -> Vec<Point<3>> {
+    let mesh = FeMesh {
+        nodes: corners.to_vec(),
+        kind: kind.linear(),
+        connectivity: (0..corners.len()).collect(),
+        sets: Default::default(),
+    }
+    .to_quadratic()
+    .unwrap();
+    let mut nodes: Vec<Point<3>> = mesh.element(0).iter().map(|&n| mesh.nodes[n]).collect();
+    for (k, p) in nodes.iter_mut().enumerate().skip(corners.len()) {
+        let s = if k % 2 == 0 { 1.0 } else { -0.5 };
+        *p = std::array::from_fn(|d| p[d] + s * bend[d]);
+    }
+    nodes
+}
+
+/// The volume centroid of an element by a fine midpoint rule of the test's own (not the
+/// composite Gauss rule under test).
+fn centroid_midpoint(kind: ElementKind, nodes: &[Point<3>]) -> Point<3> {
+    let n = 60;
+    let mut sn = vec![0.0; kind.nodes()];
+    let mut dn = vec![[0.0; 3]; kind.nodes()];
+    let (mut v, mut c) = (0.0, [0.0; 3]);
+    let dim = kind.dimension();
+    for a in 0..n {
+        for b in 0..n {
+            for z in 0..(if dim == 3 { n } else { 1 }) {
+                let u = [(a as f64 + 0.5) / n as f64, (b as f64 + 0.5) / n as f64, (z as f64 + 0.5) / n as f64];
+                let (xi, f) = natural_coordinates::natural_point(kind, &u);
+                natural_coordinates::shape_functions(kind, &xi, &mut sn, &mut dn);
+                let mut x = [0.0; 3];
+                let mut j = [[0.0; 3]; 3];
+                for (k, p) in nodes.iter().enumerate() {
+                    for cc in 0..3 {
+                        x[cc] += sn[k] * p[cc];
+                        for d in 0..dim {
+                            j[d][cc] += dn[k][d] * p[cc];
+                        }
+                    }
+                }
+                let det = if dim == 3 {
+                    crate::geometry::dot(j[0], crate::geometry::cross(j[1], j[2])).abs()
+                } else {
+                    crate::geometry::norm(crate::geometry::cross(j[0], j[1]))
+                };
+                v += f * det;
+                for cc in 0..3 {
+                    c[cc] += f * det * x[cc];
+                }
+            }
+        }
+    }
+    c.map(|x| x / v)
+}
+
+#[test]
+fn linear_ct_integrals_equal_the_value_at_the_centroid() {
+    // A CT linear in position on an oblique, anisotropic grid (mm, RAS).
+    let affine = [
+        [0.7, 0.1, 0.0, -20.0],
+        [-0.05, 0.6, 0.0, -18.0],
+        [0.0, 0.0, 1.3, -25.0],
+    ];
+    let f = |p: Point<3>| 120.0 + 9.0 * p[0] - 4.0 * p[1] + 6.5 * p[2];
+    let ct = CtField::new(&image([70, 70, 40], affine, f)).unwrap();
+    let default = recipe("");
+    let fine = recipe("[integration]\nsubcells_per_voxel = 6.0\n");
+    let h8 = hex8([-3.0, -2.0, -4.0], 6.0);
+    let t4: Vec<Point<3>> = [0, 1, 3, 4].iter().map(|&k| h8[k]).collect();
+    let h20 = curved(ElementKind::Hex20, &h8, [0.4, -0.3, 0.5]);
+    let t10 = curved(ElementKind::Tet10, &t4, [-0.5, 0.3, 0.4]);
+    for (kind, nodes) in [
+        (ElementKind::Hex8, h8.clone()),
+        (ElementKind::Tet4, t4.clone()),
+        (ElementKind::Hex20, h20),
+        (ElementKind::Tet10, t10),
+    ] {
+        let i = integral(&ct, kind, &nodes, &default);
+        let j = integral(&ct, kind, &nodes, &fine);
+        // Exact: a finer composite rule changes nothing but round-off.
+        assert!((i.hu - j.hu).abs() <= 1e-9 * i.hu.abs(), "{kind:?}: {} vs {}", i.hu, j.hu);
+        assert!((i.volume - j.volume).abs() <= 1e-9 * i.volume, "{kind:?}");
+        // And it is the value at the volume centroid (found by the test's own rule).
+        let c = centroid_midpoint(kind, &nodes);
+        assert!((i.hu - f(c)).abs() <= 1e-4 * f(c).abs(), "{kind:?}: {} vs {}", i.hu, f(c));
+        assert_eq!(i.outside, 0.0);
+    }
+    // The frustum's centroid is known in closed form: the same HU to 1e-9.
+    let (a, b, h) = (6.0, 3.6, 5.4);
+    let zbar = h * (a * a + 2.0 * a * b + 3.0 * b * b) / (4.0 * (a * a + a * b + b * b));
+    let frustum: Vec<Point<3>> = [
+        [0.0, 0.0, 0.0],
+        [a, 0.0, 0.0],
+        [a, a, 0.0],
+        [0.0, a, 0.0],
+        [1.2, 1.2, h],
+        [1.2 + b, 1.2, h],
+        [1.2 + b, 1.2 + b, h],
+        [1.2, 1.2 + b, h],
+    ]
+    .map(|p| [p[0] - 3.0, p[1] - 3.0, p[2] - 2.0])
+    .to_vec();
+    let i = integral(&ct, ElementKind::Hex8, &frustum, &default);
+    let c = [0.0, 0.0, zbar - 2.0];
+    assert!((i.hu - f(c)).abs() <= 1e-9 * f(c).abs(), "{} vs {}", i.hu, f(c));
+    let v = h / 3.0 * (a * a + a * b + b * b);
+    assert!((i.volume - v).abs() <= 1e-9 * v);
+    // Straight-sided quadratic elements are their linear ones.
+    for (lin, nodes) in [(ElementKind::Hex8, &h8), (ElementKind::Tet4, &t4)] {
+        let q = curved(lin.linear(), nodes, [0.0; 3]);
+        let kind = if lin == ElementKind::Hex8 { ElementKind::Hex20 } else { ElementKind::Tet10 };
+        let (x, y) = (integral(&ct, lin, nodes, &default), integral(&ct, kind, &q, &default));
+        assert!((x.hu - y.hu).abs() <= 1e-9 * x.hu.abs());
+    }
+    // A tetrahedron's centroid is the mean of its corners.
+    let i = integral(&ct, ElementKind::Tet4, &t4, &default);
+    let c: Point<3> = std::array::from_fn(|d| t4.iter().map(|p| p[d]).sum::<f64>() / 4.0);
+    assert!((i.hu - f(c)).abs() <= 1e-9 * f(c).abs());
+}
+
+#[test]
+fn quads_over_pixels_of_a_2d_image() {
+    let affine = [[0.5, 0.0, 0.0, -10.0], [0.0, 0.4, 0.0, -8.0], [0.0, 0.0, 1.0, 0.0]];
+    let f = |p: Point<3>| 50.0 + 3.0 * p[0] + 7.0 * p[1];
+    let ct = CtField::new(&image([60, 60, 1], affine, f)).unwrap();
+    // A convex quadrilateral; its centroid by the polygon formula.
+    let q: [Point<2>; 4] = [[-4.0, -3.0], [3.0, -4.0], [5.0, 4.0], [-2.0, 2.5]];
+    let mesh = FeMesh {
+        nodes: q.to_vec(),
+        kind: ElementKind::Quad4,
+        connectivity: vec![0, 1, 2, 3],
+        sets: Default::default(),
+    };
+    let m = map_materials(&mesh, &ct, &recipe("")).unwrap();
+    let (mut a, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    for k in 0..4 {
+        let (p, r) = (q[k], q[(k + 1) % 4]);
+        let x = p[0] * r[1] - r[0] * p[1];
+        a += x / 2.0;
+        cx += (p[0] + r[0]) * x;
+        cy += (p[1] + r[1]) * x;
+    }
+    let c = [cx / (6.0 * a), cy / (6.0 * a), 0.0];
+    assert!((m.hu[0] - f(c)).abs() <= 1e-9 * f(c).abs(), "{} vs {}", m.hu[0], f(c));
+    assert!((m.volume[0] - a).abs() <= 1e-9 * a);
+    // A 2D mesh on a 3D CT is refused.
+    let ct3 = CtField::new(&image([4, 4, 4], affine, f)).unwrap();
+    assert!(map_materials(&mesh, &ct3, &recipe("")).is_err());
+}
+
+#[test]
+fn the_published_ramp_values() {
+    // HU = 5 (i + j + k) at voxels (i, j, k) ∈ {0, 1, 2}³ centred on {-1, 0, 1}³.
+    let affine = [[1.0, 0.0, 0.0, -1.0], [0.0, 1.0, 0.0, -1.0], [0.0, 0.0, 1.0, -1.0]];
+    let ct = CtField::new(&image([3, 3, 3], affine, |p| 5.0 * (p[0] + p[1] + p[2] + 3.0))).unwrap();
+    let r = recipe("");
+    let unit_hex: Vec<Point<3>> = HexUnit::corners();
+    let unit_tet: Vec<Point<3>> = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let hex = integral(&ct, ElementKind::Hex8, &unit_hex, &r);
+    assert!((hex.hu - 22.5).abs() < 1e-12, "{}", hex.hu);
+    let tet = integral(&ct, ElementKind::Tet4, &unit_tet, &r);
+    assert!((tet.hu - 18.75).abs() < 1e-12, "{}", tet.hu);
+    let tet10 = integral(&ct, ElementKind::Tet10, &curved(ElementKind::Tet4, &unit_tet, [0.0; 3]), &r);
+    assert!((tet10.hu - 18.75).abs() < 1e-12, "{}", tet10.hu);
+    assert!((hex.volume - 1.0).abs() < 1e-12 && (tet.volume - 1.0 / 6.0).abs() < 1e-12);
+}
+
+/// The unit cube's corners in the Hex8 order.
+struct HexUnit;
+impl HexUnit {
+    fn corners() -> Vec<Point<3>> {
+        natural_coordinates::corner_signs(ElementKind::Hex8)
+            .iter()
+            .map(|s| s.map(|v| 0.5 * (v + 1.0)))
+            .collect()
+    }
+}
+
+#[test]
+fn v3_on_a_nonlinear_law_matches_a_dense_integration() {
+    // A noisy CT (the hardest case for a rule: a kink at every voxel face) and the
+    // femoral-neck power law (E ∝ ρ^1.49).
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let noise: Vec<f64> = (0..40 * 40 * 40).map(|_| rng.random_range(-200.0..1800.0)).collect();
+    let affine = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];
+    let ct = CtField::new(&image([40, 40, 40], affine, |p| {
+        noise[p[0] as usize + 40 * (p[1] as usize + 40 * p[2] as usize)]
+    }))
+    .unwrap();
+    let r = recipe("");
+    let dense = recipe("[integration]\nsubcells_per_voxel = 12.0\n");
+    let mut worst: f64 = 0.0;
+    for (k, size) in [0.5, 0.8, 1.0, 1.7, 2.5, 3.3, 5.0].into_iter().enumerate() {
+        for seed in 0..4 {
+            let o = [5.3 + 6.0 * seed as f64 + 0.1 * k as f64, 6.1 + 3.0 * k as f64, 4.7 + seed as f64];
+            let h8 = hex8(o, size);
+            let t4: Vec<Point<3>> = [0, 1, 3, 4].iter().map(|&c| h8[c]).collect();
+            for (kind, nodes) in [(ElementKind::Hex8, h8.clone()), (ElementKind::Tet4, t4)] {
+                let a = integral(&ct, kind, &nodes, &r).modulus;
+                let b = integral(&ct, kind, &nodes, &dense).modulus;
+                worst = worst.max((a - b).abs() / b);
+            }
+        }
+    }
+    assert!(worst < 0.005, "V3 within {:.3} % of the dense integration", 100.0 * worst);
+}
+
+#[test]
+fn recipes_presets_and_calibration() {
+    let r = recipe("");
+    assert_eq!(r.law.name, "morgan-2003-femoral-neck");
+    // Schileo 2008's chain and Morgan's femoral neck law at 1000 HU.
+    let qct: f64 = 0.0008 * 1000.0;
+    let app = (0.877 * qct + 0.079) / 0.6;
+    assert!((r.modulus(1000.0) - 6850.0 * app.powf(1.49)).abs() < 1e-9);
+    assert_eq!(r.modulus(-1000.0), 1.0);
+    // Keyak's three pieces are continuous to a few MPa at their joints.
+    let k = recipe("[modulus]\nlaw = \"keyak-2003\"\n");
+    for rho in [0.27, 0.6] {
+        let (a, b) = (k.law.modulus(rho - 1e-9), k.law.modulus(rho + 1e-9));
+        assert!((a - b).abs() < 0.02 * a, "{rho}: {a} vs {b}");
+    }
+    // Rods fit the calibration line.
+    let c = recipe(
+        "[calibration]\nrods = [{ hu = 0.0, density = 0.1 }, { hu = 500.0, density = 0.5 }, { hu = 1000.0, density = 0.9 }]\n",
+    );
+    assert!((c.calibration.slope - 0.0008).abs() < 1e-12 && (c.calibration.intercept - 0.1).abs() < 1e-12);
+    // A custom piecewise law, and the errors that name the field.
+    let p = recipe(
+        "[modulus]\nlaw = \"custom\"\ndensity = \"ash\"\npieces = [{ coefficient = 1000.0, exponent = 2.0 }, { from = 0.5, coefficient = 500.0, exponent = 1.0, offset = 0.0 }]\n",
+    );
+    assert_eq!(p.law.modulus(0.25), 62.5);
+    assert_eq!(p.law.modulus(0.8), 400.0);
+    let path = std::path::Path::new("r.toml");
+    for (text, needle) in [
+        ("[modulus]\nlaw = \"morgan\"\n", "unknown law"),
+        ("[modulus]\nlaw = \"custom\"\n", "density"),
+        ("[modulus]\npoisson = 0.7\n", "Poisson"),
+        ("[calibration]\nslope = -1.0\n", "slope"),
+        ("[calibration]\nrods = [{ hu = 1.0, density = 0.1 }]\n", "one phantom rod"),
+        ("[calibration]\nslop = 1.0\n", "unknown field"),
+        ("[integration]\nmethod = \"v4\"\n", "unknown variant"),
+        ("[modulus]\nlaw = \"custom\"\ndensity = \"app\"\npieces = [{ coefficient = 1.0, exponent = 1.0, from = 0.5 }, { coefficient = 1.0, exponent = 1.0, from = 0.2 }]\n", "not above"),
+    ] {
+        let e = MaterialRecipe::parse(path, text).unwrap_err().to_string();
+        assert!(e.contains(needle) && e.contains("r.toml"), "{text}: {e}");
+    }
+}
+
+#[test]
+fn a_block_of_bone_with_metal_and_air_is_flagged() {
+    // A 10 mm cube of 800 HU, one voxel of 4000 HU (metal) and a pocket of air.
+    let affine = [[0.5, 0.0, 0.0, -2.0], [0.0, 0.5, 0.0, -2.0], [0.0, 0.0, 0.5, -2.0]];
+    let ct = CtField::new(&image([40, 40, 40], affine, |p| {
+        if (p[0] - 5.0).abs() < 0.6 && (p[1] - 5.0).abs() < 0.6 && (p[2] - 5.0).abs() < 0.6 {
+            4000.0
+        } else if p[0] < 2.0 && p[1] < 2.0 && p[2] < 2.0 {
+            -1000.0
+        } else {
+            800.0
+        }
+    }))
+    .unwrap();
+    let mut mesh = FeMesh::block(5);
+    for p in &mut mesh.nodes {
+        *p = p.map(|v| 2.0 * v);
+    }
+    let r = recipe("[calibration]\nslope = 0.0009\n");
+    let m = map_materials(&mesh, &ct, &r).unwrap();
+    let s = &m.summary;
+    assert_eq!(m.hu.len(), 125);
+    assert!(s.metal_elements >= 1 && s.warnings.iter().any(|w| w.starts_with("metal")), "{:?}", s.warnings);
+    assert!(s.air_elements >= 1, "{s:?}");
+    assert!(!s.warnings.iter().any(|w| w.contains("no phantom")));
+    // Every element is in one material; the bins' E are within the gap of their elements'.
+    assert_eq!(m.bins.iter().map(|b| b.elements.len()).sum::<usize>(), 125);
+    assert!(s.binning_error_max <= s.gap + 1e-9);
+    // Moved out of the CT: an error that says how much.
+    for p in &mut mesh.nodes {
+        p[0] += 15.0;
+    }
+    let e = map_materials(&mesh, &ct, &r).unwrap_err().to_string();
+    assert!(e.contains("outside the CT") && e.contains("% of the mesh's volume"), "{e}");
+}

@@ -510,6 +510,39 @@ pub fn inp<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> String {
     s
 }
 
+/// The mesh ([`inp`]) with one material per bin of `map`: per bin an `*ELSET` `BONE_k`, a
+/// `*MATERIAL` of the same name with `*ELASTIC` E (MPa), ν, and a `*SOLID SECTION` (plane
+/// stress of unit thickness in 2D). Units: mm, N, MPa.
+pub fn inp_with_materials<const D: usize>(
+    mesh: &FeMesh<D>,
+    path: &Path,
+    map: &crate::materials::MaterialMap,
+) -> String {
+    let mut s = inp(mesh, path);
+    let _ = writeln!(
+        s,
+        "** Materials from the CT: {} groups of E (MPa) by a gap of {:.4} MPa; per element \
+         values in the .vtu",
+        map.bins.len(),
+        map.summary.gap
+    );
+    for (k, bin) in map.bins.iter().enumerate() {
+        let name = crate::materials::MaterialMap::material_name(k);
+        let _ = writeln!(s, "*ELSET, ELSET={name}");
+        id_lines(&mut s, bin.elements.iter().copied(), 16);
+        let _ = writeln!(
+            s,
+            "*MATERIAL, NAME={name}\n*ELASTIC\n{:.6e}, {}",
+            bin.modulus, map.poisson
+        );
+        let _ = writeln!(s, "*SOLID SECTION, ELSET={name}, MATERIAL={name}");
+        if D == 2 {
+            s.push_str("1.\n");
+        }
+    }
+    s
+}
+
 /// `*NODE`, `*ELEMENT` and the sets (appended to `s`).
 pub fn inp_mesh<const D: usize>(s: &mut String, mesh: &FeMesh<D>) {
     // CalculiX reads at most 20 characters per number: 13 significant digits.

@@ -1,12 +1,13 @@
 //! FE meshes in and out: the format from the extension, the checks every reader shares.
 
-use super::abaqus::{inp, parse_inp};
-use super::febio::feb;
-use super::gmsh::{msh, parse_msh};
+use super::abaqus::{inp, inp_with_materials, parse_inp};
+use super::febio::feb_with_materials;
+use super::gmsh::{msh_with_element_data, parse_msh};
 use super::helpers::check_mesh;
 use super::vtk_legacy::{parse_vtk_unstructured, vtk};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
+use crate::materials::MaterialMap;
 use crate::mesh::FeMesh;
 use crate::mesh::quality::ElementQuality;
 use std::path::Path;
@@ -150,6 +151,23 @@ pub fn write_mesh<const D: usize>(
     reference: Option<&FeMesh<D>>,
     quality: &[ElementQuality],
 ) -> Result<()> {
+    write_mesh_with_materials(path, mesh, reference, quality, None)
+}
+
+/// [`write_mesh`] with the materials of a CT (`map`, one value per element): one material
+/// per bin in `.inp` and `.feb`; the per-element HU, density, E and material number as cell
+/// data in `.vtu` and `.vtk` and as element data in `.msh`.
+///
+/// # Errors
+/// As [`write_mesh`]; [`Error::Mesh`] for a map of another element count or a set of the
+/// mesh named like a material (`BONE_k`).
+pub fn write_mesh_with_materials<const D: usize>(
+    path: &Path,
+    mesh: &FeMesh<D>,
+    reference: Option<&FeMesh<D>>,
+    quality: &[ElementQuality],
+    materials: Option<&MaterialMap>,
+) -> Result<()> {
     let format = MeshFormat::from_path(path).ok_or_else(|| {
         Error::Parameter(format!(
             "{}: unknown mesh format; use .vtu, .vtk, .inp, .msh or .feb",
@@ -168,12 +186,38 @@ pub fn write_mesh<const D: usize>(
     mesh.sets
         .check(mesh.kind, mesh.nodes.len(), mesh.num_elements())
         .map_err(|m| Error::Mesh(format!("{}: {m}", path.display())))?;
+    if let Some(m) = materials {
+        if m.modulus.len() != mesh.num_elements() {
+            return Err(Error::Mesh(format!(
+                "{}: {} material values for {} elements",
+                path.display(),
+                m.modulus.len(),
+                mesh.num_elements()
+            )));
+        }
+        if let Some(n) = (0..m.bins.len())
+            .map(MaterialMap::material_name)
+            .find(|n| mesh.sets.element_sets.contains_key(n))
+        {
+            return Err(Error::Mesh(format!(
+                "{}: the mesh has an element set {n}, the name of a material; rename the set",
+                path.display()
+            )));
+        }
+    }
+    let cells = materials.map(MaterialMap::cell_fields).unwrap_or_default();
     let text = match format {
-        MeshFormat::Vtu => return super::write_vtu_with_quality(path, mesh, reference, quality),
-        MeshFormat::Vtk => vtk(mesh, reference, quality),
-        MeshFormat::Inp => inp(mesh, path),
-        MeshFormat::Msh => msh(mesh),
-        MeshFormat::Feb => feb(mesh, path)?,
+        MeshFormat::Vtu => {
+            let c: Vec<(&str, &[f64])> = cells.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+            return super::vtk_xml::write_vtu_with_data(path, mesh, reference, quality, &[], &c);
+        }
+        MeshFormat::Vtk => vtk(mesh, reference, quality, &cells),
+        MeshFormat::Inp => match materials {
+            Some(m) => inp_with_materials(mesh, path, m),
+            None => inp(mesh, path),
+        },
+        MeshFormat::Msh => msh_with_element_data(mesh, &cells),
+        MeshFormat::Feb => feb_with_materials(mesh, path, materials)?,
     };
     crate::formats::write_atomic(path, text.as_bytes())
 }

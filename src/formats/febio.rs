@@ -9,6 +9,17 @@ use std::path::Path;
 
 /// The FEBio 4.0 `Mesh` section of a 3D mesh.
 pub fn feb<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> Result<String> {
+    feb_with_materials(mesh, path, None)
+}
+
+/// [`feb`], and with `map` one isotropic elastic material per bin (E in MPa, ν): the
+/// elements in one part per material (`BONE_k`, keeping their ids) and a `SolidDomain`
+/// tying each part to its material. Units: mm, N, MPa.
+pub fn feb_with_materials<const D: usize>(
+    mesh: &FeMesh<D>,
+    path: &Path,
+    map: Option<&crate::materials::MaterialMap>,
+) -> Result<String> {
     if D != 3 {
         return Err(Error::Mesh(format!(
             "{}: FEBio is a 3D solver; write 2D meshes as .inp, .msh, .vtu or .vtk",
@@ -22,6 +33,21 @@ pub fn feb<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> Result<String> {
         "  <!-- atlasmesh {}: the mesh and its sets; add Material, MeshDomains and Step -->",
         env!("CARGO_PKG_VERSION")
     );
+    if let Some(m) = map {
+        s.push_str("  <Material>\n");
+        for (k, bin) in m.bins.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "    <material id=\"{}\" name=\"{}\" type=\"isotropic elastic\">\n      \
+                 <density>1</density>\n      <E>{:.6e}</E>\n      <v>{}</v>\n    </material>",
+                k + 1,
+                crate::materials::MaterialMap::material_name(k),
+                bin.modulus,
+                m.poisson
+            );
+        }
+        s.push_str("  </Material>\n");
+    }
     s.push_str("  <Mesh>\n    <Nodes name=\"nodes\">\n");
     for (i, p) in mesh.nodes.iter().enumerate() {
         let q = xyz(p);
@@ -34,20 +60,38 @@ pub fn feb<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> Result<String> {
             q[2]
         );
     }
-    let _ = writeln!(
-        s,
-        "    </Nodes>\n    <Elements type=\"{}\" name=\"Part1\">",
-        mesh.kind.febio_type()
-    );
-    for e in 0..mesh.num_elements() {
-        let ids: Vec<String> = mesh
-            .element(e)
+    s.push_str("    </Nodes>\n");
+    let all: Vec<usize> = (0..mesh.num_elements()).collect();
+    let parts: Vec<(String, &[usize])> = match map {
+        Some(m) => m
+            .bins
             .iter()
-            .map(|n| (n + 1).to_string())
-            .collect();
-        let _ = writeln!(s, "      <elem id=\"{}\">{}</elem>", e + 1, ids.join(","));
+            .enumerate()
+            .map(|(k, b)| {
+                (
+                    crate::materials::MaterialMap::material_name(k),
+                    b.elements.as_slice(),
+                )
+            })
+            .collect(),
+        None => vec![("Part1".into(), all.as_slice())],
+    };
+    for (name, elements) in &parts {
+        let _ = writeln!(
+            s,
+            "    <Elements type=\"{}\" name=\"{name}\">",
+            mesh.kind.febio_type()
+        );
+        for &e in elements.iter() {
+            let ids: Vec<String> = mesh
+                .element(e)
+                .iter()
+                .map(|n| (n + 1).to_string())
+                .collect();
+            let _ = writeln!(s, "      <elem id=\"{}\">{}</elem>", e + 1, ids.join(","));
+        }
+        s.push_str("    </Elements>\n");
     }
-    s.push_str("    </Elements>\n");
     let list = |m: &[usize]| {
         m.iter()
             .map(|n| (n + 1).to_string())
@@ -80,7 +124,15 @@ pub fn feb<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> Result<String> {
         }
         s.push_str("    </Surface>\n");
     }
-    s.push_str("  </Mesh>\n</febio_spec>\n");
+    s.push_str("  </Mesh>\n");
+    if map.is_some() {
+        s.push_str("  <MeshDomains>\n");
+        for (name, _) in &parts {
+            let _ = writeln!(s, "    <SolidDomain name=\"{name}\" mat=\"{name}\"/>");
+        }
+        s.push_str("  </MeshDomains>\n");
+    }
+    s.push_str("</febio_spec>\n");
     Ok(s)
 }
 

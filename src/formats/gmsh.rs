@@ -434,6 +434,15 @@ fn assemble(path: &Path, p: Parsed) -> Result<FeMesh<3>> {
 
 /// Gmsh 4.1 ASCII with physical groups for the sets.
 pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
+    msh_with_element_data(mesh, &[])
+}
+
+/// [`msh`] with one `$ElementData` view per named per-element field (`(name, one value per
+/// element)`, names plain), the elements by their ids.
+pub fn msh_with_element_data<const D: usize>(
+    mesh: &FeMesh<D>,
+    fields: &[(&str, Vec<f64>)],
+) -> String {
     let g = Groups::of(mesh);
     let nn = mesh.nodes.len();
     let (lo, hi) = bounding_box(&mesh.nodes);
@@ -463,6 +472,17 @@ pub fn msh<const D: usize>(mesh: &FeMesh<D>) -> String {
     }
     s.push_str("$EndNodes\n");
     elements(&mut s, mesh, &g);
+    for (name, values) in fields {
+        let _ = writeln!(
+            s,
+            "$ElementData\n1\n\"{name}\"\n1\n0.0\n3\n0\n1\n{}",
+            values.len()
+        );
+        for (e, v) in values.iter().enumerate() {
+            let _ = writeln!(s, "{} {v:.17e}", e + 1);
+        }
+        s.push_str("$EndElementData\n");
+    }
     s
 }
 

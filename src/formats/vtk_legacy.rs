@@ -490,6 +490,7 @@ pub fn vtk<const D: usize>(
     mesh: &FeMesh<D>,
     reference: Option<&FeMesh<D>>,
     quality: &[ElementQuality],
+    cell_fields: &[(&str, Vec<f64>)],
 ) -> String {
     let nn = mesh.nodes.len();
     let ne = mesh.num_elements();
@@ -532,8 +533,14 @@ pub fn vtk<const D: usize>(
             let _ = writeln!(s, "{}", line.join(" "));
         }
     };
-    if quality.len() == ne || !mesh.sets.element_sets.is_empty() {
+    if quality.len() == ne || !mesh.sets.element_sets.is_empty() || !cell_fields.is_empty() {
         let _ = writeln!(s, "CELL_DATA {ne}");
+    }
+    for (name, values) in cell_fields {
+        let _ = writeln!(s, "SCALARS {name} double 1\nLOOKUP_TABLE default");
+        for v in values {
+            let _ = writeln!(s, "{v:.17e}");
+        }
     }
     if quality.len() == ne {
         s.push_str("SCALARS jacobian_min double 1\nLOOKUP_TABLE default\n");

@@ -253,7 +253,24 @@ pub fn write_vtu_with_point_data<const D: usize>(
     q: &[crate::mesh::quality::ElementQuality],
     fields: &[(&str, &[f64])],
 ) -> Result<()> {
+    write_vtu_with_data(path, mesh, reference, q, fields, &[])
+}
+
+/// [`write_vtu_with_point_data`] with named scalar cell data too (`(name, one value per
+/// element)`).
+///
+/// # Errors
+/// As [`write_vtu_with_point_data`], for both kinds of field.
+pub fn write_vtu_with_data<const D: usize>(
+    path: &Path,
+    mesh: &FeMesh<D>,
+    reference: Option<&FeMesh<D>>,
+    q: &[crate::mesh::quality::ElementQuality],
+    fields: &[(&str, &[f64])],
+    cell_fields: &[(&str, &[f64])],
+) -> Result<()> {
     check_fields(path, fields, mesh.nodes.len())?;
+    check_fields(path, cell_fields, mesh.num_elements())?;
     let k = mesh.kind.nodes();
     let ne = mesh.num_elements();
     let z = |p: &Point<D>| if D > 2 { p[2] } else { 0.0 };
@@ -288,6 +305,7 @@ pub fn write_vtu_with_point_data<const D: usize>(
         let sj = f64_bytes(q.iter().map(|e| e.scaled_jacobian_min));
         binary_array(&mut s, "Float64", Some("scaled_jacobian_min"), 1, &sj);
     }
+    scalar_arrays(&mut s, cell_fields);
     s.push_str("      </CellData>\n      <Points>\n");
     let pts = f64_bytes(mesh.nodes.iter().flat_map(|p| [p[0], p[1], z(p)]));
     binary_array(&mut s, "Float64", None, 3, &pts);

@@ -357,3 +357,25 @@ fn warnings(s: &MaterialSummary, recipe: &ResolvedRecipe) -> Vec<String> {
     }
     w
 }
+
+impl MaterialMap {
+    /// The per-element arrays the mesh files carry, named as written: `HU`, the law's
+    /// density (`rho_app`, `rho_ash` or `rho_qct`, g/cm³), `E` (MPa), and `material` (the
+    /// 1-based material number of the solver files).
+    pub fn cell_fields(&self) -> Vec<(&'static str, Vec<f64>)> {
+        vec![
+            ("HU", self.hu.clone()),
+            (self.density_kind.array_name(), self.density.clone()),
+            ("E", self.modulus.clone()),
+            (
+                "material",
+                self.element_bin.iter().map(|&b| f64::from(b + 1)).collect(),
+            ),
+        ]
+    }
+
+    /// The name of material `k` (0-based) in the solver files: `BONE_1`, `BONE_2`, ...
+    pub fn material_name(k: usize) -> String {
+        format!("BONE_{}", k + 1)
+    }
+}

@@ -794,3 +794,41 @@ mod tests {
         assert!(highest_last(&[("x".into(), vec![f64::NAN])], 6).is_empty());
     }
 }
+
+/// Histogram of the elements' Young's modulus (MPa) of a material map, titled `title`.
+pub fn plot_modulus_histogram(
+    path: &Path,
+    histogram: &crate::materials::Histogram,
+    title: &str,
+) -> Result<()> {
+    let text = super::render::font_available();
+    let (Some(&lo), Some(&hi)) = (histogram.edges.first(), histogram.edges.last()) else {
+        return Err(crate::Error::Parameter(format!(
+            "{}: an empty histogram",
+            path.display()
+        )));
+    };
+    let hi = if hi > lo { hi } else { lo + 1.0 };
+    Canvas::new(720, 400).draw(path, |root| {
+        root.fill(&WHITE).map_err(perr(path))?;
+        let top = histogram.counts.iter().copied().max().unwrap_or(1).max(1) as f64;
+        let mut chart = chart_frame(&root, title, 64, text)
+            .build_cartesian_2d(lo..hi, 0f64..top * 1.05)
+            .map_err(perr(path))?;
+        if text {
+            chart
+                .configure_mesh()
+                .x_desc("Young's modulus E of an element (MPa)")
+                .y_desc("elements")
+                .draw()
+                .map_err(perr(path))?;
+        }
+        chart
+            .draw_series(histogram.counts.iter().enumerate().map(|(k, &c)| {
+                let (x0, x1) = (histogram.edges[k], histogram.edges[k + 1]);
+                Rectangle::new([(x0, 0.0), (x1, c as f64)], RGBColor(70, 110, 170).filled())
+            }))
+            .map_err(perr(path))?;
+        Ok(())
+    })
+}

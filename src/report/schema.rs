@@ -128,6 +128,10 @@ pub struct SubjectReport {
     /// distances in voxels its page shows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub voxel_size: Option<f64>,
+    /// The mesh's materials from the subject's CT: the recipe, the figures and the checks
+    /// (whose findings are among `warnings` too).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub materials: Option<crate::materials::MaterialSummary>,
     /// Whether the last inner loop of Algorithm 1 met its tolerance.
     pub converged: bool,
     /// `E_d` at every iteration.

@@ -30,6 +30,7 @@
 mod baselines;
 pub mod batch;
 mod build;
+mod ct_materials;
 mod demo;
 mod instance;
 mod label_map;
@@ -52,6 +53,7 @@ mod write_subject;
 pub use baselines::*;
 pub use batch::{fit_batch, fit_shapes};
 pub use build::*;
+pub use ct_materials::*;
 pub use demo::*;
 pub use instance::*;
 pub use label_map::*;

@@ -52,6 +52,9 @@ pub struct RunParams {
     /// boundary against the subject's surface) within this share of the subject's
     /// bounding-box diagonal.
     pub max_mesh_distance: f64,
+    /// The material recipe applied to subjects that have a CT (`None`: no CT given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub materials: Option<crate::materials::MaterialRecipe>,
 }
 
 fn default_surface_formats() -> Vec<crate::formats::ShapeFormat> {
@@ -79,6 +82,7 @@ impl Default for RunParams {
             fit: FitParams::default(),
             morph: FfdParams::default(),
             plots: true,
+            materials: None,
         }
     }
 }

@@ -28,6 +28,8 @@ pub struct SubjectOutcome<const D: usize> {
     pub index: ClosestPointIndex<D>,
     /// The measures of `report.json` (`files` empty until the subject is written).
     pub report: SubjectReport,
+    /// The mesh's materials from the subject's CT (none without a CT).
+    pub materials: Option<crate::materials::MaterialMap>,
 }
 
 /// Fits `subject` with the atlas (Algorithm 1), morphs the mean mesh onto it (eq. 9), repairs
@@ -117,6 +119,7 @@ pub fn fit_subject<const D: usize>(
         success: false,
         mirrored_rms_distance: mirrored_rms,
         voxel_size: None,
+        materials: None,
         warnings,
         converged: fit.converged,
         e_d_history: fit.e_d_history.clone(),
@@ -131,6 +134,7 @@ pub fn fit_subject<const D: usize>(
         quality: per_element,
         index,
         report,
+        materials: None,
     })
 }
 

@@ -17,6 +17,8 @@ pub struct SubjectReading {
     pub columns: CsvColumns,
     /// Which labels of a label map make the subject's shape.
     pub labels: super::LabelReading,
+    /// Where each subject's CT is, for materials.
+    pub ct: super::CtSource,
 }
 
 /// A subject ready to fit: its shape, checked and cleaned, and what a user should know about
@@ -32,6 +34,9 @@ pub struct Subject<const D: usize> {
     pub partial: bool,
     /// For a label map's label: the image's smallest voxel spacing (mm).
     pub voxel_size: Option<f64>,
+    /// The subject's CT (a file or a DICOM series' folder), whose HU give its mesh's
+    /// materials.
+    pub ct: Option<std::path::PathBuf>,
 }
 
 /// `shape` ready to fit: checked ([`Shape::validate`]) and its floating components under
@@ -52,6 +57,7 @@ pub fn prepare_subject<const D: usize>(shape: Shape<D>, origin: &Path) -> Result
         warnings,
         partial: false,
         voxel_size: None,
+        ct: None,
     })
 }
 
@@ -72,6 +78,7 @@ pub fn read_subjects<const D: usize>(
         subject.warnings.splice(0..0, s.warnings);
         subject.partial = s.partial;
         subject.voxel_size = Some(s.spacing.iter().copied().fold(f64::INFINITY, f64::min));
+        subject.ct = reading.ct.for_subject(path, &subject.shape.name)?;
         return Ok(vec![subject]);
     }
     let surface = is_surface_file(path)?;
@@ -100,6 +107,10 @@ pub fn read_subjects<const D: usize>(
     };
     shapes
         .into_iter()
-        .map(|s| prepare_subject(s, path))
+        .map(|s| {
+            let mut subject = prepare_subject(s, path)?;
+            subject.ct = reading.ct.for_subject(path, &subject.shape.name)?;
+            Ok(subject)
+        })
         .collect()
 }

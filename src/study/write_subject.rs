@@ -5,7 +5,7 @@ use super::params::RunParams;
 use super::subject::SubjectOutcome;
 use crate::error::Result;
 use crate::fit::{FitResult, Fitter};
-use crate::formats::{write_atomic, write_mesh, write_shape};
+use crate::formats::{write_atomic, write_mesh_with_materials, write_shape};
 use crate::geometry::{Point, Shape, same_dim};
 use crate::mesh::{ElementQuality, FeMesh, Morpher};
 use crate::model::Atlas;
@@ -188,17 +188,19 @@ pub fn write_subject<const D: usize>(
         quality: per_element,
         index,
         mut report,
+        materials,
     } = outcome;
     let base = file_name(&subject.name);
     let mut files = Vec::new();
     let mean_in_subject = atlas.mesh.moved(&fit.similarity);
     for f in &params.formats {
         let mesh_file = format!("{base}_mesh.{}", f.extension());
-        write_mesh(
+        write_mesh_with_materials(
             &out.join(&mesh_file),
             &mesh,
             Some(&mean_in_subject),
             &per_element,
+            materials.as_ref(),
         )?;
         files.push(mesh_file);
     }

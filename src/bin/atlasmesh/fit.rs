@@ -46,6 +46,16 @@ pub struct FitArgs {
     columns: Option<atlasmesh::formats::CsvColumns>,
     #[command(flatten)]
     labels: crate::args::LabelArgs,
+    /// The subjects' CT, for per-element bone materials in every mesh file: one image
+    /// (NIfTI, NRRD, MetaImage, or a DICOM series' folder) for one subject file; for several,
+    /// a folder with a CT named like each subject (NAME.nii.gz, ..., or a DICOM folder NAME),
+    /// or a CSV table with columns subject,ct. In the subjects' frame (mm).
+    #[arg(long, value_name = "PATH", conflicts_with = "landmarks_only")]
+    ct: Option<PathBuf>,
+    /// The material recipe (TOML: calibration, density chain, law, integration, materials;
+    /// see docs/materials.md); without it, the documented defaults.
+    #[arg(long, value_name = "FILE", requires = "ct")]
+    recipe: Option<PathBuf>,
     #[command(flatten)]
     run: RunArgs,
     /// Output folder.
@@ -88,7 +98,19 @@ fn run_in<const D: usize>(a: &FitArgs, term: &Terminal) -> anyhow::Result<()> {
     } else {
         Vec::new()
     };
-    let ctx = RunContext::<D>::open(&a.atlas, a.run.params()?, a.run.deck.as_deref(), place)?;
+    let ct = match &a.ct {
+        Some(p) => study::CtSource::parse(p)?,
+        None => study::CtSource::None,
+    };
+    ct.check_subjects(&files)?;
+    let mut params = a.run.params()?;
+    if ct.is_some() {
+        params.materials = Some(match &a.recipe {
+            Some(r) => study::read_recipe(r)?,
+            None => Default::default(),
+        });
+    }
+    let ctx = RunContext::<D>::open(&a.atlas, params, a.run.deck.as_deref(), place)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.jobs)
         .build()
@@ -103,6 +125,7 @@ fn run_in<const D: usize>(a: &FitArgs, term: &Terminal) -> anyhow::Result<()> {
         open: a.open,
         columns: a.columns.clone().unwrap_or_default(),
         labels: a.labels.reading()?,
+        ct,
     };
     let r =
         pool.install(|| batch::fit_batch(&ctx, &files, &reading, &dataset_name(&files), term))?;

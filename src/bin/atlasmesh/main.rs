@@ -10,6 +10,7 @@ mod demo;
 mod fit;
 mod instance;
 mod loo;
+mod materials;
 mod merge_reports;
 mod population;
 mod quality;
@@ -65,6 +66,10 @@ enum Command {
     /// Repairs an FE mesh: untangles inverted elements and raises scaled Jacobians below the
     /// bound by moving nodes; boundary nodes on SURFACE slide on it, other boundary nodes stay.
     Repair(repair::RepairArgs),
+    /// Bone materials of any FE mesh from a CT (Bonemat's method): each element's HU
+    /// integrated over its volume, its density and Young's modulus by a recipe, written as a
+    /// material per group of E (.inp, .feb) and per-element values (.vtu, .vtk, .msh).
+    Materials(materials::MaterialsArgs),
     /// Run the whole method on built-in synthetic data (no files needed).
     Demo(demo::DemoArgs),
 }
@@ -83,6 +88,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Quality(a) => quality::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Repair(a) => repair::run(a, &term),
+        Command::Materials(a) => materials::run(a),
         Command::Demo(a) => demo::run(a, &term),
     }
 }

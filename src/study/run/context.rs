@@ -164,7 +164,8 @@ impl<const D: usize> RunContext<D> {
     }
 
     /// A subject as read ([`Subject`]) fitted with `params` ([`RunContext::fit_subject`]),
-    /// the warnings about its input first among its report's.
+    /// the warnings about its input first among its report's; with a CT, its mesh's
+    /// materials mapped by `params.materials` (the default recipe if none).
     ///
     /// # Errors
     /// Those of [`RunContext::fit_subject`].
@@ -181,6 +182,16 @@ impl<const D: usize> RunContext<D> {
             .warnings
             .splice(0..0, subject.warnings.iter().cloned());
         outcome.report.voxel_size = subject.voxel_size;
+        if let Some(ct) = &subject.ct {
+            let recipe = params.materials.clone().unwrap_or_default();
+            let map = crate::study::map_ct(&outcome.mesh, ct, &recipe)?;
+            outcome
+                .report
+                .warnings
+                .extend(map.summary.warnings.iter().map(|w| format!("materials: {w}")));
+            outcome.report.materials = Some(map.summary.clone());
+            outcome.materials = Some(map);
+        }
         Ok(outcome)
     }
 }

@@ -1,0 +1,293 @@
+//! CTs for materials: which CT goes with which subject (`--ct`), reading a CT and a recipe,
+//! a subject's mesh mapped, and any mesh file mapped (`atlasmesh materials`).
+
+use crate::error::{Error, Result};
+use crate::formats::{MeshFormat, read_fe_mesh_raw, read_image, to_dimension, write_atomic};
+use crate::materials::{CtField, MaterialMap, MaterialRecipe, MaterialSummary, map_materials};
+use crate::mesh::FeMesh;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Where the subjects' CTs are: none, one file (or DICOM series) for the one subject, a
+/// folder with a CT named like each subject, or a CSV table `subject,ct`.
+#[derive(Clone, Debug, Default)]
+pub enum CtSource {
+    /// No CT: no materials.
+    #[default]
+    None,
+    /// One CT (a file, or a DICOM series' folder) for a run of one subject file.
+    File(PathBuf),
+    /// A folder holding, for each subject NAME, a CT file NAME.nii[.gz], NAME.nrrd,
+    /// NAME.nhdr, NAME.mha or NAME.mhd, or a DICOM series' folder NAME.
+    Folder(PathBuf),
+    /// A CSV table with columns `subject` and `ct` (paths relative to the table's folder).
+    Table(PathBuf, BTreeMap<String, PathBuf>),
+}
+
+impl CtSource {
+    /// The source `spec` names: a `.csv` table, a folder of CTs (one holding image files or
+    /// sub-folders), otherwise one CT (an image file, or a folder of one DICOM series).
+    ///
+    /// # Errors
+    /// [`Error::Io`] for a path that does not exist, [`Error::Parse`] for a malformed table.
+    pub fn parse(spec: &Path) -> Result<Self> {
+        let meta = std::fs::metadata(spec).map_err(|e| Error::io(spec, e))?;
+        if meta.is_file()
+            && spec
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+        {
+            return Ok(CtSource::Table(spec.to_path_buf(), read_ct_table(spec)?));
+        }
+        if meta.is_dir() {
+            let entries = std::fs::read_dir(spec).map_err(|e| Error::io(spec, e))?;
+            let mut pairing = false;
+            for entry in entries {
+                let p = entry.map_err(|e| Error::io(spec, e))?.path();
+                if p.is_dir() || crate::formats::is_image_file(&p) {
+                    pairing = true;
+                    break;
+                }
+            }
+            if pairing {
+                return Ok(CtSource::Folder(spec.to_path_buf()));
+            }
+        }
+        Ok(CtSource::File(spec.to_path_buf()))
+    }
+
+    /// Whether there is a CT at all.
+    pub fn is_some(&self) -> bool {
+        !matches!(self, CtSource::None)
+    }
+
+    /// Checks the source against the subject files of a run: one CT file is for one subject
+    /// file only.
+    ///
+    /// # Errors
+    /// [`Error::Parameter`] for one CT and several subject files.
+    pub fn check_subjects(&self, files: &[PathBuf]) -> Result<()> {
+        if let CtSource::File(ct) = self
+            && files.len() > 1
+        {
+            return Err(Error::Parameter(format!(
+                "--ct {} is one CT for {} subject files; give a folder of CTs named like the \
+                 subjects, or a CSV table subject,ct",
+                ct.display(),
+                files.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The CT of the subject `name` read from `file`.
+    ///
+    /// # Errors
+    /// [`Error::Parameter`] when the folder or the table has no CT for it.
+    pub fn for_subject(&self, file: &Path, name: &str) -> Result<Option<PathBuf>> {
+        let stem = super::shape_name(file);
+        match self {
+            CtSource::None => Ok(None),
+            CtSource::File(p) => Ok(Some(p.clone())),
+            CtSource::Folder(dir) => {
+                let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+                for entry in entries {
+                    let p = entry.map_err(|e| Error::io(dir, e))?.path();
+                    let candidate = (p.is_dir() || crate::formats::is_image_file(&p))
+                        && (super::shape_name(&p) == name || super::shape_name(&p) == stem);
+                    if candidate {
+                        return Ok(Some(p));
+                    }
+                }
+                Err(Error::Parameter(format!(
+                    "no CT for subject {name} in {}: expected {name}.nii.gz (or .nii, .nrrd, \
+                     .nhdr, .mha, .mhd) or a DICOM folder {name}",
+                    dir.display()
+                )))
+            }
+            CtSource::Table(table, rows) => rows
+                .get(name)
+                .or_else(|| rows.get(&stem))
+                .cloned()
+                .map(Some)
+                .ok_or_else(|| {
+                    Error::Parameter(format!(
+                        "{}: no row for subject {name}",
+                        table.display()
+                    ))
+                }),
+        }
+    }
+}
+
+/// The rows of a CT table: `subject,ct` (a header row naming the two columns first; paths
+/// relative to the table's folder).
+fn read_ct_table(path: &Path) -> Result<BTreeMap<String, PathBuf>> {
+    let bytes = crate::formats::read_input(path)?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        return Err(Error::parse(path, 1, "empty; expected a header subject,ct"));
+    };
+    let cols: Vec<String> = header
+        .split(',')
+        .map(|c| c.trim().trim_matches('"').to_ascii_lowercase())
+        .collect();
+    let (Some(s), Some(c)) = (
+        cols.iter().position(|c| c == "subject"),
+        cols.iter().position(|c| c == "ct"),
+    ) else {
+        return Err(Error::parse(
+            path,
+            1,
+            format!("the header {header:?} lacks the columns subject and ct"),
+        ));
+    };
+    let mut rows = BTreeMap::new();
+    for (i, line) in lines {
+        let f: Vec<&str> = line.split(',').map(|v| v.trim().trim_matches('"')).collect();
+        let (Some(name), Some(ct)) = (f.get(s), f.get(c)) else {
+            return Err(Error::parse(path, i + 1, "fewer fields than the header"));
+        };
+        if name.is_empty() || ct.is_empty() {
+            return Err(Error::parse(path, i + 1, "an empty subject or ct"));
+        }
+        if rows
+            .insert((*name).to_string(), base.join(ct))
+            .is_some()
+        {
+            return Err(Error::parse(path, i + 1, format!("subject {name} twice")));
+        }
+    }
+    Ok(rows)
+}
+
+/// Reads a CT (any image atlasmesh reads, or a DICOM series' folder) as a field in HU.
+///
+/// # Errors
+/// The reader's errors; [`Error::Parameter`] naming the file for a voxel that is not a
+/// number.
+pub fn read_ct(path: &Path) -> Result<CtField> {
+    let file = read_image(path)?;
+    CtField::new(&file.image).map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))
+}
+
+/// Reads a material recipe (TOML; see [`MaterialRecipe`]), checked.
+///
+/// # Errors
+/// [`Error::Io`], [`Error::Parse`] naming the file and the field.
+pub fn read_recipe(path: &Path) -> Result<MaterialRecipe> {
+    let bytes = crate::formats::read_input(path)?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
+    MaterialRecipe::parse(path, text)
+}
+
+/// Maps the CT in `ct` onto `mesh` (subject frame, mm, RAS) with `recipe`; the summary names
+/// the CT.
+///
+/// # Errors
+/// Those of [`read_ct`], [`MaterialRecipe::law`] and [`map_materials`] (a mesh outside the
+/// CT), the CT named in the message.
+pub fn map_ct<const D: usize>(
+    mesh: &FeMesh<D>,
+    ct: &Path,
+    recipe: &MaterialRecipe,
+) -> Result<MaterialMap> {
+    let resolved = recipe.law()?;
+    let field = read_ct(ct)?;
+    let mut map = map_materials(mesh, &field, &resolved).map_err(|e| match e {
+        Error::Parameter(m) => Error::Parameter(format!("{}: {m}", ct.display())),
+        e => e,
+    })?;
+    map.summary.ct = ct.display().to_string();
+    Ok(map)
+}
+
+/// What `atlasmesh materials` wrote: the map's summary and the files.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MaterialsReport {
+    /// atlasmesh's version.
+    pub version: String,
+    /// The mesh file mapped.
+    pub mesh: String,
+    /// Its element kind and count.
+    pub element_kind: String,
+    /// The map.
+    pub materials: MaterialSummary,
+    /// Files written, relative to the output folder.
+    pub files: Vec<String>,
+}
+
+/// `atlasmesh materials`: the mesh in `mesh_file` (any FE mesh atlasmesh reads, 2D or 3D)
+/// mapped on the CT `ct` with `recipe`, written into `out` as `NAME_materials.EXT` in every
+/// format of `formats` (with materials), `NAME_E.png` (the histogram of E, with `plots`)
+/// and `report.json`.
+///
+/// # Errors
+/// Those of reading the mesh and of [`map_ct`], and of the writes.
+pub fn map_mesh_file(
+    mesh_file: &Path,
+    ct: &Path,
+    recipe: &MaterialRecipe,
+    formats: &[MeshFormat],
+    plots: bool,
+    out: &Path,
+) -> Result<MaterialsReport> {
+    let raw = read_fe_mesh_raw(mesh_file)?;
+    let name = super::write_subject::file_name(&super::shape_name(mesh_file));
+    let kind = raw.kind;
+    let (summary, mut files) = if kind.dimension() == 2 {
+        let mesh: FeMesh<2> = to_dimension(mesh_file, raw)?;
+        write_mapped(&mesh, ct, recipe, formats, &name, out)?
+    } else {
+        let mesh: FeMesh<3> = to_dimension(mesh_file, raw)?;
+        write_mapped(&mesh, ct, recipe, formats, &name, out)?
+    };
+    if plots {
+        let png = format!("{name}_E.png");
+        crate::report::plot_modulus_histogram(
+            &out.join(&png),
+            &summary.histogram,
+            &format!("{name}: Young's modulus of the elements"),
+        )?;
+        files.push(png);
+    }
+    let report = MaterialsReport {
+        version: env!("CARGO_PKG_VERSION").into(),
+        mesh: mesh_file.display().to_string(),
+        element_kind: kind.name().into(),
+        materials: summary,
+        files,
+    };
+    let json = serde_json::to_vec_pretty(&report)
+        .map_err(|e| Error::Parameter(format!("report.json: {e}")))?;
+    write_atomic(&out.join("report.json"), &json)?;
+    Ok(report)
+}
+
+/// Maps and writes one mesh; returns the summary and the files written.
+fn write_mapped<const D: usize>(
+    mesh: &FeMesh<D>,
+    ct: &Path,
+    recipe: &MaterialRecipe,
+    formats: &[MeshFormat],
+    name: &str,
+    out: &Path,
+) -> Result<(MaterialSummary, Vec<String>)> {
+    let map = map_ct(mesh, ct, recipe)?;
+    let quality = crate::mesh::mesh_quality(mesh);
+    let mut files = Vec::new();
+    for f in formats {
+        if *f == MeshFormat::Feb && D == 2 {
+            continue;
+        }
+        let file = format!("{name}_materials.{}", f.extension());
+        crate::formats::write_mesh_with_materials(&out.join(&file), mesh, None, &quality, Some(&map))?;
+        files.push(file);
+    }
+    Ok((map.summary, files))
+}

@@ -820,6 +820,8 @@ pub fn plot_modulus_histogram(
                 .configure_mesh()
                 .x_desc("Young's modulus E of an element (MPa)")
                 .y_desc("elements")
+                .x_label_formatter(&|x| format!("{x:.0}"))
+                .y_label_formatter(&|y| format!("{y:.0}"))
                 .draw()
                 .map_err(perr(path))?;
         }

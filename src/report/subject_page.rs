@@ -111,6 +111,9 @@ pub fn write_subject_page(path: &Path, page: &SubjectPage) -> Result<()> {
         h.push_str("</div>\n");
     }
     measures(&mut h, r);
+    if let Some(m) = &r.materials {
+        materials(&mut h, m);
+    }
     h.push_str("<h2>E_d per iteration (eq. 6)</h2>\n");
     h.push_str(&e_d_svg(&r.e_d_history, 560.0, 220.0));
     worst(&mut h, page);
@@ -339,4 +342,58 @@ mod tests {
         assert_eq!(pts.split(' ').count(), 4);
         assert!(e_d_svg(&[1.0], 400.0, 200.0).contains("fewer than two"));
     }
+}
+
+/// The materials' table: the CT, the recipe's law, and the figures of the map.
+fn materials(h: &mut String, m: &crate::materials::MaterialSummary) {
+    let rows: Vec<(&str, String)> = vec![
+        ("CT", escape(&m.ct)),
+        (
+            "law",
+            format!("{} ({})", escape(&m.law), escape(&m.law_source)),
+        ),
+        (
+            "calibration",
+            format!(
+                "ρ<sub>QCT</sub> = {} + {} · HU g/cm³",
+                num(m.calibration.intercept, 4),
+                num(m.calibration.slope, 6)
+            ),
+        ),
+        (
+            "integration",
+            match m.method {
+                Some(crate::materials::IntegrationMethod::V2) => "V2: HU averaged, then E".into(),
+                _ => "V3: E at every point, then averaged".to_string(),
+            },
+        ),
+        ("elements", m.elements.to_string()),
+        ("mean HU (volume-weighted)", num(m.mean_hu, 1)),
+        (
+            "E min / median / max (MPa)",
+            format!(
+                "{} / {} / {}",
+                num(m.modulus_min, 0),
+                num(m.modulus_median, 0),
+                num(m.modulus_max, 0)
+            ),
+        ),
+        ("E volume-weighted mean (MPa)", num(m.modulus_mean, 0)),
+        (
+            "materials (gap in E)",
+            format!("{} ({} MPa)", m.materials, num(m.gap, 2)),
+        ),
+        ("elements at the E floor", m.at_floor.to_string()),
+        ("elements partly outside the CT", m.partly_outside.to_string()),
+        ("elements holding metal", m.metal_elements.to_string()),
+        (
+            "boundary elements in soft tissue",
+            format!("{} %", num(100.0 * m.partial_volume_share, 1)),
+        ),
+    ];
+    h.push_str("<h2>Materials from the CT</h2>\n<table class=\"measures\"><tbody>");
+    for (k, v) in rows {
+        let _ = write!(h, "<tr><td>{}</td><td>{v}</td></tr>", escape(k));
+    }
+    h.push_str("</tbody></table>\n");
 }

@@ -88,6 +88,8 @@ pub(crate) struct PageInputs<'a, const D: usize> {
     pub mean_in_subject: &'a FeMesh<D>,
     /// The distance of every instance point to the subject.
     pub instance_distance: &'a [f64],
+    /// The mesh's materials from the subject's CT.
+    pub materials: Option<&'a crate::materials::MaterialMap>,
 }
 
 /// The scene of a subject's view, with `worst` outlined.
@@ -153,6 +155,9 @@ pub(crate) fn subject_scene<const D: usize>(p: &PageInputs<D>, worst: &[WorstEle
     mesh.point_values
         .push(("displacement".into(), displacement));
     mesh.worst = worst.iter().map(|w| w.id - 1).collect();
+    if let Some(m) = p.materials {
+        mesh.cell_values.push(("E".into(), m.modulus.clone()));
+    }
     scene.layers.push(mesh);
     scene.fields = vec![
         Field::scaled_jacobian("scaled Jacobian"),
@@ -171,6 +176,16 @@ pub(crate) fn subject_scene<const D: usize>(p: &PageInputs<D>, worst: &[WorstEle
             map: ColorMap::Magnitude,
         },
     ];
+    if let Some(m) = p.materials {
+        let s = &m.summary;
+        scene.fields.push(Field {
+            id: "E".into(),
+            label: "Young's modulus from the CT".into(),
+            unit: "MPa".into(),
+            range: (s.modulus_min, s.modulus_max.max(s.modulus_min + 1.0)),
+            map: ColorMap::Magnitude,
+        });
+    }
     scene
 }
 

@@ -237,8 +237,19 @@ pub fn write_subject<const D: usize>(
             files.push(picture_2d(atlas, subject, &fit, &mesh, &base, out)?);
         }
         // The index's thumbnail: the mesh (3D) or the subject's picture (2D), 200 pixels wide.
-        if let Some(f) = files.iter().rev().find(|f| f.ends_with(".png")) {
-            let bytes = std::fs::read(out.join(f)).map_err(|e| crate::Error::io(out.join(f), e))?;
+        let thumb_source = files.iter().rev().find(|f| f.ends_with(".png")).cloned();
+        if let Some(m) = &materials {
+            let name = format!("{base}_E.png");
+            crate::report::plot_modulus_histogram(
+                &out.join(&name),
+                &m.summary.histogram,
+                &format!("{}: Young's modulus of the elements from the CT", subject.name),
+            )?;
+            files.push(name);
+        }
+        if let Some(f) = thumb_source {
+            let bytes =
+                std::fs::read(out.join(&f)).map_err(|e| crate::Error::io(out.join(&f), e))?;
             let name = format!("{base}_thumb.png");
             write_atomic(
                 &out.join(&name),
@@ -257,6 +268,7 @@ pub fn write_subject<const D: usize>(
             index: &index,
             mean_in_subject: &mean_in_subject,
             instance_distance: &instance_distance,
+            materials: materials.as_ref(),
         };
         let name = super::subject_page::write_page(&page, &report, &base, out, index_href)?;
         report.files.push(name);

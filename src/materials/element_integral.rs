@@ -69,6 +69,21 @@ fn sub_cells(kind: ElementKind, nodes: &[Point<3>], per_voxel: f64) -> [usize; 3
     }
 }
 
+/// The most integration points of one element: an element of hundreds of voxels gets
+/// fewer sub-cells per voxel rather than unbounded time.
+pub const MAX_POINTS_PER_ELEMENT: usize = 1 << 15;
+
+/// `cells` scaled down evenly until `cells` × `per_cell` points fit
+/// [`MAX_POINTS_PER_ELEMENT`].
+fn within_budget(cells: [usize; 3], per_cell: usize) -> [usize; 3] {
+    let total = cells.iter().product::<usize>() * per_cell;
+    if total <= MAX_POINTS_PER_ELEMENT {
+        return cells;
+    }
+    let f = (MAX_POINTS_PER_ELEMENT as f64 / total as f64).cbrt();
+    cells.map(|c| ((c as f64 * f).floor() as usize).max(1))
+}
+
 /// Integrates the CT over one element whose nodes are `nodes` in the CT's index
 /// coordinates (voxels): `∫ f(HU(x)) dV` over the element by the composite Gauss rule in
 /// its natural coordinates (`x = Σ Nᵢ(ξ) xᵢ`, `dV = |det ∂x/∂ξ| dξ`; in 2D the area of the
@@ -84,7 +99,10 @@ pub fn integrate_element(
     voxel_volume: f64,
     scratch: &mut IntegrationScratch,
 ) -> ElementIntegral {
-    let cells = sub_cells(kind, nodes, recipe.recipe.integration.subcells_per_voxel);
+    let cells = within_budget(
+        sub_cells(kind, nodes, recipe.recipe.integration.subcells_per_voxel),
+        gauss_points(kind).pow(kind.dimension() as u32),
+    );
     if scratch.kind != Some(kind) || scratch.cells != cells {
         cube_rule(kind.dimension(), cells, gauss_points(kind), &mut scratch.points);
         scratch.kind = Some(kind);

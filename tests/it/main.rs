@@ -18,6 +18,7 @@ mod hostile_outputs;
 mod html;
 mod instances;
 mod label_maps;
+mod materials;
 mod model_only;
 mod posterior;
 mod register;

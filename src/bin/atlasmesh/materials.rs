@@ -56,9 +56,17 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
     for w in &m.warnings {
         eprintln!("warning: {w}");
     }
+    let metal = if m.metal_elements > 0 {
+        format!(
+            "; METAL in {} elements (up to {:.0} HU)",
+            m.metal_elements, m.hu_max
+        )
+    } else {
+        String::new()
+    };
     println!(
         "{}: {} {} elements mapped on {}; mean HU {:.1} (volume-weighted); E {:.0} to {:.0} MPa \
-         (median {:.0}) in {} materials; {} warnings",
+         (median {:.0}) in {} materials{metal}; {} warnings",
         a.mesh.display(),
         m.elements,
         r.element_kind,

@@ -71,7 +71,7 @@ fn sub_cells(kind: ElementKind, nodes: &[Point<3>], per_voxel: f64) -> [usize; 3
 
 /// The most integration points of one element: an element of hundreds of voxels gets
 /// fewer sub-cells per voxel rather than unbounded time.
-pub const MAX_POINTS_PER_ELEMENT: usize = 1 << 15;
+pub const MAX_POINTS_PER_ELEMENT: usize = 1 << 18;
 
 /// `cells` scaled down evenly until `cells` × `per_cell` points fit
 /// [`MAX_POINTS_PER_ELEMENT`].

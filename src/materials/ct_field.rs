@@ -27,6 +27,7 @@ pub struct CtField {
     /// World (mm, RAS) → index, the rows `[A⁻¹ | -A⁻¹ t]`.
     inverse: [[f64; 4]; 3],
     values: Values,
+    grid: Grid,
     /// The smallest and largest value (HU).
     pub range: [f64; 2],
 }
@@ -67,6 +68,7 @@ impl CtField {
             affine: image.affine,
             inverse: invert_affine(&image.affine),
             values,
+            grid: Grid::new(image.dims),
             range,
         })
     }
@@ -125,35 +127,55 @@ impl CtField {
 
     #[inline]
     fn sample_in<T: Copy + Into<f64>>(&self, v: &[T], x: &Point<3>) -> Option<f64> {
-        let mut base = [0usize; 3];
-        let mut frac = [0.0f64; 3];
-        let mut step = [0usize; 3];
-        let strides = [1, self.dims[0], self.dims[0] * self.dims[1]];
-        for d in 0..3 {
-            let n = self.dims[d];
-            let c = x[d];
-            if !(c >= -0.5 && c <= n as f64 - 0.5) {
-                return None;
-            }
-            let c = c.clamp(0.0, (n - 1) as f64);
-            let i = (c.floor() as usize).min(n.saturating_sub(2));
-            base[d] = i;
-            frac[d] = c - i as f64;
-            step[d] = if n > 1 { strides[d] } else { 0 };
+        let g = &self.grid;
+        if !(x[0] >= -0.5
+            && x[0] <= g.hi[0]
+            && x[1] >= -0.5
+            && x[1] <= g.hi[1]
+            && x[2] >= -0.5
+            && x[2] <= g.hi[2])
+        {
+            return None;
         }
-        let o = base[0] + strides[1] * base[1] + strides[2] * base[2];
+        // (A cast truncates, which is the floor of a non-negative value; `floor` is a call
+        // into libm on baseline x86-64.)
+        let c: [f64; 3] = std::array::from_fn(|d| x[d].max(0.0).min(g.top[d]));
+        let i: [usize; 3] = std::array::from_fn(|d| (c[d] as usize).min(g.last[d]));
+        let [fx, fy, fz]: [f64; 3] = std::array::from_fn(|d| c[d] - i[d] as f64);
+        let o = i[0] + g.strides[1] * i[1] + g.strides[2] * i[2];
+        let [sx, sy, sz] = g.step;
         let at = |k: usize| -> f64 { v[k].into() };
-        let [fx, fy, fz] = frac;
         let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
-        let c00 = lerp(at(o), at(o + step[0]), fx);
-        let c10 = lerp(at(o + step[1]), at(o + step[1] + step[0]), fx);
-        let c01 = lerp(at(o + step[2]), at(o + step[2] + step[0]), fx);
-        let c11 = lerp(
-            at(o + step[2] + step[1]),
-            at(o + step[2] + step[1] + step[0]),
-            fx,
-        );
+        let c00 = lerp(at(o), at(o + sx), fx);
+        let c10 = lerp(at(o + sy), at(o + sy + sx), fx);
+        let c01 = lerp(at(o + sz), at(o + sz + sx), fx);
+        let c11 = lerp(at(o + sz + sy), at(o + sz + sy + sx), fx);
         Some(lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz))
+    }
+}
+
+/// The grid's constants for sampling: the extent's upper faces (`dims - 0.5`), the last
+/// voxel centre (`dims - 1`), the last cell's first voxel (`dims - 2`, 0 for one voxel), the
+/// strides and the steps to the next voxel (0 along an axis of one voxel).
+#[derive(Clone, Debug)]
+struct Grid {
+    hi: [f64; 3],
+    top: [f64; 3],
+    last: [usize; 3],
+    strides: [usize; 3],
+    step: [usize; 3],
+}
+
+impl Grid {
+    fn new(dims: [usize; 3]) -> Self {
+        let strides = [1, dims[0], dims[0] * dims[1]];
+        Grid {
+            hi: dims.map(|n| n as f64 - 0.5),
+            top: dims.map(|n| (n - 1) as f64),
+            last: dims.map(|n| n.saturating_sub(2)),
+            strides,
+            step: std::array::from_fn(|d| if dims[d] > 1 { strides[d] } else { 0 }),
+        }
     }
 }
 

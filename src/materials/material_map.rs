@@ -5,7 +5,9 @@
 use super::binning::{MaterialBin, bin_moduli};
 use super::ct_field::CtField;
 use super::density_law::DensityKind;
-use super::element_integral::{ElementIntegral, IntegrationScratch, integrate_element};
+use super::element_integral::{
+    ElementIntegral, ElementRule, IntegrationScratch, integrate_element,
+};
 use super::recipe::{Calibration, IntegrationMethod, MaterialRecipe, ResolvedRecipe};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
@@ -142,6 +144,7 @@ pub fn map_materials<const D: usize>(
         .map(|p| ct.index_of(&std::array::from_fn(|d| if d < D { p[d] } else { 0.0 })))
         .collect();
     let ne = mesh.num_elements();
+    let rule = ElementRule::new(ct, recipe, voxel_volume);
     let integrals: Vec<ElementIntegral> = (0..ne)
         .into_par_iter()
         .map_init(
@@ -149,7 +152,7 @@ pub fn map_materials<const D: usize>(
             |(scratch, nodes), e| {
                 nodes.clear();
                 nodes.extend(mesh.element(e).iter().map(|&n| index_nodes[n]));
-                integrate_element(ct, mesh.kind, nodes, recipe, voxel_volume, scratch)
+                integrate_element(ct, mesh.kind, nodes, &rule, scratch)
             },
         )
         .collect();

@@ -28,7 +28,10 @@ mod tests;
 pub use binning::{MaterialBin, bin_moduli};
 pub use ct_field::CtField;
 pub use density_law::{DensityKind, LawPiece, ModulusLaw};
-pub use element_integral::{ElementIntegral, IntegrationScratch, integrate_element};
+pub use element_integral::{
+    ElementIntegral, ElementRule, IntegrationScratch, MAX_POINTS_PER_ELEMENT, ModulusTable,
+    integrate_element,
+};
 pub use material_map::{
     Histogram, MaterialMap, MaterialSummary, OUTSIDE_LIMIT, PARTIAL_VOLUME_SHARE, map_materials,
 };

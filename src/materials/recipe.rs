@@ -262,15 +262,15 @@ pub struct IntegrationSettings {
     #[serde(default)]
     pub method: IntegrationMethod,
     /// Sub-cells per voxel of extent along each of the element's natural directions (default
-    /// 2.5; each sub-cell has a Gauss rule exact for the trilinear CT of a linear field). The
-    /// default keeps V3 within 0.3 % of a 12-per-voxel integration on a CT of pure noise
-    /// (elements 0.5-5 voxels across).
-    #[serde(default = "default_subcells")]
+    /// 1.5; each sub-cell has a Gauss rule exact for the trilinear CT of a linear field).
+    /// Measured against a 12-per-voxel integration, elements 0.5-5 voxels across, the
+    /// femoral-neck law: within 0.13 % on a bone-like CT with ±60 HU of noise, 1.5 % on a CT
+    /// of pure noise (-200 to 1800 HU); 2.5 brings these to 0.02 % and 0.25 %.
     pub subcells_per_voxel: f64,
 }
 
 fn default_subcells() -> f64 {
-    2.5
+    1.5
 }
 
 impl Default for IntegrationSettings {

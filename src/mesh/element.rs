@@ -39,7 +39,7 @@ use serde::{Deserialize, Serialize};
 /// Quad4 `S1..S4` = (0,1) (1,2) (2,3) (3,0); Tri3 `S1..S3` = (0,1) (1,2) (2,0);
 /// Hex8 `S1..S6` = (0,3,2,1) (4,5,6,7) (0,1,5,4) (1,2,6,5) (2,3,7,6) (3,0,4,7);
 /// Tet4 `S1..S4` = (0,2,1) (0,1,3) (1,2,3) (2,0,3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum ElementKind {
     /// Bilinear quadrilateral (2D).
     Quad4,

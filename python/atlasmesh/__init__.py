@@ -17,6 +17,7 @@ from ._atlasmesh import (  # noqa: F401
     Mesh,
     NotConvergedError,
     __version__,
+    map_materials,
     read_label_surface,
     read_shapes,
 )
@@ -56,6 +57,7 @@ __all__ = [
     "Atlas",
     "LabelMap",
     "read_label_surface",
+    "map_materials",
     "FitResult",
     "Mesh",
     "Error",

@@ -155,6 +155,19 @@ def read_label_surface(
     """The surface of a label map's label as (name, points, facets), world RAS in mm; what a
     user should know (islands dropped, cavities filled, cut by the border) as warnings."""
 
+def map_materials(
+    mesh: Union[Mesh, str, PathLike, Tuple[npt.ArrayLike, npt.ArrayLike, str]],
+    ct: Union[str, PathLike],
+    recipe: Optional[Union[str, PathLike, Dict[str, Any]]] = None,
+) -> Dict[str, Any]:
+    """Each element's bone material from a CT (Bonemat's method). `mesh`: an atlasmesh.Mesh,
+    a mesh file, or (nodes, elements, kind) arrays, in the CT's frame (mm, RAS); `ct`: a
+    NIfTI, NRRD or MetaImage file or a DICOM series' folder; `recipe`: a TOML file or a dict
+    of its tables (the documented defaults without). Returns one value per element in
+    `HU`, `rho_app` (or `rho_ash`/`rho_qct`, g/cm³), `E` (MPa), `material` (1-based group of
+    E), `volume` (mm³); `materials` (each group's E), `poisson`, and `summary` (the figures
+    and checks of report.json). The checks' findings are warnings too."""
+
 def read_shapes(
     path: Union[str, PathLike], closed: bool = True, resample: Optional[int] = None
 ) -> List[Tuple[str, FloatArray, IntArray]]:

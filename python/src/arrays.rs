@@ -44,6 +44,36 @@ pub fn indices<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<V
         .collect())
 }
 
+/// `obj` as the rows of an integer array of shape `(n, k)`, concatenated.
+pub fn flat_indices(obj: &Bound<'_, PyAny>, k: usize, what: &str) -> PyResult<Vec<usize>> {
+    let np = obj.py().import("numpy")?;
+    let a = np.call_method1("asarray", (obj,))?;
+    let kind: String = a.getattr("dtype")?.getattr("kind")?.extract()?;
+    if kind != "i" && kind != "u" {
+        return Err(PyValueError::new_err(format!(
+            "{what}: an integer array expected, got dtype kind {kind:?}"
+        )));
+    }
+    let a = np.call_method1("ascontiguousarray", (a, "int64"))?;
+    let shape: Vec<usize> = a.getattr("shape")?.extract()?;
+    if shape.len() != 2 || shape[1] != k {
+        return Err(PyValueError::new_err(format!(
+            "{what}: an integer array of shape (n, {k}) expected, got {shape:?}"
+        )));
+    }
+    let bytes = a.call_method0("tobytes")?;
+    bytes
+        .cast::<PyBytes>()?
+        .as_bytes()
+        .chunks_exact(8)
+        .map(|c| {
+            let v = i64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
+            usize::try_from(v)
+                .map_err(|_| PyValueError::new_err(format!("{what}: negative index {v}")))
+        })
+        .collect()
+}
+
 /// `obj` as a flat float64 vector.
 pub fn vector(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
     let (shape, values) = f64_array(obj)?;

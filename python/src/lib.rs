@@ -8,6 +8,7 @@
 
 mod arrays;
 mod errors;
+mod materials;
 mod model;
 mod read;
 mod result;
@@ -23,6 +24,7 @@ fn _atlasmesh(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<result::FitResult>()?;
     m.add_function(wrap_pyfunction!(read::read_shapes, m)?)?;
     m.add_function(wrap_pyfunction!(read::read_label_surface, m)?)?;
+    m.add_function(wrap_pyfunction!(materials::map_materials, m)?)?;
     m.add_class::<read::LabelMap>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

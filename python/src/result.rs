@@ -31,6 +31,20 @@ impl Mesh {
         }
     }
 
+    /// The mesh with 3D node coordinates (z = 0 for a 2D mesh).
+    pub(crate) fn fe_mesh_3d(&self) -> atlasmesh::mesh::FeMesh<3> {
+        atlasmesh::mesh::FeMesh {
+            nodes: self
+                .nodes
+                .chunks_exact(self.dim)
+                .map(|c| std::array::from_fn(|d| c.get(d).copied().unwrap_or(0.0)))
+                .collect(),
+            kind: self.kind,
+            connectivity: self.connectivity.clone(),
+            sets: self.sets.clone(),
+        }
+    }
+
     fn fe_mesh<const D: usize>(&self) -> atlasmesh::mesh::FeMesh<D> {
         atlasmesh::mesh::FeMesh {
             nodes: self

@@ -93,6 +93,16 @@ pub fn to_dimension<const D: usize>(path: &Path, m: FeMesh<3>) -> Result<FeMesh<
     })
 }
 
+/// Checks a mesh as every reader checks the meshes it reads: finite nodes, node indices in
+/// range, no element repeating a node, the sets' names and members (`path` names the mesh
+/// in messages).
+///
+/// # Errors
+/// [`Error::Parse`] naming `path` and the problem.
+pub fn check_fe_mesh<const D: usize>(path: &Path, mesh: &FeMesh<D>) -> Result<()> {
+    check_mesh(path, &mesh.nodes, mesh.kind, &mesh.connectivity, &mesh.sets)
+}
+
 /// The FE mesh formats written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum MeshFormat {

@@ -34,19 +34,7 @@ pub fn feb_with_materials<const D: usize>(
         env!("CARGO_PKG_VERSION")
     );
     if let Some(m) = map {
-        s.push_str("  <Material>\n");
-        for (k, bin) in m.bins.iter().enumerate() {
-            let _ = writeln!(
-                s,
-                "    <material id=\"{}\" name=\"{}\" type=\"isotropic elastic\">\n      \
-                 <density>1</density>\n      <E>{:.6e}</E>\n      <v>{}</v>\n    </material>",
-                k + 1,
-                crate::materials::MaterialMap::material_name(k),
-                bin.modulus,
-                m.poisson
-            );
-        }
-        s.push_str("  </Material>\n");
+        materials(&mut s, m);
     }
     s.push_str("  <Mesh>\n    <Nodes name=\"nodes\">\n");
     for (i, p) in mesh.nodes.iter().enumerate() {
@@ -77,20 +65,7 @@ pub fn feb_with_materials<const D: usize>(
         None => vec![("Part1".into(), all.as_slice())],
     };
     for (name, elements) in &parts {
-        let _ = writeln!(
-            s,
-            "    <Elements type=\"{}\" name=\"{name}\">",
-            mesh.kind.febio_type()
-        );
-        for &e in elements.iter() {
-            let ids: Vec<String> = mesh
-                .element(e)
-                .iter()
-                .map(|n| (n + 1).to_string())
-                .collect();
-            let _ = writeln!(s, "      <elem id=\"{}\">{}</elem>", e + 1, ids.join(","));
-        }
-        s.push_str("    </Elements>\n");
+        element_part(&mut s, mesh, name, elements);
     }
     let list = |m: &[usize]| {
         m.iter()
@@ -134,6 +109,41 @@ pub fn feb_with_materials<const D: usize>(
     }
     s.push_str("</febio_spec>\n");
     Ok(s)
+}
+
+/// One `Elements` part named `name` holding `elements` (their ids kept).
+fn element_part<const D: usize>(s: &mut String, mesh: &FeMesh<D>, name: &str, elements: &[usize]) {
+    let _ = writeln!(
+        s,
+        "    <Elements type=\"{}\" name=\"{name}\">",
+        mesh.kind.febio_type()
+    );
+    for &e in elements {
+        let ids: Vec<String> = mesh
+            .element(e)
+            .iter()
+            .map(|n| (n + 1).to_string())
+            .collect();
+        let _ = writeln!(s, "      <elem id=\"{}\">{}</elem>", e + 1, ids.join(","));
+    }
+    s.push_str("    </Elements>\n");
+}
+
+/// The `Material` section: one isotropic elastic material per bin of `map` (E in MPa).
+fn materials(s: &mut String, map: &crate::materials::MaterialMap) {
+    s.push_str("  <Material>\n");
+    for (k, bin) in map.bins.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "    <material id=\"{}\" name=\"{}\" type=\"isotropic elastic\">\n      \
+             <density>1</density>\n      <E>{:.6e}</E>\n      <v>{}</v>\n    </material>",
+            k + 1,
+            crate::materials::MaterialMap::material_name(k),
+            bin.modulus,
+            map.poisson
+        );
+    }
+    s.push_str("  </Material>\n");
 }
 
 /// The element-type table of this format.

@@ -64,8 +64,8 @@ pub use atomic::{create_dir, lock_dir, write_atomic};
 pub use csv_table::CsvColumns;
 pub use deck::{Deck, FebDeck};
 pub use fe_mesh::{
-    MeshFormat, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension, write_mesh,
-    write_mesh_with_materials,
+    MeshFormat, check_fe_mesh, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension,
+    write_mesh, write_mesh_with_materials,
 };
 pub use gmsh::{parse_msh, read_msh};
 pub use image_file::{ImageFile, ImageFormat, is_image_file, read_image};

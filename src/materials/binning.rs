@@ -16,7 +16,12 @@ pub struct MaterialBin {
 /// their E is within `gap` (MPa) of its first element's. When that makes more than `max`
 /// bins, the gap grows (by half, at least to the range over `max`) until it fits. Returns
 /// the bins by increasing E and the gap used. `volume` weighs the bins' means.
-pub fn bin_moduli(modulus: &[f64], volume: &[f64], gap: f64, max: usize) -> (Vec<MaterialBin>, f64) {
+pub fn bin_moduli(
+    modulus: &[f64],
+    volume: &[f64],
+    gap: f64,
+    max: usize,
+) -> (Vec<MaterialBin>, f64) {
     let mut order: Vec<usize> = (0..modulus.len()).collect();
     order.sort_by(|&a, &b| modulus[a].total_cmp(&modulus[b]).then(a.cmp(&b)));
     let (Some(&lo), Some(&hi)) = (order.first(), order.last()) else {

@@ -68,12 +68,7 @@ const fn power(coefficient: f64, exponent: f64) -> LawPiece {
 }
 
 /// A preset: name, density, pieces, source.
-type Preset = (
-    &'static str,
-    DensityKind,
-    &'static [LawPiece],
-    &'static str,
-);
+type Preset = (&'static str, DensityKind, &'static [LawPiece], &'static str);
 
 impl ModulusLaw {
     /// The presets: name, density, pieces, source (E in MPa, ρ in g/cm³).

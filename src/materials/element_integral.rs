@@ -91,7 +91,9 @@ impl ModulusTable {
         let span = (range[1] - range[0]).abs().max(1.0);
         let step = (span / (Self::MAX_ENTRIES - 2) as f64).max(1.0 / 16.0);
         let n = (span / step).ceil() as usize + 2;
-        let values = (0..n).map(|i| recipe.modulus(lo + i as f64 * step)).collect();
+        let values = (0..n)
+            .map(|i| recipe.modulus(lo + i as f64 * step))
+            .collect();
         ModulusTable { lo, step, values }
     }
 

@@ -274,7 +274,10 @@ fn summarize<const D: usize>(
             .iter()
             .filter(|i| i.hu_max > r.checks.metal_hu)
             .count(),
-        hu_max: integrals.iter().map(|i| i.hu_max).fold(f64::NEG_INFINITY, f64::max),
+        hu_max: integrals
+            .iter()
+            .map(|i| i.hu_max)
+            .fold(f64::NEG_INFINITY, f64::max),
         air_elements: integrals.iter().filter(|i| i.hu < r.checks.air_hu).count(),
         partial_volume_share: soft_surface as f64 / surface.max(1) as f64,
         histogram: histogram(&sorted, 20),
@@ -289,7 +292,11 @@ fn histogram(sorted: &[f64], bins: usize) -> Histogram {
     let (Some(&lo), Some(&hi)) = (sorted.first(), sorted.last()) else {
         return Histogram::default();
     };
-    let width = if hi > lo { (hi - lo) / bins as f64 } else { 1.0 };
+    let width = if hi > lo {
+        (hi - lo) / bins as f64
+    } else {
+        1.0
+    };
     let edges: Vec<f64> = (0..=bins).map(|k| lo + k as f64 * width).collect();
     let mut counts = vec![0; bins];
     for &v in sorted {

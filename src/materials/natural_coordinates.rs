@@ -118,10 +118,9 @@ pub fn cube_rule(dim: usize, cells: [usize; 3], g: usize, out: &mut Vec<CubePoin
 pub fn natural_point(kind: ElementKind, u: &[f64; 3]) -> ([f64; 3], f64) {
     match kind {
         ElementKind::Quad4 => ([2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0, 0.0], 4.0),
-        ElementKind::Hex8 | ElementKind::Hex20 => (
-            [2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0, 2.0 * u[2] - 1.0],
-            8.0,
-        ),
+        ElementKind::Hex8 | ElementKind::Hex20 => {
+            ([2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0, 2.0 * u[2] - 1.0], 8.0)
+        }
         ElementKind::Tri3 => ([u[0], (1.0 - u[0]) * u[1], 0.0], 1.0 - u[0]),
         ElementKind::Tet4 | ElementKind::Tet10 => {
             let a = 1.0 - u[0];
@@ -140,12 +139,17 @@ pub fn shape_functions(kind: ElementKind, xi: &[f64; 3], n: &mut [f64], dn: &mut
             let dim = kind.dimension();
             let scale = 0.5f64.powi(dim as i32);
             for (c, s) in corner_signs(kind).iter().enumerate() {
-                let f: [f64; 3] = std::array::from_fn(|d| if d < dim { 1.0 + xi[d] * s[d] } else { 1.0 });
+                let f: [f64; 3] =
+                    std::array::from_fn(|d| if d < dim { 1.0 + xi[d] * s[d] } else { 1.0 });
                 n[c] = scale * f[0] * f[1] * f[2];
                 dn[c] = [
                     scale * s[0] * f[1] * f[2],
                     scale * f[0] * s[1] * f[2],
-                    if dim == 3 { scale * f[0] * f[1] * s[2] } else { 0.0 },
+                    if dim == 3 {
+                        scale * f[0] * f[1] * s[2]
+                    } else {
+                        0.0
+                    },
                 ];
             }
         }

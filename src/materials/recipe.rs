@@ -377,7 +377,9 @@ impl MaterialRecipe {
     pub fn law(&self) -> Result<ResolvedRecipe> {
         let bad = |m: String| Err(Error::Parameter(format!("material recipe: {m}")));
         if self.calibration.rods.len() > MAX_ITEMS || self.modulus.pieces.len() > MAX_ITEMS {
-            return bad(format!("at most {MAX_ITEMS} rods and {MAX_ITEMS} law pieces"));
+            return bad(format!(
+                "at most {MAX_ITEMS} rods and {MAX_ITEMS} law pieces"
+            ));
         }
         let (calibration, rod_residual) = self.calibration.fitted()?;
         let c = &calibration;
@@ -388,8 +390,11 @@ impl MaterialRecipe {
             ));
         }
         let d = &self.density;
-        if !(d.ash_slope.is_finite() && d.ash_slope > 0.0 && d.ash_intercept.is_finite())
-            || !(d.ash_per_apparent > 0.0 && d.ash_per_apparent <= 1.0)
+        if !(d.ash_slope.is_finite()
+            && d.ash_slope > 0.0
+            && d.ash_intercept.is_finite()
+            && d.ash_per_apparent > 0.0
+            && d.ash_per_apparent <= 1.0)
         {
             return bad(format!(
                 "density: ash_slope {} must be positive, ash_intercept {} finite and \
@@ -402,7 +407,10 @@ impl MaterialRecipe {
             return bad(format!("modulus floor {} MPa must be positive", m.floor));
         }
         if !(m.poisson > -1.0 && m.poisson < 0.5) {
-            return bad(format!("Poisson's ratio {} must be in (-1, 0.5)", m.poisson));
+            return bad(format!(
+                "Poisson's ratio {} must be in (-1, 0.5)",
+                m.poisson
+            ));
         }
         let law = ModulusLaw::named(&m.law, m.density, &m.pieces)?;
         let s = self.integration.subcells_per_voxel;
@@ -410,7 +418,7 @@ impl MaterialRecipe {
             return bad(format!("subcells_per_voxel {s} must be in [0.25, 16]"));
         }
         let b = &self.materials;
-        if !(b.gap.is_finite() && b.gap >= 0.0) || !(1..=100_000).contains(&b.max_materials) {
+        if !(b.gap.is_finite() && b.gap >= 0.0 && (1..=100_000).contains(&b.max_materials)) {
             return bad(format!(
                 "materials: gap {} MPa must be ≥ 0 and max_materials {} in 1..=100000",
                 b.gap, b.max_materials

@@ -39,7 +39,12 @@ fn recipe(text: &str) -> ResolvedRecipe {
 }
 
 /// One element's integral on `ct` (nodes in world mm).
-fn integral(ct: &CtField, kind: ElementKind, nodes: &[Point<3>], r: &ResolvedRecipe) -> ElementIntegral {
+fn integral(
+    ct: &CtField,
+    kind: ElementKind,
+    nodes: &[Point<3>],
+    r: &ResolvedRecipe,
+) -> ElementIntegral {
     let idx: Vec<Point<3>> = nodes.iter().map(|p| ct.index_of(p)).collect();
     let rule = ElementRule::new(ct, r, ct.voxel_volume());
     integrate_element(ct, kind, &idx, &rule, &mut IntegrationScratch::default())
@@ -61,7 +66,11 @@ fn hex8(o: Point<3>, size: f64) -> Vec<Point<3>> {
     ];
     for p in &mut v {
         let q = *p;
-        *p = [o[0] + q[0] + 0.2 * q[2], o[1] + q[1] - 0.1 * q[0], o[2] + q[2] + 0.15 * q[1]];
+        *p = [
+            o[0] + q[0] + 0.2 * q[2],
+            o[1] + q[1] - 0.1 * q[0],
+            o[2] + q[2] + 0.15 * q[1],
+        ];
     }
     v
 }
@@ -96,7 +105,11 @@ fn centroid_midpoint(kind: ElementKind, nodes: &[Point<3>]) -> Point<3> {
     for a in 0..n {
         for b in 0..n {
             for z in 0..(if dim == 3 { n } else { 1 }) {
-                let u = [(a as f64 + 0.5) / n as f64, (b as f64 + 0.5) / n as f64, (z as f64 + 0.5) / n as f64];
+                let u = [
+                    (a as f64 + 0.5) / n as f64,
+                    (b as f64 + 0.5) / n as f64,
+                    (z as f64 + 0.5) / n as f64,
+                ];
                 let (xi, f) = natural_coordinates::natural_point(kind, &u);
                 natural_coordinates::shape_functions(kind, &xi, &mut sn, &mut dn);
                 let mut x = [0.0; 3];
@@ -149,11 +162,21 @@ fn linear_ct_integrals_equal_the_value_at_the_centroid() {
         let i = integral(&ct, kind, &nodes, &default);
         let j = integral(&ct, kind, &nodes, &fine);
         // Exact: a finer composite rule changes nothing but round-off.
-        assert!((i.hu - j.hu).abs() <= 1e-9 * i.hu.abs(), "{kind:?}: {} vs {}", i.hu, j.hu);
+        assert!(
+            (i.hu - j.hu).abs() <= 1e-9 * i.hu.abs(),
+            "{kind:?}: {} vs {}",
+            i.hu,
+            j.hu
+        );
         assert!((i.volume - j.volume).abs() <= 1e-9 * i.volume, "{kind:?}");
         // And it is the value at the volume centroid (found by the test's own rule).
         let c = centroid_midpoint(kind, &nodes);
-        assert!((i.hu - f(c)).abs() <= 1e-4 * f(c).abs(), "{kind:?}: {} vs {}", i.hu, f(c));
+        assert!(
+            (i.hu - f(c)).abs() <= 1e-4 * f(c).abs(),
+            "{kind:?}: {} vs {}",
+            i.hu,
+            f(c)
+        );
         assert_eq!(i.outside, 0.0);
     }
     // The frustum's centroid is known in closed form: the same HU to 1e-9.
@@ -173,14 +196,26 @@ fn linear_ct_integrals_equal_the_value_at_the_centroid() {
     .to_vec();
     let i = integral(&ct, ElementKind::Hex8, &frustum, &default);
     let c = [0.0, 0.0, zbar - 2.0];
-    assert!((i.hu - f(c)).abs() <= 1e-9 * f(c).abs(), "{} vs {}", i.hu, f(c));
+    assert!(
+        (i.hu - f(c)).abs() <= 1e-9 * f(c).abs(),
+        "{} vs {}",
+        i.hu,
+        f(c)
+    );
     let v = h / 3.0 * (a * a + a * b + b * b);
     assert!((i.volume - v).abs() <= 1e-9 * v);
     // Straight-sided quadratic elements are their linear ones.
     for (lin, nodes) in [(ElementKind::Hex8, &h8), (ElementKind::Tet4, &t4)] {
         let q = curved(lin.linear(), nodes, [0.0; 3]);
-        let kind = if lin == ElementKind::Hex8 { ElementKind::Hex20 } else { ElementKind::Tet10 };
-        let (x, y) = (integral(&ct, lin, nodes, &default), integral(&ct, kind, &q, &default));
+        let kind = if lin == ElementKind::Hex8 {
+            ElementKind::Hex20
+        } else {
+            ElementKind::Tet10
+        };
+        let (x, y) = (
+            integral(&ct, lin, nodes, &default),
+            integral(&ct, kind, &q, &default),
+        );
         assert!((x.hu - y.hu).abs() <= 1e-9 * x.hu.abs());
     }
     // A tetrahedron's centroid is the mean of its corners.
@@ -191,7 +226,11 @@ fn linear_ct_integrals_equal_the_value_at_the_centroid() {
 
 #[test]
 fn quads_over_pixels_of_a_2d_image() {
-    let affine = [[0.5, 0.0, 0.0, -10.0], [0.0, 0.4, 0.0, -8.0], [0.0, 0.0, 1.0, 0.0]];
+    let affine = [
+        [0.5, 0.0, 0.0, -10.0],
+        [0.0, 0.4, 0.0, -8.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
     let f = |p: Point<3>| 50.0 + 3.0 * p[0] + 7.0 * p[1];
     let ct = CtField::new(&image([60, 60, 1], affine, f)).unwrap();
     // A convex quadrilateral; its centroid by the polygon formula.
@@ -212,7 +251,12 @@ fn quads_over_pixels_of_a_2d_image() {
         cy += (p[1] + r[1]) * x;
     }
     let c = [cx / (6.0 * a), cy / (6.0 * a), 0.0];
-    assert!((m.hu[0] - f(c)).abs() <= 1e-9 * f(c).abs(), "{} vs {}", m.hu[0], f(c));
+    assert!(
+        (m.hu[0] - f(c)).abs() <= 1e-9 * f(c).abs(),
+        "{} vs {}",
+        m.hu[0],
+        f(c)
+    );
     assert!((m.volume[0] - a).abs() <= 1e-9 * a);
     // A 2D mesh on a 3D CT is refused.
     let ct3 = CtField::new(&image([4, 4, 4], affine, f)).unwrap();
@@ -222,16 +266,33 @@ fn quads_over_pixels_of_a_2d_image() {
 #[test]
 fn the_published_ramp_values() {
     // HU = 5 (i + j + k) at voxels (i, j, k) ∈ {0, 1, 2}³ centred on {-1, 0, 1}³.
-    let affine = [[1.0, 0.0, 0.0, -1.0], [0.0, 1.0, 0.0, -1.0], [0.0, 0.0, 1.0, -1.0]];
-    let ct = CtField::new(&image([3, 3, 3], affine, |p| 5.0 * (p[0] + p[1] + p[2] + 3.0))).unwrap();
+    let affine = [
+        [1.0, 0.0, 0.0, -1.0],
+        [0.0, 1.0, 0.0, -1.0],
+        [0.0, 0.0, 1.0, -1.0],
+    ];
+    let ct = CtField::new(&image([3, 3, 3], affine, |p| {
+        5.0 * (p[0] + p[1] + p[2] + 3.0)
+    }))
+    .unwrap();
     let r = recipe("");
     let unit_hex: Vec<Point<3>> = HexUnit::corners();
-    let unit_tet: Vec<Point<3>> = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let unit_tet: Vec<Point<3>> = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
     let hex = integral(&ct, ElementKind::Hex8, &unit_hex, &r);
     assert!((hex.hu - 22.5).abs() < 1e-12, "{}", hex.hu);
     let tet = integral(&ct, ElementKind::Tet4, &unit_tet, &r);
     assert!((tet.hu - 18.75).abs() < 1e-12, "{}", tet.hu);
-    let tet10 = integral(&ct, ElementKind::Tet10, &curved(ElementKind::Tet4, &unit_tet, [0.0; 3]), &r);
+    let tet10 = integral(
+        &ct,
+        ElementKind::Tet10,
+        &curved(ElementKind::Tet4, &unit_tet, [0.0; 3]),
+        &r,
+    );
     assert!((tet10.hu - 18.75).abs() < 1e-12, "{}", tet10.hu);
     assert!((hex.volume - 1.0).abs() < 1e-12 && (tet.volume - 1.0 / 6.0).abs() < 1e-12);
 }
@@ -251,11 +312,17 @@ impl HexUnit {
 /// (`dense` sub-cells per voxel) over hexahedra and tetrahedra 0.5-5 voxels across on `ct`.
 fn v3_error(ct: &CtField, recipe_text: &str, dense: f64) -> f64 {
     let r = recipe(recipe_text);
-    let dense = recipe(&format!("{recipe_text}\n[integration]\nsubcells_per_voxel = {dense}\n"));
+    let dense = recipe(&format!(
+        "{recipe_text}\n[integration]\nsubcells_per_voxel = {dense}\n"
+    ));
     let mut worst: f64 = 0.0;
     for (k, size) in [0.5, 0.8, 1.0, 1.7, 2.5, 3.3, 5.0].into_iter().enumerate() {
         for seed in 0..4 {
-            let o = [5.3 + 6.0 * seed as f64 + 0.1 * k as f64, 6.1 + 3.0 * k as f64, 4.7 + seed as f64];
+            let o = [
+                5.3 + 6.0 * seed as f64 + 0.1 * k as f64,
+                6.1 + 3.0 * k as f64,
+                4.7 + seed as f64,
+            ];
             let h8 = hex8(o, size);
             let t4: Vec<Point<3>> = [0, 1, 3, 4].iter().map(|&c| h8[c]).collect();
             for (kind, nodes) in [(ElementKind::Hex8, h8.clone()), (ElementKind::Tet4, t4)] {
@@ -271,8 +338,14 @@ fn v3_error(ct: &CtField, recipe_text: &str, dense: f64) -> f64 {
 /// A 40³ CT of 1 mm: `f` at each voxel plus uniform noise of ± `noise` HU.
 fn noisy_ct(f: impl Fn(Point<3>) -> f64, noise: f64) -> CtField {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-    let n: Vec<f64> = (0..40 * 40 * 40).map(|_| rng.random_range(-noise..noise)).collect();
-    let affine = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];
+    let n: Vec<f64> = (0..40 * 40 * 40)
+        .map(|_| rng.random_range(-noise..noise))
+        .collect();
+    let affine = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
     CtField::new(&image([40, 40, 40], affine, |p| {
         f(p) + n[p[0] as usize + 40 * (p[1] as usize + 40 * p[2] as usize)]
     }))
@@ -283,13 +356,24 @@ fn noisy_ct(f: impl Fn(Point<3>) -> f64, noise: f64) -> CtField {
 fn v3_on_a_nonlinear_law_matches_a_dense_integration() {
     // Bone-like: trabecular HU varying over millimetres with scanner noise of ±60 HU, under
     // the femoral-neck power law (E ∝ ρ^1.49).
-    let bone = noisy_ct(|p| 500.0 + 300.0 * (p[0] / 3.0).sin() * (p[1] / 4.0).cos() + 8.0 * p[2], 60.0);
+    let bone = noisy_ct(
+        |p| 500.0 + 300.0 * (p[0] / 3.0).sin() * (p[1] / 4.0).cos() + 8.0 * p[2],
+        60.0,
+    );
     let e = v3_error(&bone, "", 12.0);
-    assert!(e < 0.005, "bone-like CT: V3 within {:.3} % of the dense integration", 100.0 * e);
+    assert!(
+        e < 0.005,
+        "bone-like CT: V3 within {:.3} % of the dense integration",
+        100.0 * e
+    );
     // The hardest case, pure noise from -200 to 1800 HU (a kink at every voxel face).
     let noise = noisy_ct(|_| 800.0, 1000.0);
     let e = v3_error(&noise, "", 12.0);
-    assert!(e < 0.02, "noise CT: V3 within {:.3} % of the dense integration", 100.0 * e);
+    assert!(
+        e < 0.02,
+        "noise CT: V3 within {:.3} % of the dense integration",
+        100.0 * e
+    );
 }
 
 #[test]
@@ -311,7 +395,10 @@ fn recipes_presets_and_calibration() {
     let c = recipe(
         "[calibration]\nrods = [{ hu = 0.0, density = 0.1 }, { hu = 500.0, density = 0.5 }, { hu = 1000.0, density = 0.9 }]\n",
     );
-    assert!((c.calibration.slope - 0.0008).abs() < 1e-12 && (c.calibration.intercept - 0.1).abs() < 1e-12);
+    assert!(
+        (c.calibration.slope - 0.0008).abs() < 1e-12
+            && (c.calibration.intercept - 0.1).abs() < 1e-12
+    );
     // A custom piecewise law, and the errors that name the field.
     let p = recipe(
         "[modulus]\nlaw = \"custom\"\ndensity = \"ash\"\npieces = [{ coefficient = 1000.0, exponent = 2.0 }, { from = 0.5, coefficient = 500.0, exponent = 1.0, offset = 0.0 }]\n",
@@ -324,10 +411,16 @@ fn recipes_presets_and_calibration() {
         ("[modulus]\nlaw = \"custom\"\n", "density"),
         ("[modulus]\npoisson = 0.7\n", "Poisson"),
         ("[calibration]\nslope = -1.0\n", "slope"),
-        ("[calibration]\nrods = [{ hu = 1.0, density = 0.1 }]\n", "one phantom rod"),
+        (
+            "[calibration]\nrods = [{ hu = 1.0, density = 0.1 }]\n",
+            "one phantom rod",
+        ),
         ("[calibration]\nslop = 1.0\n", "unknown field"),
         ("[integration]\nmethod = \"v4\"\n", "unknown variant"),
-        ("[modulus]\nlaw = \"custom\"\ndensity = \"app\"\npieces = [{ coefficient = 1.0, exponent = 1.0, from = 0.5 }, { coefficient = 1.0, exponent = 1.0, from = 0.2 }]\n", "not above"),
+        (
+            "[modulus]\nlaw = \"custom\"\ndensity = \"app\"\npieces = [{ coefficient = 1.0, exponent = 1.0, from = 0.5 }, { coefficient = 1.0, exponent = 1.0, from = 0.2 }]\n",
+            "not above",
+        ),
     ] {
         let e = MaterialRecipe::parse(path, text).unwrap_err().to_string();
         assert!(e.contains(needle) && e.contains("r.toml"), "{text}: {e}");
@@ -337,7 +430,11 @@ fn recipes_presets_and_calibration() {
 #[test]
 fn a_block_of_bone_with_metal_and_air_is_flagged() {
     // A 10 mm cube of 800 HU, one voxel of 4000 HU (metal) and a pocket of air.
-    let affine = [[0.5, 0.0, 0.0, -2.0], [0.0, 0.5, 0.0, -2.0], [0.0, 0.0, 0.5, -2.0]];
+    let affine = [
+        [0.5, 0.0, 0.0, -2.0],
+        [0.0, 0.5, 0.0, -2.0],
+        [0.0, 0.0, 0.5, -2.0],
+    ];
     let ct = CtField::new(&image([40, 40, 40], affine, |p| {
         if (p[0] - 5.0).abs() < 0.6 && (p[1] - 5.0).abs() < 0.6 && (p[2] - 5.0).abs() < 0.6 {
             4000.0
@@ -356,7 +453,11 @@ fn a_block_of_bone_with_metal_and_air_is_flagged() {
     let m = map_materials(&mesh, &ct, &r).unwrap();
     let s = &m.summary;
     assert_eq!(m.hu.len(), 125);
-    assert!(s.metal_elements >= 1 && s.warnings.iter().any(|w| w.starts_with("metal")), "{:?}", s.warnings);
+    assert!(
+        s.metal_elements >= 1 && s.warnings.iter().any(|w| w.starts_with("metal")),
+        "{:?}",
+        s.warnings
+    );
     assert!(s.air_elements >= 1, "{s:?}");
     assert!(!s.warnings.iter().any(|w| w.contains("no phantom")));
     // Every element is in one material; the bins' E are within the gap of their elements'.
@@ -367,12 +468,19 @@ fn a_block_of_bone_with_metal_and_air_is_flagged() {
         p[0] += 15.0;
     }
     let e = map_materials(&mesh, &ct, &r).unwrap_err().to_string();
-    assert!(e.contains("outside the CT") && e.contains("% of the mesh's volume"), "{e}");
+    assert!(
+        e.contains("outside the CT") && e.contains("% of the mesh's volume"),
+        "{e}"
+    );
 }
 
 #[test]
 fn the_tabulated_law_is_the_law() {
-    for text in ["", "[modulus]\nlaw = \"keyak-2003\"\n", "[modulus]\nlaw = \"morgan-2003-vertebra\"\n"] {
+    for text in [
+        "",
+        "[modulus]\nlaw = \"keyak-2003\"\n",
+        "[modulus]\nlaw = \"morgan-2003-vertebra\"\n",
+    ] {
         let r = recipe(text);
         let t = ModulusTable::new(&r, [-1024.0, 3071.0]);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);

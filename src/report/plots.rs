@@ -769,32 +769,6 @@ pub fn plot_baselines(path: &Path, subjects: &[SubjectReport]) -> Result<()> {
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn count_axes_label_integers_only() {
-        assert_eq!(integer_label(&2.0), "2");
-        assert_eq!(integer_label(&2.5), "");
-        assert_eq!(integer_label(&0.0), "0");
-        assert_eq!(integer_label(&(3.0 + 1e-12)), "3");
-    }
-
-    #[test]
-    fn the_e_d_plot_names_the_subjects_that_ended_highest() {
-        let h: Vec<(String, Vec<f64>)> = (0..10)
-            .map(|k| (format!("s{k}"), vec![100.0, (k * 7 % 10) as f64 + 1.0]))
-            .collect();
-        let named = highest_last(&h, 3);
-        let last: Vec<f64> = named.iter().map(|&i| h[i].1[1]).collect();
-        assert_eq!(last, vec![10.0, 9.0, 8.0]);
-        assert_eq!(highest_last(&h[..2], 6).len(), 2);
-        // A history with no finite value is left out.
-        assert!(highest_last(&[("x".into(), vec![f64::NAN])], 6).is_empty());
-    }
-}
-
 /// Histogram of the elements' Young's modulus (MPa) of a material map, titled `title`.
 pub fn plot_modulus_histogram(
     path: &Path,
@@ -833,4 +807,30 @@ pub fn plot_modulus_histogram(
             .map_err(perr(path))?;
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn count_axes_label_integers_only() {
+        assert_eq!(integer_label(&2.0), "2");
+        assert_eq!(integer_label(&2.5), "");
+        assert_eq!(integer_label(&0.0), "0");
+        assert_eq!(integer_label(&(3.0 + 1e-12)), "3");
+    }
+
+    #[test]
+    fn the_e_d_plot_names_the_subjects_that_ended_highest() {
+        let h: Vec<(String, Vec<f64>)> = (0..10)
+            .map(|k| (format!("s{k}"), vec![100.0, (k * 7 % 10) as f64 + 1.0]))
+            .collect();
+        let named = highest_last(&h, 3);
+        let last: Vec<f64> = named.iter().map(|&i| h[i].1[1]).collect();
+        assert_eq!(last, vec![10.0, 9.0, 8.0]);
+        assert_eq!(highest_last(&h[..2], 6).len(), 2);
+        // A history with no finite value is left out.
+        assert!(highest_last(&[("x".into(), vec![f64::NAN])], 6).is_empty());
+    }
 }

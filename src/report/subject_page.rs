@@ -322,28 +322,6 @@ pub fn e_d_svg(history: &[f64], width: f64, height: f64) -> String {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_e_d_plot_has_integer_ticks_and_a_point_per_iteration() {
-        let s = e_d_svg(&[10.0, 1.0, 0.1, 0.05], 400.0, 200.0);
-        assert!(s.contains(">0</text>") && s.contains(">3</text>"), "{s}");
-        assert!(!s.contains(">0.5<"), "{s}");
-        assert_eq!(s.matches("<polyline").count(), 1);
-        let pts = s
-            .split("points=\"")
-            .nth(1)
-            .unwrap()
-            .split('"')
-            .next()
-            .unwrap();
-        assert_eq!(pts.split(' ').count(), 4);
-        assert!(e_d_svg(&[1.0], 400.0, 200.0).contains("fewer than two"));
-    }
-}
-
 /// The materials' table: the CT, the recipe's law, and the figures of the map.
 fn materials(h: &mut String, m: &crate::materials::MaterialSummary) {
     let rows: Vec<(&str, String)> = vec![
@@ -384,7 +362,10 @@ fn materials(h: &mut String, m: &crate::materials::MaterialSummary) {
             format!("{} ({} MPa)", m.materials, num(m.gap, 2)),
         ),
         ("elements at the E floor", m.at_floor.to_string()),
-        ("elements partly outside the CT", m.partly_outside.to_string()),
+        (
+            "elements partly outside the CT",
+            m.partly_outside.to_string(),
+        ),
         ("elements holding metal", m.metal_elements.to_string()),
         (
             "boundary elements in soft tissue",
@@ -396,4 +377,26 @@ fn materials(h: &mut String, m: &crate::materials::MaterialSummary) {
         let _ = write!(h, "<tr><td>{}</td><td>{v}</td></tr>", escape(k));
     }
     h.push_str("</tbody></table>\n");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_e_d_plot_has_integer_ticks_and_a_point_per_iteration() {
+        let s = e_d_svg(&[10.0, 1.0, 0.1, 0.05], 400.0, 200.0);
+        assert!(s.contains(">0</text>") && s.contains(">3</text>"), "{s}");
+        assert!(!s.contains(">0.5<"), "{s}");
+        assert_eq!(s.matches("<polyline").count(), 1);
+        let pts = s
+            .split("points=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        assert_eq!(pts.split(' ').count(), 4);
+        assert!(e_d_svg(&[1.0], 400.0, 200.0).contains("fewer than two"));
+    }
 }

@@ -112,10 +112,7 @@ impl CtSource {
                 .cloned()
                 .map(Some)
                 .ok_or_else(|| {
-                    Error::Parameter(format!(
-                        "{}: no row for subject {name}",
-                        table.display()
-                    ))
+                    Error::Parameter(format!("{}: no row for subject {name}", table.display()))
                 }),
         }
     }
@@ -125,10 +122,12 @@ impl CtSource {
 /// relative to the table's folder).
 fn read_ct_table(path: &Path) -> Result<BTreeMap<String, PathBuf>> {
     let bytes = crate::formats::read_input(path)?;
-    let text = std::str::from_utf8(&bytes)
-        .map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
+    let text = std::str::from_utf8(&bytes).map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     let Some((_, header)) = lines.next() else {
         return Err(Error::parse(path, 1, "empty; expected a header subject,ct"));
     };
@@ -148,17 +147,17 @@ fn read_ct_table(path: &Path) -> Result<BTreeMap<String, PathBuf>> {
     };
     let mut rows = BTreeMap::new();
     for (i, line) in lines {
-        let f: Vec<&str> = line.split(',').map(|v| v.trim().trim_matches('"')).collect();
+        let f: Vec<&str> = line
+            .split(',')
+            .map(|v| v.trim().trim_matches('"'))
+            .collect();
         let (Some(name), Some(ct)) = (f.get(s), f.get(c)) else {
             return Err(Error::parse(path, i + 1, "fewer fields than the header"));
         };
         if name.is_empty() || ct.is_empty() {
             return Err(Error::parse(path, i + 1, "an empty subject or ct"));
         }
-        if rows
-            .insert((*name).to_string(), base.join(ct))
-            .is_some()
-        {
+        if rows.insert((*name).to_string(), base.join(ct)).is_some() {
             return Err(Error::parse(path, i + 1, format!("subject {name} twice")));
         }
     }
@@ -172,7 +171,8 @@ fn read_ct_table(path: &Path) -> Result<BTreeMap<String, PathBuf>> {
 /// number.
 pub fn read_ct(path: &Path) -> Result<CtField> {
     let file = read_image(path)?;
-    CtField::new(&file.image).map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))
+    CtField::new(&file.image)
+        .map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))
 }
 
 /// Reads a material recipe (TOML; see [`MaterialRecipe`]), checked.
@@ -181,8 +181,7 @@ pub fn read_ct(path: &Path) -> Result<CtField> {
 /// [`Error::Io`], [`Error::Parse`] naming the file and the field.
 pub fn read_recipe(path: &Path) -> Result<MaterialRecipe> {
     let bytes = crate::formats::read_input(path)?;
-    let text = std::str::from_utf8(&bytes)
-        .map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
+    let text = std::str::from_utf8(&bytes).map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
     MaterialRecipe::parse(path, text)
 }
 
@@ -286,7 +285,13 @@ fn write_mapped<const D: usize>(
             continue;
         }
         let file = format!("{name}_materials.{}", f.extension());
-        crate::formats::write_mesh_with_materials(&out.join(&file), mesh, None, &quality, Some(&map))?;
+        crate::formats::write_mesh_with_materials(
+            &out.join(&file),
+            mesh,
+            None,
+            &quality,
+            Some(&map),
+        )?;
         files.push(file);
     }
     Ok((map.summary, files))

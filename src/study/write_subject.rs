@@ -243,7 +243,10 @@ pub fn write_subject<const D: usize>(
             crate::report::plot_modulus_histogram(
                 &out.join(&name),
                 &m.summary.histogram,
-                &format!("{}: Young's modulus of the elements from the CT", subject.name),
+                &format!(
+                    "{}: Young's modulus of the elements from the CT",
+                    subject.name
+                ),
             )?;
             files.push(name);
         }

@@ -55,7 +55,14 @@ fn vertebra_atlas(data: &Path, dir: &Path) -> PathBuf {
         .collect();
     shapes.sort();
     let atlas = dir.join("atlas.safetensors");
-    let mut a = args(&["build", "--register", "--element-size", "2", "--no-plots", "--shapes"]);
+    let mut a = args(&[
+        "build",
+        "--register",
+        "--element-size",
+        "2",
+        "--no-plots",
+        "--shapes",
+    ]);
     a.extend(shapes);
     a.extend(["--out".into(), s(&atlas)]);
     run_ok(&a);
@@ -117,14 +124,19 @@ fn calculix_stiffness(mesh_inp: &Path, dir: &Path, name: &str) -> f64 {
     let (lo, hi) = mesh
         .nodes
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[2]), b.max(p[2])));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p[2]), b.max(p[2]))
+        });
     let band = 0.05 * (hi - lo);
     let ids = |f: &dyn Fn(f64) -> bool| -> String {
         let v: Vec<String> = (0..mesh.nodes.len())
             .filter(|&n| f(mesh.nodes[n][2]))
             .map(|n| (n + 1).to_string())
             .collect();
-        v.chunks(16).map(|c| c.join(", ")).collect::<Vec<_>>().join("\n")
+        v.chunks(16)
+            .map(|c| c.join(", "))
+            .collect::<Vec<_>>()
+            .join("\n")
     };
     let deck = dir.join(format!("{name}.inp"));
     let text = std::fs::read_to_string(mesh_inp).unwrap()
@@ -143,12 +155,18 @@ fn calculix_stiffness(mesh_inp: &Path, dir: &Path, name: &str) -> f64 {
     let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success() && !log.contains("*ERROR"), "ccx: {log}");
     let dat = std::fs::read_to_string(dir.join(format!("{name}.dat"))).unwrap();
-    let after = dat.split("total force").nth(1).expect("total force in the .dat");
+    let after = dat
+        .split("total force")
+        .nth(1)
+        .expect("total force in the .dat");
     let fz: f64 = after
         .lines()
         .skip(1)
         .find_map(|l| {
-            let f: Vec<f64> = l.split_whitespace().filter_map(|v| v.parse().ok()).collect();
+            let f: Vec<f64> = l
+                .split_whitespace()
+                .filter_map(|v| v.parse().ok())
+                .collect();
             (f.len() == 3).then(|| f[2])
         })
         .unwrap();
@@ -186,7 +204,10 @@ fn totalsegmentators_l1_gets_its_materials_from_its_ct_in_every_solver_file() {
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     let subject = &r.subjects[0];
     assert!(subject.success, "{:?}", subject.failed_checks);
-    let m = subject.materials.as_ref().expect("materials in report.json");
+    let m = subject
+        .materials
+        .as_ref()
+        .expect("materials in report.json");
     let base = out.join("example_seg/example_seg_mesh");
     let mesh: atlasmesh::mesh::FeMesh<3> =
         atlasmesh::formats::read_fe_mesh(&base.with_extension("vtu")).unwrap();
@@ -217,18 +238,20 @@ fn totalsegmentators_l1_gets_its_materials_from_its_ct_in_every_solver_file() {
     assert!(v["median_abs"].as_f64().unwrap() < 15.0, "{v}");
     assert!(v["corr"].as_f64().unwrap() > 0.95, "{v}");
     // Every format read back.
-    let v: serde_json::Value =
-        serde_json::from_str(&python(&py, READ_BACK, &[s(&base)])).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&python(&py, READ_BACK, &[s(&base)])).unwrap();
     eprintln!("read back: {v}");
     assert_eq!(v["materials"].as_u64().unwrap() as usize, m.materials);
-    assert!((v["E_min_feb"].as_f64().unwrap() - v["E_min"].as_f64().unwrap()).abs() <= m.gap + 1e-6);
+    assert!(
+        (v["E_min_feb"].as_f64().unwrap() - v["E_min"].as_f64().unwrap()).abs() <= m.gap + 1e-6
+    );
     if common::tool("gmsh", "gmsh -check of a .msh with element data") {
         let o = std::process::Command::new("gmsh")
             .arg("-check")
             .arg(base.with_extension("msh"))
             .output()
             .unwrap();
-        let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+        let log =
+            String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success() && !log.contains("Error"), "{log}");
     }
     // CalculiX solves the graded vertebra in compression; and the same mesh of one material
@@ -252,7 +275,10 @@ fn totalsegmentators_l1_gets_its_materials_from_its_ct_in_every_solver_file() {
             "CalculiX: graded L1 compressed between its lowest and highest 5 %: stiffness {k:.0} N/mm (one material of the mean E: {k_uniform:.0} N/mm)"
         );
         assert!(k.is_finite() && k > 1e2 && k < 1e6, "{k}");
-        assert!((k - k_uniform).abs() > 1e-3 * k_uniform, "the grading changes the answer");
+        assert!(
+            (k - k_uniform).abs() > 1e-3 * k_uniform,
+            "the grading changes the answer"
+        );
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -296,7 +322,12 @@ fn any_mesh_mapped_by_the_materials_command_metal_flagged_lps_the_same() {
     python(
         &py,
         WRITE_CTS,
-        &[s(&ct), s(&ts.join("example_seg.nii.gz")), "31".into(), s(&dir)],
+        &[
+            s(&ct),
+            s(&ts.join("example_seg.nii.gz")),
+            "31".into(),
+            s(&dir),
+        ],
     );
     let map = |ct: &Path, out: &str| -> (atlasmesh::study::MaterialsReport, String) {
         let o = run_ok(&args(&[
@@ -332,13 +363,22 @@ fn any_mesh_mapped_by_the_materials_command_metal_flagged_lps_the_same() {
     let (a, b) = (e("nifti"), e("nrrd"));
     assert_eq!(a.len(), b.len());
     for (x, y) in a.iter().zip(&b) {
-        assert!((x - y).abs() <= 1e-6 * x.abs(), "NIfTI {x} vs NRRD (LPS) {y}");
+        assert!(
+            (x - y).abs() <= 1e-6 * x.abs(),
+            "NIfTI {x} vs NRRD (LPS) {y}"
+        );
     }
     assert!((nifti.materials.mean_hu - nrrd.materials.mean_hu).abs() < 1e-6);
     // A metal implant inside the bone: flagged in the report and the summary line.
     let (metal, line) = map(&dir.join("metal.nii.gz"), "metal");
     assert!(metal.materials.metal_elements > 0);
-    assert!(metal.materials.warnings.iter().any(|w| w.starts_with("metal")));
+    assert!(
+        metal
+            .materials
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("metal"))
+    );
     assert!(line.contains("metal"), "{line}");
     // A fit with the metal CT: its report and summary line say so too.
     let o = common::atlasmesh(&args(&[
@@ -366,11 +406,20 @@ fn any_mesh_mapped_by_the_materials_command_metal_flagged_lps_the_same() {
     }
     atlasmesh::formats::write_vtu(&far, &moved, None).unwrap();
     let o = common::atlasmesh(&args(&[
-        "materials", "--mesh", &s(&far), "--ct", &s(&ct), "--out", &s(&dir.join("far")),
+        "materials",
+        "--mesh",
+        &s(&far),
+        "--ct",
+        &s(&ct),
+        "--out",
+        &s(&dir.join("far")),
     ]));
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("outside the CT") && err.contains("100.0 %"), "{err}");
+    assert!(
+        err.contains("outside the CT") && err.contains("100.0 %"),
+        "{err}"
+    );
     assert!(!dir.join("far/report.json").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -458,20 +507,36 @@ fn cts_paired_with_subjects_by_folder_and_table_and_bad_pairings_refused() {
             subjects.join(format!("{n}.nii.gz")),
         )
         .unwrap();
-        std::os::unix::fs::symlink(ts.join("example_ct_sm.nii.gz"), cts.join(format!("{n}.nii.gz")))
-            .unwrap();
+        std::os::unix::fs::symlink(
+            ts.join("example_ct_sm.nii.gz"),
+            cts.join(format!("{n}.nii.gz")),
+        )
+        .unwrap();
     }
     let fit = |ct: &Path, out: &str| {
         common::atlasmesh(&args(&[
-            "fit", "--atlas", &s(&atlas), "--subjects", &s(&subjects), "--label", "31", "--ct",
-            &s(ct), "--no-plots", "--out", &s(&dir.join(out)),
+            "fit",
+            "--atlas",
+            &s(&atlas),
+            "--subjects",
+            &s(&subjects),
+            "--label",
+            "31",
+            "--ct",
+            &s(ct),
+            "--no-plots",
+            "--out",
+            &s(&dir.join(out)),
         ]))
     };
     let means = |out: &str| -> Vec<f64> {
         let r: atlasmesh::report::Report =
             serde_json::from_slice(&std::fs::read(dir.join(out).join("report.json")).unwrap())
                 .unwrap();
-        r.subjects.iter().map(|s| s.materials.as_ref().unwrap().mean_hu).collect()
+        r.subjects
+            .iter()
+            .map(|s| s.materials.as_ref().unwrap().mean_hu)
+            .collect()
     };
     let o = fit(&cts, "by-folder");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -488,20 +553,38 @@ fn cts_paired_with_subjects_by_folder_and_table_and_bad_pairings_refused() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("one CT for 2 subject files"));
     std::fs::write(&table, "subject,ct\na,cts/a.nii.gz\n").unwrap();
     let o = fit(&table, "short-table");
-    assert!(String::from_utf8_lossy(&o.stderr).contains("no row for subject b"), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("no row for subject b"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     std::fs::remove_file(cts.join("b.nii.gz")).unwrap();
     let o = fit(&cts, "short-folder");
-    assert!(String::from_utf8_lossy(&o.stderr).contains("no CT for subject b"), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("no CT for subject b"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     // A recipe with a typo names the file and the field.
     let recipe = dir.join("r.toml");
     std::fs::write(&recipe, "[modulus]\nlaw = \"morgan-2003-vertebrae\"\n").unwrap();
     let o = common::atlasmesh(&args(&[
-        "materials", "--mesh", "x.vtu", "--ct", &s(&ts.join("example_ct_sm.nii.gz")), "--recipe",
-        &s(&recipe), "--out", &s(&dir.join("r")),
+        "materials",
+        "--mesh",
+        "x.vtu",
+        "--ct",
+        &s(&ts.join("example_ct_sm.nii.gz")),
+        "--recipe",
+        &s(&recipe),
+        "--out",
+        &s(&dir.join("r")),
     ]));
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("r.toml") && err.contains("morgan-2003-vertebra,"), "{err}");
+    assert!(
+        err.contains("r.toml") && err.contains("morgan-2003-vertebra,"),
+        "{err}"
+    );
     assert!(!dir.join("r").exists());
     std::fs::remove_dir_all(&dir).ok();
 }

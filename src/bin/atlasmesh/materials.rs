@@ -20,7 +20,12 @@ pub struct MaterialsArgs {
     recipe: Option<PathBuf>,
     /// Formats written, comma-separated: inp (a material per group of E), feb, vtu, vtk,
     /// msh (per-element HU, density, E).
-    #[arg(long, value_delimiter = ',', default_value = "inp,vtu", value_name = "FORMATS")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "inp,vtu",
+        value_name = "FORMATS"
+    )]
     format: Vec<String>,
     /// No histogram picture.
     #[arg(long)]
@@ -51,7 +56,8 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
         return Err(atlasmesh::Error::io(&a.ct, std::io::ErrorKind::NotFound.into()).into());
     }
     std::fs::create_dir_all(&a.out).map_err(|e| atlasmesh::Error::io(&a.out, e))?;
-    let r = atlasmesh::study::map_mesh_file(&a.mesh, &a.ct, &recipe, &formats, !a.no_plots, &a.out)?;
+    let r =
+        atlasmesh::study::map_mesh_file(&a.mesh, &a.ct, &recipe, &formats, !a.no_plots, &a.out)?;
     let m = &r.materials;
     for w in &m.warnings {
         eprintln!("warning: {w}");

@@ -185,10 +185,12 @@ impl<const D: usize> RunContext<D> {
         if let Some(ct) = &subject.ct {
             let recipe = params.materials.clone().unwrap_or_default();
             let map = crate::study::map_ct(&outcome.mesh, ct, &recipe)?;
-            outcome
-                .report
-                .warnings
-                .extend(map.summary.warnings.iter().map(|w| format!("materials: {w}")));
+            outcome.report.warnings.extend(
+                map.summary
+                    .warnings
+                    .iter()
+                    .map(|w| format!("materials: {w}")),
+            );
             outcome.report.materials = Some(map.summary.clone());
             outcome.materials = Some(map);
         }

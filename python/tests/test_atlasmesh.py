@@ -236,3 +236,62 @@ def test_a_label_maps_label_is_read_as_a_surface_and_fitted_as_a_subject(data, f
     # the subject is read, named and fitted in the image's frame).
     r = femur_atlas.fit(atlasmesh.LabelMap(seg, "vertebrae_L1", label_table=table), mesh=False)
     assert np.isfinite(r.weights).all()
+
+
+def test_materials_from_a_ct_onto_arrays_a_mesh_and_a_file(data, tmp_path):
+    """Each element's bone material from TotalSegmentator's CT: a block of hexahedra inside
+    L1 as arrays, the same as a file, a recipe as a dict and as TOML; one value per element,
+    the checks' findings as warnings, errors of the package's family."""
+    import warnings
+
+    ct = data / "totalseg-example-ct-3d" / "example_ct_sm.nii.gz"
+    seg = data / "totalseg-example-ct-3d" / "example_seg.nii.gz"
+    _, points, _ = atlasmesh.read_label_surface(seg, 31)
+    c = points.mean(axis=0)
+    # 4 x 4 x 4 hexahedra of 2 mm around L1's centroid.
+    n = 4
+    g = np.stack(np.meshgrid(*[np.arange(n + 1)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    idx = lambda x, y, z: (x * (n + 1) + y) * (n + 1) + z
+    nodes = c + 2.0 * (g[:, [0, 1, 2]] - n / 2)
+    cells = []
+    for x in range(n):
+        for y in range(n):
+            for z in range(n):
+                cells.append([idx(x, y, z), idx(x + 1, y, z), idx(x + 1, y + 1, z), idx(x, y + 1, z),
+                              idx(x, y, z + 1), idx(x + 1, y, z + 1), idx(x + 1, y + 1, z + 1), idx(x, y + 1, z + 1)])
+    cells = np.array(cells)
+    recipe = {"calibration": {"slope": 0.0009, "intercept": 0.01}, "modulus": {"law": "morgan-2003-vertebra"}}
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        m = atlasmesh.map_materials((nodes, cells, "hex8"), ct, recipe=recipe)
+    assert not any("no phantom" in str(w.message) for w in seen)
+    assert m["E"].shape == (64,) and m["HU"].shape == (64,) and m["rho_app"].shape == (64,)
+    assert (m["E"] > 0).all() and m["material"].min() == 1 and m["material"].max() == len(m["materials"])
+    assert abs(m["volume"].sum() - 8.0 * 64) < 1e-6
+    assert m["summary"]["law"] == "morgan-2003-vertebra"
+    # Inside a vertebra: bone's HU.
+    assert 50 < np.average(m["HU"], weights=m["volume"]) < 600
+    # The same mesh as a file, the recipe as TOML: the same values.
+    meshio = pytest.importorskip("meshio")
+    path = tmp_path / "block.vtu"
+    meshio.Mesh(nodes, [("hexahedron", cells)]).write(path)
+    toml = tmp_path / "recipe.toml"
+    toml.write_text('[calibration]\nslope = 0.0009\nintercept = 0.01\n[modulus]\nlaw = "morgan-2003-vertebra"\n')
+    f = atlasmesh.map_materials(path, ct, recipe=toml)
+    assert np.allclose(f["E"], m["E"], rtol=1e-12)
+    # Without a recipe: the defaults, and the warning that no phantom calibrated the CT.
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        atlasmesh.map_materials(path, ct)
+    assert any("no phantom" in str(w.message) for w in seen)
+    # Errors of the family: outside the CT, a bad recipe, bad arrays.
+    with pytest.raises(atlasmesh.BadInputError, match="outside the CT"):
+        atlasmesh.map_materials((nodes + 1000.0, cells, "hex8"), ct)
+    with pytest.raises(atlasmesh.BadInputError, match="unknown law"):
+        atlasmesh.map_materials(path, ct, recipe={"modulus": {"law": "nope"}})
+    with pytest.raises(atlasmesh.BadInputError):
+        atlasmesh.map_materials((nodes, cells.astype(float), "hex8"), ct)
+    with pytest.raises(atlasmesh.BadInputError):
+        atlasmesh.map_materials((nodes, cells, "hex27"), ct)
+    with pytest.raises(atlasmesh.Error):
+        atlasmesh.map_materials((nodes, cells + 10_000, "hex8"), ct)

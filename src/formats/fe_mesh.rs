@@ -100,6 +100,8 @@ pub fn to_dimension<const D: usize>(path: &Path, m: FeMesh<3>) -> Result<FeMesh<
 /// # Errors
 /// [`Error::Parse`] naming `path` and the problem.
 pub fn check_fe_mesh<const D: usize>(path: &Path, mesh: &FeMesh<D>) -> Result<()> {
+    mesh.check_connectivity()
+        .map_err(|m| Error::parse(path, 0, m))?;
     check_mesh(path, &mesh.nodes, mesh.kind, &mesh.connectivity, &mesh.sets)
 }
 

@@ -118,6 +118,7 @@ pub struct MaterialSummary {
 /// RAS); a 2D mesh lies in the plane of a one-slice image (`z = 0`).
 ///
 /// # Errors
+/// [`Error::Mesh`] for a connectivity naming nodes that do not exist;
 /// [`Error::Parameter`] for a 2D mesh on a 3D CT, or when an element lies more than
 /// [`OUTSIDE_LIMIT`] outside the CT (the message gives how many and how much of the mesh,
 /// and both extents).
@@ -126,6 +127,13 @@ pub fn map_materials<const D: usize>(
     ct: &CtField,
     recipe: &ResolvedRecipe,
 ) -> Result<MaterialMap> {
+    mesh.check_connectivity().map_err(Error::Mesh)?;
+    if mesh.kind.dimension() != D {
+        return Err(Error::Mesh(format!(
+            "{} elements in a {D}D mesh",
+            mesh.kind.name()
+        )));
+    }
     let a = &ct.affine;
     let voxel_volume = if D == 2 {
         if ct.dims[2] != 1 {

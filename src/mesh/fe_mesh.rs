@@ -154,6 +154,32 @@ impl HexMesh {
 }
 
 impl<const D: usize> FeMesh<D> {
+    /// Checks that the connectivity is whole elements of nodes that exist; the message names
+    /// the first element that is not.
+    pub fn check_connectivity(&self) -> Result<(), String> {
+        let k = self.kind.nodes();
+        if self.connectivity.len() % k != 0 {
+            return Err(format!(
+                "{} node indices are not whole {} elements of {k} nodes",
+                self.connectivity.len(),
+                self.kind.name()
+            ));
+        }
+        if let Some(i) = self
+            .connectivity
+            .iter()
+            .position(|&n| n >= self.nodes.len())
+        {
+            return Err(format!(
+                "element {} names node {} but the mesh has {} nodes",
+                i / k + 1,
+                self.connectivity[i] + 1,
+                self.nodes.len()
+            ));
+        }
+        Ok(())
+    }
+
     /// Number of elements.
     pub fn num_elements(&self) -> usize {
         self.connectivity.len() / self.kind.nodes()

@@ -158,7 +158,7 @@ impl<const D: usize> FeMesh<D> {
     /// the first element that is not.
     pub fn check_connectivity(&self) -> Result<(), String> {
         let k = self.kind.nodes();
-        if self.connectivity.len() % k != 0 {
+        if !self.connectivity.len().is_multiple_of(k) {
             return Err(format!(
                 "{} node indices are not whole {} elements of {k} nodes",
                 self.connectivity.len(),

@@ -588,3 +588,64 @@ fn cts_paired_with_subjects_by_folder_and_table_and_bad_pairings_refused() {
     assert!(!dir.join("r").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// With SimpleITK: the DICOM series read and written as NIfTI, and a block of hexahedra
+/// (meshio) around the centre of the series' extent, in RAS.
+const DICOM_AND_BLOCK: &str = r#"
+import sys, numpy as np, SimpleITK as sitk, meshio
+series, out = sys.argv[1], sys.argv[2]
+r = sitk.ImageSeriesReader(); r.SetFileNames(r.GetGDCMSeriesFileNames(series))
+img = r.Execute()
+sitk.WriteImage(img, out + "/dicom.nii.gz")
+size = np.array(img.GetSize())
+c_lps = np.array(img.TransformContinuousIndexToPhysicalPoint(((size - 1) / 2.0).tolist()))
+c = c_lps * np.array([-1, -1, 1])
+n = 6
+g = np.stack(np.meshgrid(*[np.arange(n + 1)] * 3, indexing="ij"), -1).reshape(-1, 3)
+idx = lambda x, y, z: (x * (n + 1) + y) * (n + 1) + z
+nodes = c + 3.0 * (g - n / 2)
+cells = [[idx(x, y, z), idx(x + 1, y, z), idx(x + 1, y + 1, z), idx(x, y + 1, z),
+          idx(x, y, z + 1), idx(x + 1, y, z + 1), idx(x + 1, y + 1, z + 1), idx(x, y + 1, z + 1)]
+         for x in range(n) for y in range(n) for z in range(n)]
+meshio.Mesh(nodes, [("hexahedron", np.array(cells))]).write(out + "/block.vtu")
+"#;
+
+#[test]
+fn a_dicom_series_gives_the_materials_of_its_nifti() {
+    let Some(data) = common::data_dir("materials from a DICOM series") else {
+        return;
+    };
+    let Some(py) = common::python() else { return };
+    let dir = common::temp_dir("materials-dicom");
+    let series = data.join("totalseg-example-ct-3d/example_ct_dicom");
+    python(&py, DICOM_AND_BLOCK, &[s(&series), s(&dir)]);
+    let map = |ct: &Path, out: &str| -> atlasmesh::study::MaterialsReport {
+        run_ok(&args(&[
+            "materials",
+            "--mesh",
+            &s(&dir.join("block.vtu")),
+            "--ct",
+            &s(ct),
+            "--format",
+            "vtu",
+            "--no-plots",
+            "--out",
+            &s(&dir.join(out)),
+        ]));
+        serde_json::from_slice(&std::fs::read(dir.join(out).join("report.json")).unwrap()).unwrap()
+    };
+    let dicom = map(&series, "dicom");
+    let nifti = map(&dir.join("dicom.nii.gz"), "nifti");
+    eprintln!(
+        "DICOM series: mean HU {:.2}, NIfTI by SimpleITK {:.2}; range {:?}",
+        dicom.materials.mean_hu, nifti.materials.mean_hu, dicom.materials.ct_range
+    );
+    assert_eq!(dicom.materials.elements, 216);
+    assert_eq!(dicom.materials.partly_outside, 0);
+    assert!((dicom.materials.mean_hu - nifti.materials.mean_hu).abs() < 1e-3);
+    assert!(
+        (dicom.materials.modulus_mean - nifti.materials.modulus_mean).abs()
+            < 1e-3 * nifti.materials.modulus_mean
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

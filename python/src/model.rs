@@ -47,6 +47,9 @@ fn context<const D: usize>(atlas: RustAtlas<D>) -> PyResult<RunContext<D>> {
     RunContext::new(atlas, params, Default::default()).map_err(to_py)
 }
 
+/// The most float64 values one returned array holds (2 GiB).
+const MAX_ARRAY_VALUES: usize = 1 << 28;
+
 /// A statistical atlas (sections 2.2-2.4): the shape model of a population (mean, modes,
 /// variances, eq. 4) and the FE mesh of its mean, in the population's unit.
 #[pyclass(frozen, module = "atlasmesh")]
@@ -419,7 +422,13 @@ impl Atlas {
                 )));
             }
             let w: Vec<f64> = (0..m).map(|k| sd.get(k).copied().unwrap_or(0.0) * a.atlas.eigenvalues[k].sqrt()).collect();
-            arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.instance(&w)))
+            let shape = a.atlas.to_data_frame(&a.atlas.instance(&w));
+            if shape.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(crate::errors::BadInputError::new_err(
+                    "instance: the weights are so large that the shape is not finite",
+                ));
+            }
+            arrays::of_points::<D>(py, &shape)
         })
     }
 
@@ -434,6 +443,11 @@ impl Atlas {
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         each!(&self.inner, a, D => {
             let x = arrays::points::<D>(points, "points")?;
+            if x.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(crate::errors::BadInputError::new_err(
+                    "project: points have NaN or infinite coordinates",
+                ));
+            }
             if x.len() != a.atlas.mean.len() {
                 return Err(crate::errors::BadInputError::new_err(format!(
                     "{} points for a model of {}",
@@ -462,6 +476,15 @@ impl Atlas {
         max_sd: Option<f64>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         each!(&self.inner, a, D => {
+            let values = n.saturating_mul(a.atlas.mean.len()).saturating_mul(D);
+            if values > MAX_ARRAY_VALUES {
+                return Err(crate::errors::BadInputError::new_err(format!(
+                    "sample({n}): {n} shapes of {} points would take {} GB; draw at most {} at a time",
+                    a.atlas.mean.len(),
+                    values.saturating_mul(8) >> 30,
+                    MAX_ARRAY_VALUES / (a.atlas.mean.len() * D).max(1)
+                )));
+            }
             let specs = atlasmesh::study::sample_specs(&a.atlas, n, seed, max_sd).map_err(to_py)?;
             let m = a.atlas.num_modes();
             let mut pts = Vec::with_capacity(n * a.atlas.mean.len() * D);
@@ -520,6 +543,11 @@ impl Atlas {
         alpha: f64,
         jobs: usize,
     ) -> PyResult<Vec<Py<PyAny>>> {
+        if jobs > 1024 {
+            return Err(crate::errors::BadInputError::new_err(format!(
+                "fit_many: jobs={jobs}; use 0 (every core) to 1024"
+            )));
+        }
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
             .build()

@@ -77,6 +77,27 @@ def test_errors_are_one_family_with_the_message():
     assert isinstance(results[0], atlasmesh.FitResult)
     assert isinstance(results[1], atlasmesh.BadInputError)
     assert isinstance(results[2], atlasmesh.FitResult)
+    # The command line's bounds, before any memory is taken or thread started.
+    with pytest.raises(atlasmesh.BadInputError, match="GB"):
+        atlas.sample(10**6)
+    with pytest.raises(atlasmesh.BadInputError, match="jobs"):
+        atlas.fit_many([shapes[1]], jobs=10**6)
+    with pytest.raises(atlasmesh.BadInputError, match="NaN"):
+        atlas.project(np.full_like(shapes[0][0], np.nan))
+    with pytest.raises(atlasmesh.BadInputError, match="finite"):
+        atlas.instance([1e308, np.inf])
+    with pytest.raises(atlasmesh.BadInputError, match="not finite"):
+        atlas.instance([1e308, 1e308])
+
+
+def test_resample_bounds_hold_in_python(tmp_path):
+    csv = tmp_path / "o.csv"
+    t = np.linspace(0, 2 * np.pi, 20, endpoint=False)
+    csv.write_text("shape,point,x,y\n" + "".join(f"a,{k},{np.cos(v)},{np.sin(v)}\n" for k, v in enumerate(t)))
+    for n in [2**63, 10**8]:
+        with pytest.raises(atlasmesh.Error):
+            atlasmesh.read_shapes(csv, resample=n)
+    assert len(atlasmesh.read_shapes(csv, resample=50)[0][1]) == 50
 
 
 def test_save_load_and_mesh_files(tmp_path):

@@ -42,6 +42,17 @@ pub(crate) fn split_cells(
     offsets: &[f64],
     points: usize,
 ) -> Result<Vec<Vec<usize>>> {
+    if offsets.len() > super::MAX_COUNT {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "{} cells, beyond the limit of {}",
+                offsets.len(),
+                super::MAX_COUNT
+            ),
+        ));
+    }
     let mut cells = Vec::with_capacity(offsets.len());
     let mut prev = 0usize;
     for (c, &o) in offsets.iter().enumerate() {

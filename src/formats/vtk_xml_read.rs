@@ -12,6 +12,15 @@ use std::path::Path;
 /// The largest decoded array, in bytes (a compressed header announcing more is refused).
 const MAX_ARRAY_BYTES: usize = 8 * super::MAX_COUNT;
 
+/// What decoding one file may take, in bytes of decoded data and of the `f64` values made
+/// from it, all its arrays together: [`DECODE_FACTOR`] times the file's size, at least
+/// [`DECODE_FLOOR`]. Real data compress a few times; a file that inflates beyond this is
+/// refused before the memory is taken (a decompression bomb, or many arrays sharing one
+/// appended block).
+const DECODE_FACTOR: usize = 64;
+/// See [`DECODE_FACTOR`].
+const DECODE_FLOOR: usize = 256 << 20;
+
 /// Where an array's values are.
 enum Source {
     /// Inline text: ASCII numbers, or base64 (`format="binary"`).
@@ -69,6 +78,10 @@ pub(crate) struct Document<'a> {
     compressor: Compressor,
     /// The appended block after its `_`: raw bytes, or base64 text.
     appended: Option<(&'a [u8], bool)>,
+    /// Bytes decoding may still take ([`DECODE_FACTOR`]).
+    budget: std::cell::Cell<usize>,
+    /// The whole budget, for messages.
+    budget_total: usize,
 }
 
 fn attr(e: &BytesStart, key: &str) -> Option<String> {
@@ -108,7 +121,10 @@ impl<'a> Document<'a> {
             header64: false,
             compressor: Compressor::None,
             appended: None,
+            budget: std::cell::Cell::new(0),
+            budget_total: bytes.len().saturating_mul(DECODE_FACTOR).max(DECODE_FLOOR),
         };
+        doc.budget.set(doc.budget_total);
         let mut stack: Vec<String> = Vec::new();
         // The array being read and the depth of its element.
         let mut open: Option<(ArraySpec, usize)> = None;
@@ -319,6 +335,7 @@ impl<'a> Document<'a> {
         if !bytes.len().is_multiple_of(width) {
             return Err(bad("its size is not a whole number of values".into()));
         }
+        self.charge(bytes.len() / width * 8).map_err(bad)?;
         let be = self.big_endian;
         let word = |c: &[u8]| -> [u8; 8] {
             let mut w = [0u8; 8];
@@ -348,6 +365,20 @@ impl<'a> Document<'a> {
             .collect())
     }
 
+    /// Takes `n` bytes from the file's decoding budget, or says why not.
+    fn charge(&self, n: usize) -> std::result::Result<(), String> {
+        let left = self.budget.get();
+        if n > left {
+            return Err(format!(
+                "decoding the file's arrays would take more than {} MB, {DECODE_FACTOR} times \
+                 the file's size (a decompression bomb, or arrays sharing one block?)",
+                self.budget_total >> 20
+            ));
+        }
+        self.budget.set(left - n);
+        Ok(())
+    }
+
     /// The data bytes of one binary array from its encoded block (header, then the values,
     /// compressed in blocks when the file has a compressor). Only the bytes the header
     /// announces are read; a block may be followed by others (appended data).
@@ -371,6 +402,7 @@ impl<'a> Document<'a> {
             if n > MAX_ARRAY_BYTES {
                 return Err(format!("an array of {n} bytes is beyond the limit"));
             }
+            self.charge(n)?;
             return block.get(hw..hw + n).map(<[u8]>::to_vec).ok_or_else(|| {
                 format!("the array announces {n} bytes but the file ends before (truncated?)")
             });
@@ -385,6 +417,8 @@ impl<'a> Document<'a> {
         }
         .filter(|&t| t <= MAX_ARRAY_BYTES)
         .ok_or("the compressed array announces a size beyond the limit")?;
+        // Charged before anything is inflated.
+        self.charge(total)?;
         let mut out = Vec::with_capacity(total);
         let mut at = hw.checked_mul(3 + nb).ok_or("a bad block count")?;
         for b in 0..nb {

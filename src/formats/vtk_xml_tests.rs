@@ -52,3 +52,42 @@ fn written_vtp_and_vtu_read_back() {
     assert!(e.contains("c.vtu") && e.contains("not closed"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A VTU of one hexahedron whose eight point-data arrays share one appended zlib block that
+/// inflates to 40 MB of bytes (320 MB as values) each: refused before it is inflated, by the
+/// file's decoding budget, with a message that says why.
+#[test]
+fn arrays_sharing_one_inflating_block_are_refused_by_the_budget() {
+    use std::io::Write as _;
+    let n: u32 = 40 << 20;
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+    z.write_all(&vec![0u8; n as usize]).unwrap();
+    let packed = z.finish().unwrap();
+    let mut block = Vec::new();
+    for w in [1, n, n, packed.len() as u32] {
+        block.extend(w.to_le_bytes());
+    }
+    block.extend(&packed);
+    let sets: String = (b'a'..=b'h')
+        .map(|c| {
+            format!(
+                "<DataArray type=\"UInt8\" Name=\"set_{}\" format=\"appended\" offset=\"0\"/>",
+                c as char
+            )
+        })
+        .collect();
+    let mut file = format!(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt32\" compressor=\"vtkZLibDataCompressor\">\n<UnstructuredGrid><Piece NumberOfPoints=\"8\" NumberOfCells=\"1\">\n<PointData>{sets}</PointData>\n<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1</DataArray></Points>\n<Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">0 1 2 3 4 5 6 7</DataArray><DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">8</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">12</DataArray></Cells>\n</Piece></UnstructuredGrid>\n<AppendedData encoding=\"raw\">_"
+    )
+    .into_bytes();
+    file.extend(&block);
+    file.extend(b"\n</AppendedData>\n</VTKFile>\n");
+    assert!(file.len() < 1 << 20);
+    let e = parse_vtu(std::path::Path::new("bomb.vtu"), &file)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bomb.vtu") && e.contains("decompression bomb"),
+        "{e}"
+    );
+}

@@ -22,4 +22,4 @@ pub use registration::{
     MAX_ALIGNMENT_MISFIT, REGISTRATION_WARNING_P95, RegisterParams, Registration,
     RegistrationResiduals, register,
 };
-pub use resample::{resample_corresponding, resample_uniform};
+pub use resample::{MAX_RESAMPLE, resample_corresponding, resample_uniform};

@@ -128,6 +128,13 @@ pub fn resample_corresponding(
     let Some(first) = shapes.first() else {
         return Err(Error::Population("no shapes".into()));
     };
+    if n > MAX_RESAMPLE || n.saturating_mul(shapes.len()) > 50 * MAX_RESAMPLE {
+        return Err(Error::Parameter(format!(
+            "--resample {n}: at most {MAX_RESAMPLE} points, and {} over all {} shapes",
+            50 * MAX_RESAMPLE,
+            shapes.len()
+        )));
+    }
     let np = first.points.len();
     for s in shapes {
         check_outline(s)?;
@@ -198,14 +205,17 @@ pub fn resample_corresponding(
     Ok((out, index_map))
 }
 
+/// The most points an outline is resampled to (the command line's bound, and Python's).
+pub const MAX_RESAMPLE: usize = 1_000_000;
+
 /// Resamples one outline to `n` points evenly spaced by arc length along its spline (for
 /// outlines whose points do not correspond). Starts at the first input point; an open outline
 /// also keeps its last point.
 pub fn resample_uniform(shape: &Shape<2>, n: usize, closed: bool) -> Result<Shape<2>> {
     check_outline(shape)?;
-    if n < 3 {
+    if !(3..=MAX_RESAMPLE).contains(&n) {
         return Err(Error::Parameter(format!(
-            "--resample {n}: at least 3 points are needed"
+            "--resample {n}: from 3 to {MAX_RESAMPLE} points"
         )));
     }
     let sp = Spline {

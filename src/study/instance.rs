@@ -46,6 +46,9 @@ impl super::run::UnitReport for InstanceReport {
     }
 }
 
+/// The most shapes one `sample` draws (the command line's bound, and Python's).
+pub const MAX_SAMPLES: usize = 1_000_000;
+
 /// `n` instances of weights drawn from the model's prior (eq. 4, `w ~ N(0, Lambda)`, each
 /// standard normal redrawn beyond `max_sd`) by one ChaCha8 stream from `seed`, named
 /// `sample-001`, ... (as many digits as `n` needs). The list depends on `seed`, `n` and the
@@ -60,8 +63,10 @@ pub fn sample_specs<const D: usize>(
     max_sd: Option<f64>,
 ) -> Result<Vec<InstanceSpec>> {
     use rand::SeedableRng;
-    if n == 0 {
-        return Err(Error::Parameter("sample: --n must be at least 1".into()));
+    if n == 0 || n > MAX_SAMPLES {
+        return Err(Error::Parameter(format!(
+            "sample: --n {n} must be from 1 to {MAX_SAMPLES}"
+        )));
     }
     let digits = n.to_string().len().max(3);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);

@@ -62,6 +62,13 @@ pub fn convert_mesh_file(
         path: &Path,
     ) -> Result<(FeMesh<D>, Vec<Point<D>>, Option<Similarity<D>>)> {
         let a = Atlas::<D>::load(path)?;
+        if a.mesh.num_elements() == 0 {
+            return Err(Error::Parameter(format!(
+                "{}: the atlas has no mesh (built with --no-mesh): there is no mean mesh to \
+                 convert; build it with a mesh, or write its mean shape with `instance`",
+                path.display()
+            )));
+        }
         let l = a.landmarks.iter().map(|&i| a.mean[i]).collect();
         Ok((a.mesh, l, a.data_frame))
     }

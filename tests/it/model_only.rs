@@ -85,6 +85,14 @@ fn a_model_of_point_sets_without_a_mesh_matches_numpy_pca() {
         &["without a mean mesh", "--no-mesh"],
     );
     assert!(!fit_out.join("report.json").exists());
+    // Nor is there a mean mesh to convert.
+    let vtu = d.join("mean.vtu");
+    fails(
+        &atlasmesh(&["convert", &a, &s(&vtu)]),
+        2,
+        &["has no mesh", "--no-mesh"],
+    );
+    assert!(!vtu.exists());
 }
 
 /// The model in `atlas` (built with `--measures`) against NumPy's PCA of the same aligned

@@ -47,8 +47,8 @@ fn context<const D: usize>(atlas: RustAtlas<D>) -> PyResult<RunContext<D>> {
     RunContext::new(atlas, params, Default::default()).map_err(to_py)
 }
 
-/// The most float64 values one returned array holds (2 GiB).
-const MAX_ARRAY_VALUES: usize = 1 << 28;
+/// The most float64 values one returned array holds (512 MiB).
+const MAX_ARRAY_VALUES: usize = 1 << 26;
 
 /// A statistical atlas (sections 2.2-2.4): the shape model of a population (mean, modes,
 /// variances, eq. 4) and the FE mesh of its mean, in the population's unit.
@@ -479,9 +479,9 @@ impl Atlas {
             let values = n.saturating_mul(a.atlas.mean.len()).saturating_mul(D);
             if values > MAX_ARRAY_VALUES {
                 return Err(crate::errors::BadInputError::new_err(format!(
-                    "sample({n}): {n} shapes of {} points would take {} GB; draw at most {} at a time",
+                    "sample({n}): {n} shapes of {} points would take {} MB; draw at most {} at a time",
                     a.atlas.mean.len(),
-                    values.saturating_mul(8) >> 30,
+                    values.saturating_mul(8) >> 20,
                     MAX_ARRAY_VALUES / (a.atlas.mean.len() * D).max(1)
                 )));
             }

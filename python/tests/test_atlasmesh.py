@@ -78,8 +78,10 @@ def test_errors_are_one_family_with_the_message():
     assert isinstance(results[1], atlasmesh.BadInputError)
     assert isinstance(results[2], atlasmesh.FitResult)
     # The command line's bounds, before any memory is taken or thread started.
-    with pytest.raises(atlasmesh.BadInputError, match="GB"):
+    with pytest.raises(atlasmesh.BadInputError, match="MB"):
         atlas.sample(10**6)
+    with pytest.raises(atlasmesh.BadInputError, match="from 1 to"):
+        atlasmesh.Atlas.build(shapes, modes=2).sample(0)
     with pytest.raises(atlasmesh.BadInputError, match="jobs"):
         atlas.fit_many([shapes[1]], jobs=10**6)
     with pytest.raises(atlasmesh.BadInputError, match="NaN"):

@@ -40,9 +40,11 @@ impl DataFrame {
     /// 1e-9), a finite translation, all of dimension `D`.
     fn similarity<const D: usize>(&self) -> std::result::Result<Similarity<D>, String> {
         let bad = || {
-            "data_frame: a scale > 0, a DxD rotation and a translation of D finite numbers are expected".to_string()
+            "data_frame: a scale from 1e-9 to 1e9, a DxD rotation and a translation of D finite numbers are expected".to_string()
         };
-        if !(self.scale.is_finite() && self.scale > 0.0)
+        // (A scale beyond 1e±9 is no unit a shape was ever measured in: 1e300 made meshes of
+        // 1e299 that their checks called perfect.)
+        if !(self.scale.is_finite() && (1e-9..=1e9).contains(&self.scale))
             || self.rotation.len() != D
             || self.rotation.iter().any(|r| r.len() != D)
             || self.translation.len() != D
@@ -449,6 +451,10 @@ fn validate<const D: usize>(a: &Atlas<D>, model_only: bool) -> std::result::Resu
             a.landmark_ids.len(),
             a.landmarks.len()
         ));
+    }
+    let mut seen = std::collections::HashSet::new();
+    if let Some(id) = a.landmark_ids.iter().find(|id| !seen.insert(id.as_str())) {
+        return Err(format!("landmark id {id:?} is given twice"));
     }
     let kind = a.mesh.kind;
     if kind.dimension() != D {

@@ -286,6 +286,19 @@ fn assemble(path: &Path, p: Parsed) -> Result<FeMesh<3>> {
         mut elements,
         line: el,
     } = p;
+    if node_index.len() != nodes.len() {
+        // A repeated tag would silently replace the earlier node.
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "{} node tags are repeated ({} nodes, {} distinct tags)",
+                nodes.len() - node_index.len(),
+                nodes.len(),
+                node_index.len()
+            ),
+        ));
+    }
     let top = elements
         .iter()
         .filter(|e| ElementKind::from_gmsh_type(e.1).is_some())

@@ -202,3 +202,39 @@ fn outlines_written_as_vtp_and_vtk_read_back() {
     assert!(e.to_string().contains("vtp or vtk"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn repeated_gmsh_node_tags_and_legacy_offsets_not_from_zero_are_refused() {
+    let m = crate::mesh::HexMesh::block(1);
+    let text = super::gmsh::msh(&m);
+    assert!(super::gmsh::parse_msh(std::path::Path::new("ok.msh"), text.as_bytes()).is_ok());
+    let twice = text.replacen("3 1 0 8\n1\n2\n", "3 1 0 8\n1\n1\n", 1);
+    assert_ne!(twice, text);
+    let e = super::gmsh::parse_msh(std::path::Path::new("twice.msh"), twice.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("twice.msh") && e.contains("node tags are repeated"),
+        "{e}"
+    );
+    let vtk = |offsets: &str| {
+        format!(
+            "# vtk DataFile Version 5.1\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 2 4\nOFFSETS vtktypeint64\n{offsets}\nCONNECTIVITY vtktypeint64\n0 1 2 3\nCELL_TYPES 1\n10\n"
+        )
+    };
+    let ok = super::vtk_legacy::parse_vtk_unstructured(
+        std::path::Path::new("ok.vtk"),
+        vtk("0 4").as_bytes(),
+    );
+    assert_eq!(ok.unwrap().connectivity, vec![0, 1, 2, 3]);
+    let e = super::vtk_legacy::parse_vtk_unstructured(
+        std::path::Path::new("off.vtk"),
+        vtk("1 4").as_bytes(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("off.vtk") && e.contains("offsets run from 1"),
+        "{e}"
+    );
+}

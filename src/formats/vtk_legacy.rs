@@ -188,6 +188,15 @@ fn read_cells(c: &mut Cursor, f: &[&str], v5: bool, points: usize) -> Result<Vec
         };
         let offsets = section("OFFSETS", a)?;
         let conn = section("CONNECTIVITY", b)?;
+        if offsets.first().is_some_and(|&o| o != 0.0)
+            || offsets.last().is_some_and(|&o| o != b as f64)
+        {
+            return Err(c.err(format!(
+                "{key}: the offsets run from {} to {}, not from 0 to the {b} connectivity entries",
+                offsets.first().copied().unwrap_or(0.0),
+                offsets.last().copied().unwrap_or(0.0)
+            )));
+        }
         let mut cells = Vec::with_capacity(a.saturating_sub(1));
         for w in offsets.windows(2) {
             let (s, e) = (idx(c, w[0], b + 1)?, idx(c, w[1], b + 1)?);

@@ -306,3 +306,31 @@ fn the_atlas_knows_the_data_frame() {
     assert_eq!(back.to_data_frame(&back.mean), back.mean);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn atlases_with_an_absurd_scale_or_a_landmark_id_twice_do_not_load() {
+    let path = std::path::Path::new("edited.safetensors");
+    let mut a = three_mode_atlas();
+    a.data_frame = Some(crate::geometry::Similarity::<2>::centred(
+        1e300,
+        crate::geometry::Similarity::<2>::planar_rotation(0.0).r,
+        &[0.0, 0.0],
+        &[0.0, 0.0],
+    ));
+    let e = Atlas::<2>::from_bytes(path, &a.to_bytes().unwrap())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("edited.safetensors") && e.contains("scale from 1e-9"),
+        "{e}"
+    );
+    let mut b = three_mode_atlas();
+    b.landmarks = vec![0, 5];
+    b.landmark_ids = vec!["tip".into(), "tip".into()];
+    let e = Atlas::<2>::from_bytes(path, &b.to_bytes().unwrap())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("\"tip\" is given twice"), "{e}");
+}

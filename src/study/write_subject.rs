@@ -283,7 +283,7 @@ pub fn write_subject<const D: usize>(
 
 /// A subject's name as a safe file or folder name: ASCII letters, digits, `-`, `_` and `.`
 /// kept, anything else (separators, spaces, controls) `_`; never empty, never starting with
-/// a dot (so never `.`, `..` or a hidden name).
+/// a dot (so never `.`, `..` or a hidden name); at most [`MAX_FILE_STEM`] bytes.
 pub(crate) fn file_name(name: &str) -> String {
     let mut s: String = name
         .chars()
@@ -298,5 +298,29 @@ pub(crate) fn file_name(name: &str) -> String {
     if s.starts_with('.') || s.is_empty() {
         s.insert(0, '_');
     }
+    // A file system takes 255 bytes a name: a long name keeps its start and a checksum of
+    // the whole, so that two long names stay apart and `NAME_thumb.png` still fits.
+    if s.len() > MAX_FILE_STEM {
+        let crc = crc32fast::hash(name.as_bytes());
+        s.truncate(MAX_FILE_STEM - 9);
+        s.push_str(&format!("~{crc:08x}"));
+    }
     s
+}
+
+/// The longest file or folder name made from a subject's name (bytes), room left for the
+/// suffixes of its files.
+pub(crate) const MAX_FILE_STEM: usize = 120;
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn long_names_are_cut_with_a_checksum() {
+        let a = "a".repeat(240);
+        let b = format!("{}b", "a".repeat(239));
+        let (fa, fb) = (super::file_name(&a), super::file_name(&b));
+        assert_eq!(fa.len(), super::MAX_FILE_STEM);
+        assert_ne!(fa, fb);
+        assert_eq!(super::file_name("S 1/x"), "S_1_x");
+    }
 }

@@ -25,6 +25,57 @@ pub struct LandmarkFit<const D: usize> {
     pub iterations: usize,
 }
 
+/// A posterior beyond this many standard deviations along a mode is no shape of the
+/// population: landmarks misplaced, or in another unit or frame.
+pub const MAX_POSTERIOR_SD: f64 = 20.0;
+
+/// Refuses landmarks that cannot fix a pose: all at one place, or (3D) all on one line (the
+/// rotation about it is free), to 1e-6 of their extent.
+pub(crate) fn check_spread<const D: usize>(given: &[Point<D>]) -> Result<()> {
+    let mut far = (0, 0, 0.0);
+    for (i, a) in given.iter().enumerate() {
+        for (j, b) in given.iter().enumerate().skip(i + 1) {
+            let d = crate::geometry::dist2(*a, *b);
+            if d > far.2 {
+                far = (i, j, d);
+            }
+        }
+    }
+    let extent = far.2.sqrt();
+    let scale = given
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        .max(1.0);
+    if extent.is_nan() || extent <= 1e-9 * scale {
+        return Err(Error::Parameter(
+            "the landmarks are all at one place: their positions fix no pose or size".into(),
+        ));
+    }
+    if D == 3 {
+        let (a, b) = (given[far.0], given[far.1]);
+        let u: Point<D> = std::array::from_fn(|d| (b[d] - a[d]) / extent);
+        let off_line = given
+            .iter()
+            .map(|p| {
+                let v: Point<D> = std::array::from_fn(|d| p[d] - a[d]);
+                let along: f64 = (0..D).map(|d| v[d] * u[d]).sum();
+                ((0..D).map(|d| v[d] * v[d]).sum::<f64>() - along * along)
+                    .max(0.0)
+                    .sqrt()
+            })
+            .fold(0.0, f64::max);
+        if off_line <= 1e-6 * extent {
+            return Err(Error::Parameter(
+                "the landmarks lie on one line: the rotation about it is not fixed; give at \
+                 least three not on a line"
+                    .into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Fits the model to the landmark positions `observed` (`(model point, position)`, subject
 /// frame) observed with isotropic noise of standard deviation `sd` (subject units): the
 /// similarity from the mean's landmarks to the observed ones (Umeyama), then, alternately,
@@ -58,6 +109,7 @@ pub fn fit_landmarks<const D: usize>(
         )));
     }
     let given: Vec<Point<D>> = observed.iter().map(|o| o.1).collect();
+    check_spread(&given)?;
     let at =
         |shape: &[Point<D>]| -> Vec<Point<D>> { observed.iter().map(|(i, _)| shape[*i]).collect() };
     let mut t = fit_similarity(&at(&atlas.mean), &given, None);
@@ -88,6 +140,19 @@ pub fn fit_landmarks<const D: usize>(
             )?;
         }
     };
+    let sd_weights = atlas.in_sd(&posterior.weights);
+    if let Some((k, w)) = sd_weights
+        .iter()
+        .enumerate()
+        .find(|(_, w)| w.is_nan() || w.abs() > MAX_POSTERIOR_SD)
+    {
+        return Err(Error::Parameter(format!(
+            "the landmarks lie far outside the model: its mode {} would need {w:.3e} standard \
+             deviations (at most {MAX_POSTERIOR_SD}); check the landmarks' positions, unit and \
+             frame",
+            k + 1
+        )));
+    }
     let mean: Vec<Point<D>> = posterior.mean.iter().map(|p| t.apply(p)).collect();
     let landmark_rms = (at(&mean)
         .iter()

@@ -210,4 +210,24 @@ fn a_dozen_exact_landmarks_give_back_the_instance_and_its_pose() {
     // Too few landmarks, a bad sd: refused.
     assert!(fit_landmarks(&a, &observed[..1], 1.0).is_err());
     assert!(fit_landmarks(&a, &observed, f64::NAN).is_err());
+    // Landmarks at one place fix no pose; one landmark thrown far off asks the model for a
+    // shape no population holds: refused with the reason, not fitted.
+    let same: Vec<(usize, Point<2>)> = points.iter().map(|&i| (i, [3.0, 4.0])).collect();
+    let e = fit_landmarks(&a, &same, 1.0).unwrap_err().to_string();
+    assert!(e.contains("all at one place"), "{e}");
+    let mut far = observed.clone();
+    far[3].1 = [1e6, 1e6];
+    let e = fit_landmarks(&a, &far, 1.0).unwrap_err().to_string();
+    assert!(e.contains("far outside the model"), "{e}");
+}
+
+#[test]
+fn landmarks_on_one_line_fix_no_pose_in_3d() {
+    use super::landmarks::check_spread;
+    let line: Vec<Point<3>> = vec![[0.0, 0.0, 0.0], [10.0, 20.0, 30.0], [5.0, 10.0, 15.0]];
+    let e = check_spread(&line).unwrap_err().to_string();
+    assert!(e.contains("one line"), "{e}");
+    let ok: Vec<Point<3>> = vec![[0.0, 0.0, 0.0], [10.0, 20.0, 30.0], [5.0, 11.0, 15.0]];
+    assert!(check_spread(&ok).is_ok());
+    assert!(check_spread(&[[1.0, 2.0, 3.0]; 4]).is_err());
 }

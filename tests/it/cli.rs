@@ -628,3 +628,37 @@ fn convert_gives_the_mean_mesh_in_the_data_unit() {
         assert!(atlasmesh::geometry::dist2(*p, *q).sqrt() < 1e-9);
     }
 }
+
+#[test]
+fn options_a_landmarks_only_fit_does_not_use_are_refused() {
+    for flag in ["--partial", "--one-way", "--baselines"] {
+        let o = crate::common::atlasmesh(&[
+            "fit",
+            "--atlas",
+            "a.safetensors",
+            "--landmarks-only",
+            "l.json",
+            flag,
+            "--out",
+            "o",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flag}: {err}");
+        assert!(
+            err.contains("cannot be used with") && err.contains(flag),
+            "{err}"
+        );
+    }
+    let o = crate::common::atlasmesh(&[
+        "fit",
+        "--atlas",
+        "a.safetensors",
+        "--landmarks-only",
+        "l.json",
+        "--max-misfit",
+        "0.1",
+        "--out",
+        "o",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -27,7 +27,12 @@ pub struct FitArgs {
     /// per file; or CSV shape,landmark,x,y[,z] of several): the model's posterior given them,
     /// its mean shape with the per-point standard deviation (point data `posterior_sd`) and
     /// its FE mesh, in OUT/NAME/, and OUT/posterior.json.
-    #[arg(long, value_name = "FILE", num_args = 1.., conflicts_with = "subject")]
+    #[arg(
+        long,
+        value_name = "FILE",
+        num_args = 1..,
+        conflicts_with_all = ["subject", "one_way", "partial", "baselines", "max_misfit"]
+    )]
     landmarks_only: Vec<PathBuf>,
     /// The landmarks' standard deviation (their uncertainty), in their unit.
     #[arg(

@@ -149,7 +149,7 @@
       var p = kv.split('='), v = (p[1] || '').split(',');
       if (p[0] === 'clip' && v.length === 2) {
         self.clip = { on: true, axis: Math.max(0, Math.min(2, Math.trunc(Number(v[0])) || 0)), at: Math.max(0, Math.min(1, +v[1] || 0)) };
-      } else if (p[0] === 'color' && self.fieldById[p[1]]) {
+      } else if (p[0] === 'color' && Object.prototype.hasOwnProperty.call(self.fieldById, p[1])) {
         self.field = p[1];
       } else if (p[0] === 'mode' && v.length === 2 && self.scene.modes) {
         self.mode = { k: Math.max(0, Math.min(self.scene.modes.sd.length - 1, (Math.trunc(Number(v[0])) || 0) - 1)), w: +v[1] || 0 };

@@ -334,6 +334,14 @@ fn the_demo_report_opens_in_chromium_and_every_view_draws() {
             "{clipped} triangles clipped, {whole} whole, in {}",
             subject_pages[0].display()
         );
+        // An address naming no field of the page (an object's built-in property) is ignored.
+        for hash in [
+            "color=constructor",
+            "color=__proto__",
+            "color=toString&clip=1,0.5",
+        ] {
+            assert!(triangles(&subject_pages[0], hash) > 0, "#{hash}");
+        }
         // Seen as a user sees it: the view of the mesh, coloured by scaled Jacobian.
         let (w, h, rgb) = screenshot(&subject_pages[0], &d.join("shot.png"));
         let g = greens(&rgb);

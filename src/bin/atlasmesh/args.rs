@@ -247,7 +247,7 @@ pub fn count<const LO: usize, const HI: usize>(s: &str) -> Result<usize, String>
 }
 
 /// A finite positive number, for clap.
-fn positive(s: &str) -> Result<f64, String> {
+pub fn positive(s: &str) -> Result<f64, String> {
     s.trim()
         .parse::<f64>()
         .ok()

@@ -39,7 +39,8 @@ pub struct FitArgs {
         long,
         value_name = "SD",
         default_value_t = 1.0,
-        requires = "landmarks_only"
+        requires = "landmarks_only",
+        value_parser = crate::args::positive
     )]
     landmark_sd: f64,
     /// Outlines in CSV/text files are open.

@@ -37,10 +37,39 @@ impl std::str::FromStr for CsvColumns {
                     ROLES.map(|(r, _)| r).join(", ")
                 ));
             }
-            map.insert(role, unquote(name).to_lowercase());
+            let name = unquote(name).to_lowercase();
+            if let Some((other, _)) = map.iter().find(|(_, n)| **n == name) {
+                return Err(format!(
+                    "{other} and {role} both name the column {name:?}; one column a role"
+                ));
+            }
+            map.insert(role, name);
         }
         Ok(CsvColumns(map))
     }
+}
+
+/// Refuses what a plain split on commas would misread: a quoted field holding a comma (R's
+/// `"s,1"`) or an escaped quote (`""`).
+fn check_quotes(line: &str) -> std::result::Result<(), String> {
+    if !line.contains('"') {
+        return Ok(());
+    }
+    for f in line.split(',') {
+        let t = f.trim();
+        let inner = t.strip_prefix('"').and_then(|g| g.strip_suffix('"'));
+        let bad = match inner {
+            Some(g) => g.contains('"'),
+            None => t.contains('"'),
+        };
+        if bad || t == "\"" {
+            return Err(format!(
+                "a quoted field holds a comma or a quote ({f:?}): not read; write names without \
+                 commas or quotes (R: write.csv(..., quote = FALSE) after renaming)"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A field without its surrounding quotes and spaces.
@@ -80,8 +109,18 @@ impl<'a> Table<'a> {
             .split(',')
             .map(|c| unquote(c).to_lowercase())
             .collect();
+        for (k, h) in header.iter().enumerate() {
+            if !h.is_empty() && header[..k].contains(h) {
+                return Err(Error::parse(
+                    path,
+                    1,
+                    format!("the header names the column {h:?} twice"),
+                ));
+            }
+        }
         let mut rows = Vec::new();
         for (i, l) in lines {
+            check_quotes(l).map_err(|m| Error::parse(path, i + 1, m))?;
             let f: Vec<&str> = l.split(',').map(unquote).collect();
             if f.len() != header.len() {
                 return Err(Error::parse(

@@ -119,3 +119,22 @@ fn landmark_csvs_say_their_index_base() {
         .to_string();
     assert!(e.contains("1-based"), "{e}");
 }
+
+#[test]
+fn csv_quotes_a_split_would_misread_and_columns_named_twice_are_refused() {
+    use crate::formats::csv_table::CsvColumns;
+    let p = Path::new("r.csv");
+    let comma = "shape,point,x,y\n\"s,1\",0,1,2\n";
+    let e = parse_long_csv(p, comma, true).unwrap_err().to_string();
+    assert!(e.contains("r.csv:2") && e.contains("quoted field"), "{e}");
+    let escaped = "shape,point,x,y\n\"a\"\"b\",0,1,2\n";
+    assert!(parse_long_csv(p, escaped, true).is_err());
+    let twice = "shape,point,x,x\nA,0,1,2\n";
+    let e = parse_long_csv(p, twice, true).unwrap_err().to_string();
+    assert!(e.contains("\"x\" twice"), "{e}");
+    let e = "x=PX,y=PX".parse::<CsvColumns>().unwrap_err();
+    assert!(e.contains("both name the column"), "{e}");
+    // R's quoting of plain names still reads.
+    let r = "\"shape\",\"point\",\"x\",\"y\"\n\"A\",0,1,2\n\"A\",1,3,4\n\"A\",2,5,7\n";
+    assert_eq!(parse_long_csv(p, r, true).unwrap()[0].points.len(), 3);
+}

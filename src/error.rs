@@ -109,6 +109,15 @@ impl Error {
         }
     }
 
+    /// An [`Error::Parse`] of `path` for a TOML error `e` in its `text`, at the error's line.
+    pub fn toml(path: impl Into<PathBuf>, text: &str, e: &toml::de::Error) -> Self {
+        let line = e
+            .span()
+            .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
+            .unwrap_or(0);
+        Error::parse(path, line, e.message().to_string())
+    }
+
     /// An [`Error::InvalidShape`] of the shape `name`.
     pub fn shape(name: impl Into<String>, message: impl Into<String>) -> Self {
         Error::InvalidShape {

@@ -48,6 +48,7 @@ pub mod outline;
 pub mod outline_csv;
 pub mod outline_text;
 pub mod ply;
+mod recipe_file;
 mod sets_file;
 pub mod shape_file;
 pub mod stl;

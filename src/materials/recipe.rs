@@ -358,13 +358,7 @@ impl MaterialRecipe {
     /// # Errors
     /// [`Error::Parse`] naming the file, the line and the problem.
     pub fn parse(path: &Path, text: &str) -> Result<Self> {
-        let r: MaterialRecipe = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
-                .unwrap_or(0);
-            Error::parse(path, line, e.message().to_string())
-        })?;
+        let r: MaterialRecipe = toml::from_str(text).map_err(|e| Error::toml(path, text, &e))?;
         r.law()
             .map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))?;
         Ok(r)

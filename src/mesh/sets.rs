@@ -137,13 +137,7 @@ impl SetsConfig {
     /// Parses and checks the text of a sets file (`path` only names the file in messages;
     /// [`SetsConfig::read`] reads the file).
     pub fn parse(path: &Path, text: &str) -> Result<Self> {
-        let mut c: SetsConfig = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].lines().count().max(1))
-                .unwrap_or(0);
-            Error::parse(path, line, e.message().to_string())
-        })?;
+        let mut c: SetsConfig = toml::from_str(text).map_err(|e| Error::toml(path, text, &e))?;
         c.source = path.to_path_buf();
         let mut names = std::collections::HashSet::new();
         for (kind, s) in c.all() {

@@ -121,8 +121,7 @@ impl CtSource {
 /// The rows of a CT table: `subject,ct` (a header row naming the two columns first; paths
 /// relative to the table's folder).
 fn read_ct_table(path: &Path) -> Result<BTreeMap<String, PathBuf>> {
-    let bytes = crate::formats::read_input(path)?;
-    let text = std::str::from_utf8(&bytes).map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
+    let text = crate::formats::read_input_text(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let mut lines = text
         .lines()
@@ -180,9 +179,7 @@ pub fn read_ct(path: &Path) -> Result<CtField> {
 /// # Errors
 /// [`Error::Io`], [`Error::Parse`] naming the file and the field.
 pub fn read_recipe(path: &Path) -> Result<MaterialRecipe> {
-    let bytes = crate::formats::read_input(path)?;
-    let text = std::str::from_utf8(&bytes).map_err(|_| Error::parse(path, 0, "not UTF-8 text"))?;
-    MaterialRecipe::parse(path, text)
+    MaterialRecipe::read(path)
 }
 
 /// Maps the CT in `ct` onto `mesh` (subject frame, mm, RAS) with `recipe`; the summary names

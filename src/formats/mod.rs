@@ -72,7 +72,9 @@ pub use gmsh::{parse_msh, read_msh};
 pub use image_file::{ImageFile, ImageFormat, is_image_file, read_image};
 pub(crate) use input::check_points;
 pub use input::{DEFAULT_MAX_POINTS, max_points, read_input, read_input_text};
-pub use outline::{parse_outlines, parse_outlines_with, read_outlines, read_outlines_with};
+pub use outline::{
+    outline_from_vtk, parse_outlines, parse_outlines_with, read_outlines, read_outlines_with,
+};
 pub use outline_csv::{
     csv_holds_3d_points, parse_long_csv, parse_long_csv_with, parse_point_sets_csv, read_long_csv,
     read_point_sets_csv,
@@ -81,7 +83,9 @@ pub use outline_text::{parse_text_outlines, read_text_outlines};
 pub use ply::write_ply;
 pub use shape_file::{ShapeFormat, write_shape};
 pub use stl::write_stl;
-pub use surface::{parse_surface, read_point_set, read_surface};
+pub use surface::{
+    parse_surface, read_point_set, read_polydata, read_surface, surface_from_polydata,
+};
 pub use vtk_cells::VtkPolyData;
 pub use vtk_legacy::{
     parse_vtk_outline, parse_vtk_polydata, parse_vtk_unstructured, read_vtk_outline,

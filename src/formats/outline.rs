@@ -62,6 +62,17 @@ pub fn parse_outlines_with(
     Ok(shapes)
 }
 
+/// The 2D outline of VTK polydata already read from `path` ([`crate::formats::read_polydata`]):
+/// its lines chained, checked as [`read_outlines`] checks.
+///
+/// # Errors
+/// As [`read_outlines`] for a VTK file.
+pub fn outline_from_vtk(path: &Path, v: &super::VtkPolyData) -> Result<Shape<2>> {
+    let s = outline_from_polydata(path, v)?;
+    check_finite(path, &s)?;
+    Ok(s)
+}
+
 pub(crate) fn check_finite(path: &Path, s: &Shape<2>) -> Result<()> {
     super::check_points(path, s.points.len(), 1)?;
     if let Some((i, m)) = (s.points.iter().enumerate())

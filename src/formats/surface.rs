@@ -57,11 +57,7 @@ fn parse_vertices_and_faces(path: &Path, bytes: &[u8], need_faces: bool) -> Resu
         "stl" => parse_stl(path, bytes)?,
         "obj" => parse_obj(path, bytes)?,
         "vtp" | "vtk" => {
-            let v = if ext == "vtp" {
-                super::vtk_xml::parse_vtp(path, bytes)?
-            } else {
-                super::vtk_legacy::parse_vtk_polydata(path, bytes)?
-            };
+            let v = parse_polydata(path, bytes)?;
             if v.polygons.is_empty() && need_faces {
                 return Err(Error::parse(
                     path,
@@ -79,6 +75,67 @@ fn parse_vertices_and_faces(path: &Path, bytes: &[u8], need_faces: bool) -> Resu
             ));
         }
     };
+    faces_to_shape(path, name, points, &polys)
+}
+
+/// The polydata of a VTK file (`.vtk` or `.vtp`), parsed once, so that a caller can see what
+/// it holds (polygons: a surface; lines: an outline) and then make the shape from it with
+/// [`surface_from_polydata`] or [`crate::formats::outline_from_vtk`]. `None` for any other
+/// extension (nothing is read).
+///
+/// # Errors
+/// The file's reading and parsing errors.
+pub fn read_polydata(path: &Path) -> Result<Option<super::VtkPolyData>> {
+    if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vtp") || e.eq_ignore_ascii_case("vtk"))
+    {
+        return Ok(None);
+    }
+    let bytes = crate::formats::read_input(path)?;
+    parse_polydata(path, &bytes).map(Some)
+}
+
+/// The polydata of a VTK file, legacy (`.vtk`) or XML (`.vtp`) by the extension of `path`.
+pub(crate) fn parse_polydata(path: &Path, bytes: &[u8]) -> Result<super::VtkPolyData> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vtp"))
+    {
+        super::vtk_xml::parse_vtp(path, bytes)
+    } else {
+        super::vtk_legacy::parse_vtk_polydata(path, bytes)
+    }
+}
+
+/// The checked and oriented surface of polydata already read from `path` (its polygons
+/// triangulated as fans), for a caller that looked at the polydata first.
+///
+/// # Errors
+/// As [`read_surface`].
+pub fn surface_from_polydata(path: &Path, v: super::VtkPolyData) -> Result<Shape<3>> {
+    if v.polygons.is_empty() {
+        return Err(Error::parse(
+            path,
+            0,
+            "no polygons: a surface needs polygons (an outline has lines)",
+        ));
+    }
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let shape = faces_to_shape(path, name, v.points, &v.polygons)?;
+    prepare_surface(shape).map_err(|e| Error::parse(path, 0, e.to_string()))
+}
+
+/// Points and polygons as a shape: every polygon checked and fanned into triangles.
+fn faces_to_shape(
+    path: &Path,
+    name: String,
+    points: Vec<[f64; 3]>,
+    polys: &[Vec<usize>],
+) -> Result<Shape<3>> {
     super::check_points(path, points.len(), 1)?;
     let mut facets = Vec::with_capacity(polys.len());
     for (k, poly) in polys.iter().enumerate() {

@@ -38,8 +38,8 @@ impl VtkPolyData {
 /// Cells as VTK lays them out: `connectivity`, the end `offsets` of each cell in it.
 pub(crate) fn split_cells(
     path: &Path,
-    conn: &[f64],
-    offsets: &[f64],
+    conn: &[i64],
+    offsets: &[i64],
     points: usize,
 ) -> Result<Vec<Vec<usize>>> {
     if offsets.len() > super::MAX_COUNT {
@@ -77,22 +77,18 @@ pub(crate) fn split_cells(
 
 /// VTK cell type numbers as read (values outside 0..=255 become 255, a type VTK does not
 /// define).
-pub(crate) fn cell_types(v: Vec<f64>) -> Vec<u8> {
+pub(crate) fn cell_types(v: impl IntoIterator<Item = i64>) -> Vec<u8> {
     v.into_iter()
-        .map(|t| {
-            if (0.0..=255.0).contains(&t) {
-                t as u8
-            } else {
-                255
-            }
-        })
+        .map(|t| u8::try_from(t).unwrap_or(255))
         .collect()
 }
 
 /// `v` as an index below `n`.
-pub(crate) fn index(path: &Path, v: f64, n: usize, what: &str) -> Result<usize> {
-    if v >= 0.0 && v.fract() == 0.0 && v < n as f64 {
-        Ok(v as usize)
+fn index(path: &Path, v: i64, n: usize, what: &str) -> Result<usize> {
+    if let Ok(i) = usize::try_from(v)
+        && i < n
+    {
+        Ok(i)
     } else {
         Err(Error::parse(
             path,

@@ -302,7 +302,13 @@ fn parse_legacy(path: &Path, bytes: &[u8]) -> Result<Legacy> {
             }
             "CELL_TYPES" => {
                 let n = count(&c, &f, 1, "count")?;
-                out.types = cell_types(c.values(n, "int", "CELL_TYPES")?);
+                out.types = cell_types(c.values(n, "int", "CELL_TYPES")?.into_iter().map(|t| {
+                    if t.fract() == 0.0 && t.abs() < 1e18 {
+                        t as i64
+                    } else {
+                        -1
+                    }
+                }));
             }
             "POINT_DATA" | "CELL_DATA" => {
                 target = Some((key == "POINT_DATA", count(&c, &f, 1, "count")?));

@@ -2,7 +2,7 @@
 //! their sets and quality) read and written.
 
 use super::vtk_cells::{DataArrays, VtkPolyData, cell_types, mesh_from_cells, split_cells};
-use super::vtk_xml_read::{Document, Piece};
+use super::vtk_xml_read::{ArraySpec, Document, Piece};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape};
 use crate::mesh::FeMesh;
@@ -10,14 +10,18 @@ use crate::mesh::quality::mesh_quality;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The values of the array `name` (the first array when `None`) of section `tag` in `piece`.
-fn array(doc: &Document, piece: &Piece, tag: &str, name: Option<&str>) -> Result<Vec<f64>> {
+/// The array `name` (the first array when `None`) of section `tag` in `piece`, not decoded.
+fn spec<'p>(
+    doc: &Document,
+    piece: &'p Piece,
+    tag: &str,
+    name: Option<&str>,
+) -> Result<&'p ArraySpec> {
     let path = doc.path();
     let s = piece
         .section(tag)
         .ok_or_else(|| Error::parse(path, 0, format!("no <{tag}> section")))?;
-    let a = s
-        .arrays
+    s.arrays
         .iter()
         .find(|a| name.is_none_or(|n| a.name == n))
         .ok_or_else(|| {
@@ -29,8 +33,17 @@ fn array(doc: &Document, piece: &Piece, tag: &str, name: Option<&str>) -> Result
                     name.map(|n| format!(" '{n}'")).unwrap_or_default()
                 ),
             )
-        })?;
-    doc.values(a, tag)
+        })
+}
+
+/// The values of the array `name` (the first array when `None`) of section `tag` in `piece`.
+fn array(doc: &Document, piece: &Piece, tag: &str, name: Option<&str>) -> Result<Vec<f64>> {
+    doc.values(spec(doc, piece, tag, name)?, tag)
+}
+
+/// The integer array `name` of section `tag` in `piece`, kept as integers.
+fn integers(doc: &Document, piece: &Piece, tag: &str, name: &str) -> Result<Vec<i64>> {
+    doc.integers(spec(doc, piece, tag, Some(name))?, tag)
 }
 
 /// The points of a piece (checked against its `NumberOfPoints`, finite).
@@ -63,8 +76,8 @@ fn cells(doc: &Document, piece: &Piece, tag: &str, points: usize) -> Result<Vec<
     if piece.section(tag).is_none_or(|s| s.arrays.is_empty()) {
         return Ok(Vec::new());
     }
-    let conn = array(doc, piece, tag, Some("connectivity"))?;
-    let offs = array(doc, piece, tag, Some("offsets"))?;
+    let conn = integers(doc, piece, tag, "connectivity")?;
+    let offs = integers(doc, piece, tag, "offsets")?;
     split_cells(doc.path(), &conn, &offs, points)
 }
 
@@ -154,7 +167,7 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
     };
     let nodes = points(&doc, piece)?;
     let cells = cells(&doc, piece, "Cells", nodes.len())?;
-    let types = cell_types(array(&doc, piece, "Cells", Some("types"))?);
+    let types = cell_types(integers(&doc, piece, "Cells", "types")?);
     let point_data = data(&doc, piece, "PointData", "set_")?;
     let cell_data = data(&doc, piece, "CellData", "set_")?;
     mesh_from_cells(path, nodes, &cells, &types, &point_data, &cell_data)

@@ -29,6 +29,12 @@ enum Source {
     Appended(usize),
 }
 
+/// An array as stored: ASCII text, or binary values once decoded.
+enum Stored<'s> {
+    Text(&'s str),
+    Binary(Vec<u8>),
+}
+
 /// One `DataArray`, not yet decoded.
 pub(crate) struct ArraySpec {
     /// `Name` (empty when absent).
@@ -275,34 +281,87 @@ impl<'a> Document<'a> {
         }
     }
 
-    /// The values of `a`, as f64 (integers up to 2^53 exactly).
-    pub fn values(&self, a: &ArraySpec, section: &str) -> Result<Vec<f64>> {
-        let bad = |m: String| {
-            Error::parse(
-                self.path,
-                0,
-                format!(
-                    "<{section}> array{}: {m}",
-                    if a.name.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" '{}'", a.name)
-                    }
-                ),
-            )
-        };
-        let width = match a.ty.as_str() {
+    /// The width in bytes of one value of `a`'s type, or why it is not read.
+    fn width(a: &ArraySpec) -> std::result::Result<usize, String> {
+        Ok(match a.ty.as_str() {
             "Float64" | "Int64" | "UInt64" => 8,
             "Float32" | "Int32" | "UInt32" => 4,
             "Int16" | "UInt16" => 2,
             "Int8" | "UInt8" | "Char" => 1,
-            t => return Err(bad(format!("data type {t:?} is not read"))),
-        };
-        let bytes: Vec<u8> = match &a.source {
+            t => return Err(format!("data type {t:?} is not read")),
+        })
+    }
+
+    /// The error for array `a` of `section`.
+    fn array_error(&self, a: &ArraySpec, section: &str, m: String) -> Error {
+        Error::parse(
+            self.path,
+            0,
+            format!(
+                "<{section}> array{}: {m}",
+                if a.name.is_empty() {
+                    String::new()
+                } else {
+                    format!(" '{}'", a.name)
+                }
+            ),
+        )
+    }
+
+    /// The stored form of `a`: its ASCII text, or its decoded binary bytes (each value
+    /// `width` bytes, in the file's byte order).
+    fn stored<'s>(
+        &'s self,
+        a: &'s ArraySpec,
+        width: usize,
+    ) -> std::result::Result<Stored<'s>, String> {
+        let bytes = match &a.source {
             Source::Inline {
                 binary: false,
                 text,
-            } => {
+            } => return Ok(Stored::Text(text)),
+            Source::Inline { binary: true, text } => {
+                self.payload(&base64_segments(text.as_bytes())?)?
+            }
+            Source::Appended(offset) => {
+                let (data, base64) = self
+                    .appended
+                    .ok_or("appended data announced but no <AppendedData>")?;
+                let from = data.get(*offset..).ok_or_else(|| {
+                    format!("offset {offset} is past the appended data (truncated?)")
+                })?;
+                if base64 {
+                    self.payload(&base64_segments(from)?)?
+                } else {
+                    self.payload(from)?
+                }
+            }
+        };
+        if !bytes.len().is_multiple_of(width) {
+            return Err("its size is not a whole number of values".into());
+        }
+        Ok(Stored::Binary(bytes))
+    }
+
+    /// One binary value of `width` bytes in the file's byte order, as a little-endian word.
+    fn word(&self, c: &[u8]) -> u64 {
+        let mut w = [0u8; 8];
+        if self.big_endian {
+            w[8 - c.len()..].copy_from_slice(c);
+            w.reverse();
+        } else {
+            w[..c.len()].copy_from_slice(c);
+        }
+        u64::from_le_bytes(w)
+    }
+
+    /// The values of `a`, as f64 (integers up to 2^53 exactly).
+    pub fn values(&self, a: &ArraySpec, section: &str) -> Result<Vec<f64>> {
+        let bad = |m: String| self.array_error(a, section, m);
+        let width = Self::width(a).map_err(bad)?;
+        let bytes = match self.stored(a, width).map_err(bad)? {
+            Stored::Text(text) => {
+                self.charge(text.len().saturating_mul(8) / 2).map_err(bad)?;
                 return text
                     .split_whitespace()
                     .map(|t| {
@@ -311,58 +370,69 @@ impl<'a> Document<'a> {
                     })
                     .collect();
             }
-            Source::Inline { binary: true, text } => {
-                let raw = base64_segments(text.as_bytes()).map_err(bad)?;
-                self.payload(&raw).map_err(bad)?
-            }
-            Source::Appended(offset) => {
-                let (data, base64) = self
-                    .appended
-                    .ok_or_else(|| bad("appended data announced but no <AppendedData>".into()))?;
-                let from = data.get(*offset..).ok_or_else(|| {
-                    bad(format!(
-                        "offset {offset} is past the appended data (truncated?)"
-                    ))
-                })?;
-                if base64 {
-                    let raw = base64_segments(from).map_err(bad)?;
-                    self.payload(&raw).map_err(bad)?
-                } else {
-                    self.payload(from).map_err(bad)?
-                }
-            }
+            Stored::Binary(b) => b,
         };
-        if !bytes.len().is_multiple_of(width) {
-            return Err(bad("its size is not a whole number of values".into()));
-        }
         self.charge(bytes.len() / width * 8).map_err(bad)?;
-        let be = self.big_endian;
-        let word = |c: &[u8]| -> [u8; 8] {
-            let mut w = [0u8; 8];
-            if be {
-                w[8 - c.len()..].copy_from_slice(c);
-                w.reverse();
-            } else {
-                w[..c.len()].copy_from_slice(c);
-            }
-            w
-        };
         Ok(bytes
             .chunks_exact(width)
             .map(|c| {
-                let w = word(c);
-                let u = u64::from_le_bytes(w);
-                match (a.ty.as_str(), width) {
-                    ("Float64", _) => f64::from_bits(u),
-                    ("Float32", _) => f32::from_bits(u as u32) as f64,
-                    ("Int64", _) => u as i64 as f64,
-                    ("Int32", _) => u as u32 as i32 as f64,
-                    ("Int16", _) => u as u16 as i16 as f64,
-                    ("Int8" | "Char", _) => u as u8 as i8 as f64,
+                let u = self.word(c);
+                match a.ty.as_str() {
+                    "Float64" => f64::from_bits(u),
+                    "Float32" => f32::from_bits(u as u32) as f64,
+                    "Int64" => u as i64 as f64,
+                    "Int32" => u as u32 as i32 as f64,
+                    "Int16" => u as u16 as i16 as f64,
+                    "Int8" | "Char" => u as u8 as i8 as f64,
                     _ => u as f64,
                 }
             })
             .collect())
+    }
+
+    /// The values of an integer array (cell connectivity, offsets, types) as integers, never
+    /// through `f64`: every 64-bit value exact, an unsigned value beyond `i64::MAX` or a
+    /// fractional value (an integer array written as floats) refused.
+    pub fn integers(&self, a: &ArraySpec, section: &str) -> Result<Vec<i64>> {
+        let bad = |m: String| self.array_error(a, section, m);
+        let width = Self::width(a).map_err(bad)?;
+        let bytes = match self.stored(a, width).map_err(bad)? {
+            Stored::Text(text) => {
+                self.charge(text.len().saturating_mul(8) / 2).map_err(bad)?;
+                return text
+                    .split_whitespace()
+                    .map(|t| {
+                        t.parse::<i64>()
+                            .map_err(|_| bad(format!("{t:?} is not an integer")))
+                    })
+                    .collect();
+            }
+            Stored::Binary(b) => b,
+        };
+        self.charge(bytes.len() / width * 8).map_err(bad)?;
+        let float = |v: f64| -> Result<i64> {
+            if v.fract() == 0.0 && v.abs() < 9.0e18 {
+                Ok(v as i64)
+            } else {
+                Err(bad(format!("{v} is not an integer")))
+            }
+        };
+        bytes
+            .chunks_exact(width)
+            .map(|c| {
+                let u = self.word(c);
+                match a.ty.as_str() {
+                    "Float64" => float(f64::from_bits(u)),
+                    "Float32" => float(f32::from_bits(u as u32) as f64),
+                    "Int64" => Ok(u as i64),
+                    "Int32" => Ok(i64::from(u as u32 as i32)),
+                    "Int16" => Ok(i64::from(u as u16 as i16)),
+                    "Int8" | "Char" => Ok(i64::from(u as u8 as i8)),
+                    _ => i64::try_from(u)
+                        .map_err(|_| bad(format!("{u} is beyond the largest index"))),
+                }
+            })
+            .collect()
     }
 
     /// Takes `n` bytes from the file's decoding budget, or says why not.

@@ -91,3 +91,34 @@ fn arrays_sharing_one_inflating_block_are_refused_by_the_budget() {
         "{e}"
     );
 }
+
+/// A hexahedron's VTU with the connectivity stored as `ty` holding `conn`.
+fn hex_vtu(ty: &str, conn: &str) -> Vec<u8> {
+    format!(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\">\n<UnstructuredGrid><Piece NumberOfPoints=\"8\" NumberOfCells=\"1\">\n<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1</DataArray></Points>\n<Cells><DataArray type=\"{ty}\" Name=\"connectivity\" format=\"ascii\">{conn}</DataArray><DataArray type=\"UInt8\" Name=\"offsets\" format=\"ascii\">8</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">12</DataArray></Cells>\n</Piece></UnstructuredGrid>\n</VTKFile>\n"
+    )
+    .into_bytes()
+}
+
+#[test]
+fn cell_arrays_are_read_as_integers() {
+    let path = std::path::Path::new("cells.vtu");
+    // Any integer type, small ones too.
+    for ty in ["UInt8", "Int16", "Int32", "UInt64"] {
+        let m = parse_vtu(path, &hex_vtu(ty, "0 1 2 3 4 5 6 7")).unwrap();
+        assert_eq!(m.connectivity, vec![0, 1, 2, 3, 4, 5, 6, 7], "{ty}");
+    }
+    // An index that only rounds to a valid one through f64 (2^53 + 1 → 2^53) and a fraction
+    // are refused, naming the value.
+    let e = parse_vtu(path, &hex_vtu("Int64", "0 1 2 3 4 5 6 9007199254740993"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("9007199254740993") && e.contains("cells.vtu"),
+        "{e}"
+    );
+    let e = parse_vtu(path, &hex_vtu("Int64", "0 1 2 3 4 5 6 6.5"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("\"6.5\" is not an integer"), "{e}");
+}

@@ -593,13 +593,23 @@ pub fn is_surface_file(path: &Path) -> Result<bool> {
     if crate::formats::is_image_file(path) {
         return Ok(true);
     }
-    let v = match ext.as_str() {
-        "ply" | "stl" | "obj" => return Ok(true),
-        "csv" => return crate::formats::csv_holds_3d_points(path),
-        "vtk" => crate::formats::read_vtk_polydata(path)?,
-        "vtp" => crate::formats::read_vtp(path)?,
-        _ => return Ok(false),
-    };
+    match ext.as_str() {
+        "ply" | "stl" | "obj" => Ok(true),
+        "csv" => crate::formats::csv_holds_3d_points(path),
+        "vtk" | "vtp" => match crate::formats::read_polydata(path)? {
+            Some(v) => polydata_is_surface(path, &v),
+            None => Ok(false),
+        },
+        _ => Ok(false),
+    }
+}
+
+/// Whether VTK polydata read from `path` is a surface (polygons, or points alone: a 3D point
+/// set for `build --no-mesh`) rather than an outline (lines).
+///
+/// # Errors
+/// Polydata with neither polygons nor lines nor points.
+pub(crate) fn polydata_is_surface(path: &Path, v: &crate::formats::VtkPolyData) -> Result<bool> {
     if v.polygons.is_empty() && v.lines.is_empty() && v.points.is_empty() {
         return Err(Error::parse(
             path,
@@ -607,7 +617,6 @@ pub fn is_surface_file(path: &Path) -> Result<bool> {
             "neither polygons (a surface) nor lines (an outline) nor points",
         ));
     }
-    // Points alone: a 3D point set (`build --no-mesh`).
     Ok(v.lines.is_empty())
 }
 

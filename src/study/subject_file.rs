@@ -1,7 +1,7 @@
 //! Reading a subject, the same for every front end: a file (or arrays) in the atlas's
 //! dimension, checked, its floating islands dropped with a warning that its report keeps.
 
-use super::population::{ISLAND_SHARE, clean_shapes, is_surface_file};
+use super::population::{ISLAND_SHARE, clean_shapes, is_surface_file, polydata_is_surface};
 use crate::error::{Error, Result};
 use crate::formats::CsvColumns;
 use crate::geometry::Shape;
@@ -81,14 +81,23 @@ pub fn read_subjects<const D: usize>(
         subject.ct = reading.ct.for_subject(path, &subject.shape.name)?;
         return Ok(vec![subject]);
     }
-    let surface = is_surface_file(path)?;
-    let shapes: Vec<Shape<D>> = match (D, surface) {
-        (3, true) => vec![super::population::read_surface_file(path)?.into_dim()],
-        (2, false) => crate::formats::read_outlines_with(path, !reading.open, &reading.columns)?
-            .into_iter()
-            .map(Shape::into_dim)
-            .collect(),
-        (_, surface) => {
+    // A VTK file is parsed once: what it holds says surface or outline.
+    let polydata = crate::formats::read_polydata(path)?;
+    let surface = match &polydata {
+        Some(v) => polydata_is_surface(path, v)?,
+        None => is_surface_file(path)?,
+    };
+    let shapes: Vec<Shape<D>> = match (D, surface, polydata) {
+        (3, true, Some(v)) => vec![crate::formats::surface_from_polydata(path, v)?.into_dim()],
+        (3, true, None) => vec![super::population::read_surface_file(path)?.into_dim()],
+        (2, false, Some(v)) => vec![crate::formats::outline_from_vtk(path, &v)?.into_dim()],
+        (2, false, None) => {
+            crate::formats::read_outlines_with(path, !reading.open, &reading.columns)?
+                .into_iter()
+                .map(Shape::into_dim)
+                .collect()
+        }
+        (_, surface, _) => {
             return Err(Error::Population(format!(
                 "{}: {}, but the atlas is {D}D",
                 path.display(),

@@ -6,6 +6,7 @@
 
 #![warn(clippy::too_many_lines)]
 
+mod args;
 mod arrays;
 mod errors;
 mod materials;

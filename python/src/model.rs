@@ -1,12 +1,11 @@
 //! `atlasmesh.Atlas`: an atlas of 2D outlines or 3D surfaces, its shape model and its fits.
 
-use crate::arrays;
 use crate::errors::to_py;
 use crate::result::{FitResult, Mesh};
+use crate::{args, arrays};
 use atlasmesh::geometry::{Point, Shape};
 use atlasmesh::model::Atlas as RustAtlas;
 use atlasmesh::study::{RunContext, RunParams, Subject};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use rayon::prelude::*;
@@ -118,17 +117,44 @@ fn dimension_of(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
         );
     }
     let (points, _): (Bound<'_, PyAny>, Bound<'_, PyAny>) = obj.extract().map_err(|_| {
-        PyValueError::new_err("a shape is a (points, facets) pair of arrays or a file path")
+        crate::errors::BadInputError::new_err(
+            "a shape is a (points, facets) pair of arrays or a file path",
+        )
     })?;
     let np = obj.py().import("numpy")?;
-    let shape: Vec<usize> = np.call_method1("shape", (points,))?.extract()?;
+    let shape: Vec<usize> = np
+        .call_method1("shape", (points,))
+        .and_then(|s| s.extract())
+        .map_err(|e| {
+            crate::errors::BadInputError::new_err(format!(
+                "points: not an array of numbers ({})",
+                e.value(obj.py())
+            ))
+        })?;
     match shape.as_slice() {
         [_, 2] => Ok(2),
         [_, 3] => Ok(3),
-        s => Err(PyValueError::new_err(format!(
+        s => Err(crate::errors::BadInputError::new_err(format!(
             "points of shape {s:?}: (n, 2) or (n, 3) expected"
         ))),
     }
+}
+
+/// `grid` and `alpha` of a fit call (20 control points per axis, smoothing 50 when absent);
+/// their ranges are checked with the run's parameters ([`call_params`]).
+fn morph_args(
+    grid: Option<&Bound<'_, PyAny>>,
+    alpha: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(usize, f64)> {
+    Ok((
+        grid.map(|g| args::size(g, "grid", 0, usize::MAX))
+            .transpose()?
+            .unwrap_or(20),
+        alpha
+            .map(|a| args::real(a, "alpha"))
+            .transpose()?
+            .unwrap_or(50.0),
+    ))
 }
 
 /// The run's parameters with a call's options, checked as the command line's are
@@ -261,13 +287,13 @@ impl Atlas {
     /// alone. `register=True` brings raw shapes into correspondence first (FFD registration
     /// of a template, eq. 1-2).
     #[staticmethod]
-    #[pyo3(signature = (shapes, modes=None, variance=0.985, element_size="auto", register=false, mesh=true))]
+    #[pyo3(signature = (shapes, modes=None, variance=None, element_size=None, register=false, mesh=true))]
     fn build(
         py: Python<'_>,
         shapes: &Bound<'_, PyList>,
-        modes: Option<usize>,
-        variance: f64,
-        element_size: &str,
+        modes: Option<&Bound<'_, PyAny>>,
+        variance: Option<&Bound<'_, PyAny>>,
+        element_size: Option<&Bound<'_, PyAny>>,
         register: bool,
         mesh: bool,
     ) -> PyResult<Self> {
@@ -279,13 +305,26 @@ impl Atlas {
             plots: false,
             ..RunParams::default()
         };
-        params.atlas.modes = match modes {
-            Some(m) => atlasmesh::model::ModeSelection::Count(m),
-            None => atlasmesh::model::ModeSelection::Variance(variance),
+        params.atlas.modes = match (modes, variance) {
+            (Some(m), _) => {
+                atlasmesh::model::ModeSelection::Count(args::size(m, "modes", 1, 100_000)?)
+            }
+            (None, Some(v)) => {
+                atlasmesh::model::ModeSelection::Variance(args::real(v, "variance")?)
+            }
+            (None, None) => atlasmesh::model::ModeSelection::Variance(0.985),
         };
-        params.element_size = element_size
-            .parse()
-            .map_err(|e: String| crate::errors::BadInputError::new_err(e))?;
+        params.element_size = match element_size {
+            None => atlasmesh::mesh::ElementSize::Auto,
+            // A string ("auto", "2", "1.5%") or a length as a number.
+            Some(e) => match e.extract::<String>() {
+                Ok(t) => t.parse(),
+                Err(_) => args::real(e, "element_size")?.to_string().parse(),
+            }
+            .map_err(|m: String| {
+                crate::errors::BadInputError::new_err(format!("element_size: {m}"))
+            })?,
+        };
         fn go<const D: usize>(
             py: Python<'_>,
             list: &Bound<'_, PyList>,
@@ -353,13 +392,13 @@ impl Atlas {
     /// The mean shape `S_bar`, `(N, D)`, in the data's frame and unit.
     #[getter]
     fn mean<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::of_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.mean)))
+        each!(&self.inner, a, D => arrays::frozen_points::<D>(py, &a.atlas.to_data_frame(&a.atlas.mean)))
     }
 
     /// The facets of the shapes (triangles or segments), `(F, D)` int64.
     #[getter]
     fn facets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::to_i64(py, a.atlas.facets.iter().flatten().copied(), &[a.atlas.facets.len(), D]))
+        each!(&self.inner, a, D => arrays::frozen_i64(py, a.atlas.facets.iter().flatten().copied(), &[a.atlas.facets.len(), D]))
     }
 
     /// The modes `Psi`, `(m, N, D)`: orthonormal directions of the shape space (the
@@ -368,7 +407,7 @@ impl Atlas {
     fn modes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         each!(&self.inner, a, D => {
             let (n, m) = (a.atlas.mean.len(), a.atlas.num_modes());
-            arrays::to_f64(
+            arrays::frozen_f64(
                 py,
                 (0..m).flat_map(|k| (0..n * D).map(move |r| (k, r))).map(|(k, r)| a.atlas.modes[(r, k)]),
                 &[m, n, D],
@@ -381,7 +420,7 @@ impl Atlas {
     fn variances<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         each!(&self.inner, a, D => {
             let s = a.atlas.data_frame.map_or(1.0, |t| t.s);
-            arrays::to_f64(py, a.atlas.eigenvalues.iter().map(|l| l * s * s), &[a.atlas.num_modes()])
+            arrays::frozen_f64(py, a.atlas.eigenvalues.iter().map(|l| l * s * s), &[a.atlas.num_modes()])
         })
     }
 
@@ -389,7 +428,7 @@ impl Atlas {
     /// training PCA's modes).
     #[getter]
     fn cumulative_variance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        each!(&self.inner, a, D => arrays::to_f64(py, a.atlas.cumulative_variance.iter().copied(), &[a.atlas.cumulative_variance.len()]))
+        each!(&self.inner, a, D => arrays::frozen_f64(py, a.atlas.cumulative_variance.iter().copied(), &[a.atlas.cumulative_variance.len()]))
     }
 
     /// The atlas's FE mesh of the mean (data's frame and unit), or None (`mesh=False`).
@@ -412,9 +451,10 @@ impl Atlas {
         py: Python<'py>,
         sd: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let sd = arrays::vector(sd, "sd")?;
         each!(&self.inner, a, D => {
             let m = a.atlas.num_modes();
+            // The count is checked below, with the model's modes named.
+            let sd = arrays::vector(sd, "sd", 1 << 20)?;
             if sd.len() > m || sd.iter().any(|v| !v.is_finite()) {
                 return Err(crate::errors::BadInputError::new_err(format!(
                     "{} weights for a model of {m} modes (finite numbers of standard deviations)",
@@ -467,14 +507,20 @@ impl Atlas {
     /// `n` random shapes of the model (weights ~ N(0, Lambda), each within `max_sd`
     /// standard deviations when given), seeded: `(shapes (n, N, D), weights (n, m) in
     /// standard deviations)`, shapes in the data's frame and unit.
-    #[pyo3(signature = (n, seed=1, max_sd=None))]
+    #[pyo3(signature = (n, seed=None, max_sd=None))]
     fn sample<'py>(
         &self,
         py: Python<'py>,
-        n: usize,
-        seed: u64,
-        max_sd: Option<f64>,
+        n: &Bound<'py, PyAny>,
+        seed: Option<&Bound<'py, PyAny>>,
+        max_sd: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let n = args::size(n, "n", 0, usize::MAX)?;
+        let seed = seed
+            .map(|s| args::count(s, "seed", 0, u64::MAX))
+            .transpose()?
+            .unwrap_or(1);
+        let max_sd = max_sd.map(|m| args::real(m, "max_sd")).transpose()?;
         each!(&self.inner, a, D => {
             let values = n.saturating_mul(a.atlas.mean.len()).saturating_mul(D);
             if values > MAX_ARRAY_VALUES {
@@ -505,17 +551,18 @@ impl Atlas {
     /// axis, smoothing `alpha`), repaired and checked. `partial=True` for a subject that
     /// misses parts; `mesh=False` for the fit alone (no morph: `mesh` is None). The GIL is
     /// released while it runs.
-    #[pyo3(signature = (subject, facets=None, partial=false, grid=20, alpha=50.0, mesh=true))]
+    #[pyo3(signature = (subject, facets=None, partial=false, grid=None, alpha=None, mesh=true))]
     fn fit(
         &self,
         subject: &Bound<'_, PyAny>,
         facets: Option<&Bound<'_, PyAny>>,
         partial: bool,
-        grid: usize,
-        alpha: f64,
+        grid: Option<&Bound<'_, PyAny>>,
+        alpha: Option<&Bound<'_, PyAny>>,
         mesh: bool,
     ) -> PyResult<FitResult> {
         let py = subject.py();
+        let (grid, alpha) = morph_args(grid, alpha)?;
         each!(&self.inner, a, D => {
             let params = call_params(a, partial, grid, alpha)?;
             let subject = match facets {
@@ -533,21 +580,22 @@ impl Atlas {
     /// Fits every subject of `subjects` (as `fit` takes them) in parallel on `jobs` threads
     /// (0: every core), the GIL released: a list with a `FitResult` or the exception (an
     /// `atlasmesh.Error`) of each, in order.
-    #[pyo3(signature = (subjects, partial=false, grid=20, alpha=50.0, jobs=0))]
+    #[pyo3(signature = (subjects, partial=false, grid=None, alpha=None, jobs=None))]
     fn fit_many(
         &self,
         py: Python<'_>,
         subjects: &Bound<'_, PyList>,
         partial: bool,
-        grid: usize,
-        alpha: f64,
-        jobs: usize,
+        grid: Option<&Bound<'_, PyAny>>,
+        alpha: Option<&Bound<'_, PyAny>>,
+        jobs: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Vec<Py<PyAny>>> {
-        if jobs > 1024 {
-            return Err(crate::errors::BadInputError::new_err(format!(
-                "fit_many: jobs={jobs}; use 0 (every core) to 1024"
-            )));
-        }
+        let (grid, alpha) = morph_args(grid, alpha)?;
+        // 0: every core.
+        let jobs = jobs
+            .map(|j| args::size(j, "jobs", 0, 1024))
+            .transpose()?
+            .unwrap_or(0);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
             .build()

@@ -18,8 +18,11 @@ pub fn read_shapes<'py>(
     py: Python<'py>,
     path: PathBuf,
     closed: bool,
-    resample: Option<usize>,
+    resample: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+    let resample = resample
+        .map(|r| crate::args::size(r, "resample", 0, usize::MAX))
+        .transpose()?;
     if atlasmesh::study::is_surface_file(&path).map_err(to_py)? {
         let s = atlasmesh::formats::read_surface(&path).map_err(to_py)?;
         let t = (

@@ -64,7 +64,7 @@ impl Mesh {
     /// Node coordinates, `(N, D)` float64 (data's frame and unit).
     #[getter]
     fn nodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        arrays::to_f64(
+        arrays::frozen_f64(
             py,
             self.nodes.iter().copied(),
             &[self.nodes.len() / self.dim, self.dim],
@@ -75,7 +75,7 @@ impl Mesh {
     #[getter]
     fn elements<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let k = self.kind.nodes();
-        arrays::to_i64(
+        arrays::frozen_i64(
             py,
             self.connectivity.iter().copied(),
             &[self.connectivity.len() / k, k],
@@ -97,7 +97,7 @@ impl Mesh {
     /// Each element's smallest corner scaled Jacobian (1 is a perfect element), `(E,)`.
     #[getter]
     fn scaled_jacobian<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        arrays::to_f64(
+        arrays::frozen_f64(
             py,
             self.scaled_jacobian.iter().copied(),
             &[self.scaled_jacobian.len()],
@@ -111,17 +111,17 @@ impl Mesh {
         let out = PyDict::new(py);
         let nodes = PyDict::new(py);
         for (n, v) in &self.sets.node_sets {
-            nodes.set_item(n, arrays::to_i64(py, v.iter().copied(), &[v.len()])?)?;
+            nodes.set_item(n, arrays::frozen_i64(py, v.iter().copied(), &[v.len()])?)?;
         }
         let elements = PyDict::new(py);
         for (n, v) in &self.sets.element_sets {
-            elements.set_item(n, arrays::to_i64(py, v.iter().copied(), &[v.len()])?)?;
+            elements.set_item(n, arrays::frozen_i64(py, v.iter().copied(), &[v.len()])?)?;
         }
         let surfaces = PyDict::new(py);
         for (n, v) in &self.sets.surfaces {
             surfaces.set_item(
                 n,
-                arrays::to_i64(
+                arrays::frozen_i64(
                     py,
                     v.iter().flat_map(|&(e, f)| [e, usize::from(f)]),
                     &[v.len(), 2],
@@ -204,7 +204,7 @@ impl FitResult {
     /// The fitted instance's weights, in standard deviations of each mode.
     #[getter]
     fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        arrays::to_f64(py, self.sd.iter().copied(), &[self.sd.len()])
+        arrays::frozen_f64(py, self.sd.iter().copied(), &[self.sd.len()])
     }
 
     /// The pose `t_{R,T,s}` (reference frame → subject): `{"scale", "rotation" (D×D),
@@ -215,11 +215,11 @@ impl FitResult {
         d.set_item("scale", self.scale)?;
         d.set_item(
             "rotation",
-            arrays::to_f64(py, self.rotation.iter().copied(), &[self.dim, self.dim])?,
+            arrays::frozen_f64(py, self.rotation.iter().copied(), &[self.dim, self.dim])?,
         )?;
         d.set_item(
             "translation",
-            arrays::to_f64(py, self.translation.iter().copied(), &[self.dim])?,
+            arrays::frozen_f64(py, self.translation.iter().copied(), &[self.dim])?,
         )?;
         Ok(d)
     }
@@ -228,7 +228,7 @@ impl FitResult {
     /// subject corresponds.
     #[getter]
     fn surface<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        arrays::to_f64(
+        arrays::frozen_f64(
             py,
             self.surface.iter().copied(),
             &[self.surface.len() / self.dim, self.dim],
@@ -238,7 +238,7 @@ impl FitResult {
     /// The facets of `surface` (triangles, or outline segments), `(F, D)` int64.
     #[getter]
     fn facets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        arrays::to_i64(
+        arrays::frozen_i64(
             py,
             self.facets.iter().copied(),
             &[self.facets.len() / self.dim, self.dim],

@@ -92,6 +92,50 @@ def test_errors_are_one_family_with_the_message():
         atlas.instance([1e308, 1e308])
 
 
+def test_arrays_and_numbers_are_checked_as_the_command_line_checks_files():
+    shapes = ellipses()
+    atlas = atlasmesh.Atlas.build(shapes, modes=2, element_size=4)
+    pts, facets = shapes[1]
+    # Float facets are refused, never truncated; ragged or text input is the package's error.
+    with pytest.raises(atlasmesh.BadInputError, match="integer array expected, got dtype float64"):
+        atlas.fit(pts, facets + 0.5)
+    with pytest.raises(atlasmesh.BadInputError, match="not an array of numbers"):
+        atlas.fit([[0, 0], [1]], facets)
+    with pytest.raises(atlasmesh.BadInputError, match=r"shape \(n, 2\) expected"):
+        atlas.project(np.zeros((120, 3)))
+    # A zero-copy view of 10^8 facets (2.4 GB if copied) is refused at once, on its shape.
+    huge = np.broadcast_to(np.array([0, 1]), (10**8, 2))
+    start = time.monotonic()
+    with pytest.raises(atlasmesh.BadInputError, match="beyond the limit"):
+        atlas.fit(pts, huge)
+    assert time.monotonic() - start < 5
+    # Numbers: overflowing, negative, wrong types and NaN are the package's errors, named.
+    for call, match in [
+        (lambda: atlas.sample(2**64), "n=18446744073709551616"),
+        (lambda: atlas.sample(-1), "n=-1"),
+        (lambda: atlas.sample(3, seed=-5), "seed=-5"),
+        (lambda: atlas.sample(3, max_sd="two"), "max_sd='two'"),
+        (lambda: atlas.fit(pts, facets, alpha=float("nan")), "alpha=nan"),
+        (lambda: atlas.fit(pts, facets, grid=2.5), "grid=2.5"),
+        (lambda: atlas.fit_many([shapes[1]], jobs=True), "jobs=True"),
+        (lambda: atlasmesh.Atlas.build(shapes, modes=10**30), "modes="),
+        (lambda: atlasmesh.Atlas.build(shapes, element_size=-2), "element_size"),
+    ]:
+        with pytest.raises(atlasmesh.BadInputError, match=match):
+            call()
+    # NumPy scalars are numbers.
+    assert atlas.sample(np.int64(2), seed=np.uint32(4))[0].shape == (2, 120, 2)
+    # What a getter returns cannot be written to in vain.
+    r = atlas.fit(pts, facets)
+    with pytest.raises(ValueError, match="read-only"):
+        r.mesh.nodes[0, 0] = 1e3
+    with pytest.raises(ValueError, match="read-only"):
+        atlas.mean[0] = 0
+    nodes = r.mesh.nodes.copy()
+    nodes[0, 0] = 1e3
+    assert r.mesh.nodes[0, 0] != 1e3
+
+
 def test_resample_bounds_hold_in_python(tmp_path):
     csv = tmp_path / "o.csv"
     t = np.linspace(0, 2 * np.pi, 20, endpoint=False)

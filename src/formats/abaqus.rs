@@ -371,11 +371,7 @@ pub fn parse_inp(path: &Path, text: &str) -> Result<InpDeck> {
         }
         Ok(out)
     }
-    // The whole-mesh sets this writer adds are not carried as sets.
-    let node_sets: BTreeMap<String, Vec<usize>> = resolve(path, "node", &nsets, &node_index)?
-        .into_iter()
-        .filter(|(n, _)| !n.eq_ignore_ascii_case("NALL"))
-        .collect();
+    let node_sets: BTreeMap<String, Vec<usize>> = resolve(path, "node", &nsets, &node_index)?;
     let element_sets_all = resolve(path, "element", &elsets, &elem_index)?;
     let mut surface_sets: BTreeMap<String, Vec<(usize, u8)>> = BTreeMap::new();
     for (name, items) in surfaces.values() {
@@ -427,15 +423,13 @@ pub fn parse_inp(path: &Path, text: &str) -> Result<InpDeck> {
         faces.dedup();
         surface_sets.insert(name.clone(), faces);
     }
-    let element_sets = element_sets_all
-        .into_iter()
-        .filter(|(n, _)| !n.eq_ignore_ascii_case("EALL"))
-        .collect();
-    let sets = MeshSets {
+    let mut sets = MeshSets {
         node_sets,
-        element_sets,
+        element_sets: element_sets_all,
         surfaces: surface_sets,
     };
+    // The whole-mesh sets this writer adds are not carried as sets.
+    super::helpers::drop_whole_mesh_sets(path, &mut sets, nodes.len(), conn.len() / kind.nodes())?;
     super::helpers::check_mesh(path, &nodes, kind, &conn, &sets)?;
     Ok(InpDeck {
         mesh: FeMesh {

@@ -51,3 +51,36 @@ fn bad_gmsh_and_abaqus_files_are_errors_not_panics() {
         assert!(e.contains(name), "{e}");
     }
 }
+
+#[test]
+fn a_users_set_named_like_the_whole_mesh_set_is_refused_unless_it_is_the_whole_mesh() {
+    let hexes = "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n5,0,0,1\n6,1,0,1\n7,1,1,1\n8,0,1,1\n\
+                 9,2,0,0\n10,2,1,0\n11,2,0,1\n12,2,1,1\n\
+                 *ELEMENT, TYPE=C3D8, ELSET=EALL\n1,1,2,3,4,5,6,7,8\n2,2,9,10,3,6,11,12,7\n";
+    let path = std::path::Path::new("user.inp");
+    // The writer's own whole-mesh sets are not carried as sets.
+    let deck = crate::formats::parse_inp(path, hexes).unwrap();
+    assert!(deck.mesh.sets.element_sets.is_empty());
+    // Abaqus adds the elements of a later `*ELSET, ELSET=EALL` to the set: still the whole.
+    assert!(crate::formats::parse_inp(path, &format!("{hexes}*ELSET, ELSET=eall\n2\n")).is_ok());
+    // A user's part of the mesh under that name would merge with it when written: refused.
+    let part = hexes.replace("ELSET=EALL", "ELSET=SOLID") + "*ELSET, ELSET=EALL\n2\n";
+    let e = crate::formats::parse_inp(path, &part)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("user.inp")
+            && e.contains("EALL holds 1 of the 2 elements")
+            && e.contains("rename"),
+        "{e}"
+    );
+    let mut mesh = deck.mesh.clone();
+    mesh.sets.node_sets.insert("NALL".into(), vec![0, 1]);
+    assert!(
+        mesh.sets
+            .check(mesh.kind, 12, 2)
+            .unwrap_err()
+            .contains("NALL holds 2 of the 12")
+    );
+}

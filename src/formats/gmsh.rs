@@ -369,10 +369,7 @@ fn assemble(path: &Path, p: Parsed) -> Result<FeMesh<3>> {
                 .get(&(*dim, *p))
                 .cloned()
                 .unwrap_or_else(|| format!("physical_{p}"));
-            // The whole-mesh group the writer adds is not carried as a set.
-            if name != "EALL" {
-                sets.element_sets.entry(name).or_default().push(e);
-            }
+            sets.element_sets.entry(name).or_default().push(e);
         }
     }
     let kind = kind.ok_or_else(|| Error::parse(path, el, "no elements"))?;
@@ -436,6 +433,8 @@ fn assemble(path: &Path, p: Parsed) -> Result<FeMesh<3>> {
         v.sort_unstable();
         v.dedup();
     }
+    // The whole-mesh group the writer adds is not carried as a set.
+    super::helpers::drop_whole_mesh_sets(path, &mut sets, nodes.len(), conn.len() / kind.nodes())?;
     check_mesh(path, &nodes, kind, &conn, &sets)?;
     Ok(FeMesh {
         nodes,

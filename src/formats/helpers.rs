@@ -53,6 +53,51 @@ pub(crate) fn parse_f64(path: &Path, line: usize, tok: &str) -> Result<f64> {
     Ok(v)
 }
 
+/// The whole-mesh sets that atlasmesh's writers add (`NALL` of every node, `EALL` of every
+/// element, in Abaqus/CalculiX and Gmsh files) removed from sets read back: they are not the
+/// user's. A set of that name holding only part of the mesh is refused: written back, it
+/// would merge with the whole-mesh set of the same name and be lost.
+pub(crate) fn drop_whole_mesh_sets(
+    path: &Path,
+    sets: &mut MeshSets,
+    nodes: usize,
+    elements: usize,
+) -> Result<()> {
+    fn whole(
+        path: &Path,
+        map: &mut std::collections::BTreeMap<String, Vec<usize>>,
+        reserved: &str,
+        what: &str,
+        total: usize,
+    ) -> Result<()> {
+        let names: Vec<String> = map
+            .keys()
+            .filter(|n| n.eq_ignore_ascii_case(reserved))
+            .cloned()
+            .collect();
+        for name in names {
+            let mut m = map.remove(&name).unwrap_or_default();
+            m.sort_unstable();
+            m.dedup();
+            if m.len() != total {
+                return Err(Error::parse(
+                    path,
+                    0,
+                    format!(
+                        "{what} set {name} holds {} of the {total} {what}s; {reserved} is the name \
+                         atlasmesh's solver files give the whole mesh, so a part of it would be \
+                         lost when written: rename the set",
+                        m.len()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+    whole(path, &mut sets.node_sets, "NALL", "node", nodes)?;
+    whole(path, &mut sets.element_sets, "EALL", "element", elements)
+}
+
 pub(crate) fn check_mesh<const D: usize>(
     path: &Path,
     nodes: &[Point<D>],

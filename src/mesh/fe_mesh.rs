@@ -54,6 +54,20 @@ impl MeshSets {
                 return Err(format!("{what} {name:?}: {m}"));
             }
         }
+        // The names the solver files give the whole mesh: a part under that name would merge
+        // with the whole when written.
+        for (name, s, reserved, total, what) in (self.node_sets.iter())
+            .map(|(n, s)| (n, s, "NALL", nodes, "node"))
+            .chain((self.element_sets.iter()).map(|(n, s)| (n, s, "EALL", elements, "element")))
+        {
+            if name.eq_ignore_ascii_case(reserved) && s.len() < total {
+                return Err(format!(
+                    "{what} set {name} holds {} of the {total} {what}s; {reserved} is the name \
+                     the solver files give the whole mesh: rename the set",
+                    s.len()
+                ));
+            }
+        }
         for (name, s) in &self.node_sets {
             if let Some(n) = s.iter().find(|&&n| n >= nodes) {
                 return Err(format!(

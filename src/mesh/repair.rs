@@ -6,7 +6,8 @@
 //! slide on it (each trial position is projected to its closest point on the surface), so
 //! the surface fit is kept; other boundary nodes (an open outline's closing chord, the cut
 //! ends of a tube, a crease the fit did not reach) slide on the mesh's own boundary as it
-//! was, which keeps its shape. Each node in turn maximizes the worst scaled Jacobian of the
+//! was, which keeps its shape. Without a surface (a mesh repaired on its own) every boundary
+//! node stays where it is. Each node in turn maximizes the worst scaled Jacobian of the
 //! elements around it (ties broken by their mean), by a compass search that also tries the
 //! centroid of its neighbours: derivative-free, so inverted elements (negative scaled
 //! Jacobians) are handled like bad ones. Sweeps run over the nodes of the elements still
@@ -328,6 +329,7 @@ impl<'a, const D: usize> Repairer<'a, D> {
             let more: Vec<usize> = active.iter().flat_map(|&n| self.neighbours(n)).collect();
             active.extend(more);
         }
+        active.retain(|&n| self.boundary.role[n] != FIXED);
         active.sort_unstable();
         active.dedup();
         let worst = |n: usize| {
@@ -444,10 +446,13 @@ impl<'a, const D: usize> Repairer<'a, D> {
     }
 }
 
+/// The role of a boundary node that does not move (a mesh repaired without a surface).
+const FIXED: u8 = 3;
+
 /// The boundary of a mesh as the repair sees it.
 struct Boundary<const D: usize> {
     /// Every node's role: 0 free, 1 sliding on the subject's surface, 2 sliding on the
-    /// mesh's own boundary.
+    /// mesh's own boundary, [`FIXED`] not moving.
     role: Vec<u8>,
     /// Every boundary node's distance to the subject's surface before the repair.
     distance_before: Vec<f64>,
@@ -460,7 +465,8 @@ struct Boundary<const D: usize> {
 
 impl<const D: usize> Boundary<D> {
     /// The boundary of `mesh`: its nodes within `params.on_surface` median edges of
-    /// `surface` slide on it, the other boundary nodes on the mesh's own boundary.
+    /// `surface` slide on it, the other boundary nodes on the mesh's own boundary; without a
+    /// surface, every boundary node is fixed.
     fn of(mesh: &FeMesh<D>, surface: Option<&ClosestPointIndex<D>>, params: &RepairParams) -> Self {
         let kind = mesh.kind;
         let nn = mesh.nodes.len();
@@ -497,7 +503,7 @@ impl<const D: usize> Boundary<D> {
                             2
                         }
                     }
-                    None => 2,
+                    None => FIXED,
                 };
             }
         }
@@ -563,6 +569,23 @@ mod tests {
         for f in boundary_faces(&fresh) {
             for &b in &f.nodes {
                 assert_eq!(m.nodes[b], fresh.nodes[b]);
+            }
+        }
+    }
+
+    #[test]
+    fn without_a_surface_the_boundary_stays_even_where_sliding_would_help() {
+        // Interior node (1, 1, 1) pushed near the corner: the elements around it are poor, and
+        // sliding the boundary nodes nearby would help them; without a surface they stay.
+        let mut m = FeMesh::block(4);
+        let n = 1 + 5 * (1 + 5);
+        m.nodes[n] = [0.15, 0.15, 0.15];
+        let r = repair(&mut m, None, &RepairParams::default()).unwrap();
+        assert!(r.moved_nodes > 0, "{r:?}");
+        let fresh = FeMesh::block(4);
+        for f in boundary_faces(&fresh) {
+            for &b in &f.nodes {
+                assert_eq!(m.nodes[b], fresh.nodes[b], "boundary node {b} moved");
             }
         }
     }

@@ -34,15 +34,25 @@ pub(crate) fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
 
 pub(crate) fn stem(path: &Path) -> String {
     path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
+        .map(|s| crate::geometry::display_name(&s.to_string_lossy()))
         .unwrap_or_else(|| "shape".into())
+}
+
+/// A token of the input as a message quotes it: at most 40 characters (a 60 MB field is not
+/// echoed whole).
+pub(crate) fn shown(token: &str) -> String {
+    if token.chars().count() > 40 {
+        format!("{:?}...", token.chars().take(40).collect::<String>())
+    } else {
+        format!("{token:?}")
+    }
 }
 
 pub(crate) fn parse_f64(path: &Path, line: usize, tok: &str) -> Result<f64> {
     let v: f64 = tok
         .trim()
         .parse()
-        .map_err(|_| Error::parse(path, line, format!("{:?} is not a number", tok.trim())))?;
+        .map_err(|_| Error::parse(path, line, format!("{} is not a number", shown(tok.trim()))))?;
     if !v.is_finite() {
         return Err(Error::parse(
             path,

@@ -3,9 +3,9 @@
 
 use super::atomic::MAX_COUNT;
 use super::csv_table::{CsvColumns, Table};
-use super::helpers::{parse_f64, read_text, stem};
+use super::helpers::{parse_f64, read_text, shown, stem};
 use crate::error::{Error, Result};
-use crate::geometry::{Point, Shape};
+use crate::geometry::{MAX_NAME_CHARS, Point, Shape};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -126,14 +126,28 @@ fn point_table<const D: usize>(
     let mut rows: HashMap<String, Vec<(usize, Point<D>, usize)>> = HashMap::new();
     for (ln, f) in &t.rows {
         let ln = *ln;
-        let name = shape.map_or_else(|| stem(path), |c| f[c].to_string());
+        let name = match shape {
+            None => stem(path),
+            Some(c) if f[c].chars().count() > MAX_NAME_CHARS => {
+                return Err(Error::parse(
+                    path,
+                    ln,
+                    format!(
+                        "a shape name of {} characters, {} (at most {MAX_NAME_CHARS})",
+                        f[c].chars().count(),
+                        shown(f[c])
+                    ),
+                ));
+            }
+            Some(c) => f[c].to_string(),
+        };
         let idx = match point {
             Some(c) => {
                 let idx: usize = f[c].parse().map_err(|_| {
                     Error::parse(
                         path,
                         ln,
-                        format!("point index {:?} is not a non-negative integer", f[c]),
+                        format!("point index {} is not a non-negative integer", shown(f[c])),
                     )
                 })?;
                 if idx > MAX_COUNT {

@@ -49,7 +49,10 @@ pub use point::{
 };
 pub use principal_axes::{principal_axes_of, start_rotations};
 pub use query_memo::QueryMemo;
-pub use shape::{Contour2, REFERENCE_POINTS, Shape, Surface3, median_edge_length, uv_sphere};
+pub use shape::{
+    Contour2, MAX_NAME_CHARS, REFERENCE_POINTS, Shape, Surface3, display_name, median_edge_length,
+    uv_sphere,
+};
 pub use similarity::{Similarity, rotation_exp};
 pub use surface_distance::{SurfaceDistances, surface_distances};
 pub use thickness::{local_thickness, thickness_quantile};

@@ -292,3 +292,18 @@ fn ccw_circle_normals_point_outwards() {
         assert!(dot(*p, n) > 0.99);
     }
 }
+
+#[test]
+fn names_are_shown_without_hidden_characters_and_cut_with_a_checksum() {
+    use super::{MAX_NAME_CHARS, display_name};
+    assert_eq!(display_name("S001_Femur"), "S001_Femur");
+    assert_eq!(display_name("fémur ü"), "fémur ü");
+    // A right-to-left override (display spoofing), a zero-width space, a newline.
+    assert_eq!(display_name("a\u{202E}gpj.exe"), "a\u{FFFD}gpj.exe");
+    assert_eq!(display_name("a\u{200B}b\nc"), "a\u{FFFD}b\u{FFFD}c");
+    let long_a = "a".repeat(10_000);
+    let long_b = format!("{}b", "a".repeat(9_999));
+    let (a, b) = (display_name(&long_a), display_name(&long_b));
+    assert_eq!(a.chars().count(), MAX_NAME_CHARS);
+    assert_ne!(a, b);
+}

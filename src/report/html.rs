@@ -29,11 +29,25 @@ pub struct Pictures {
     pub model_page: Option<std::result::Result<String, String>>,
 }
 
+/// `s` as HTML text or attribute value: markup escaped, and the invisible characters that
+/// reorder or hide text (bidirectional overrides: display spoofing) shown as `�`.
 pub(crate) fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\u{061C}'
+            | '\u{200B}'..='\u{200F}'
+            | '\u{202A}'..='\u{202E}'
+            | '\u{2060}'..='\u{2069}'
+            | '\u{FEFF}' => out.push('\u{FFFD}'),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// `<img>` of a PNG file in `dir`, linked (relative to the page); empty when the file is not

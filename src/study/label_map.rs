@@ -105,7 +105,7 @@ pub fn read_label_surface(path: &Path, reading: &LabelReading) -> Result<LabelSu
 }
 
 /// The shape's name: the file's name without its extension (an image's `.nii.gz` and
-/// `.seg.nrrd` whole).
+/// `.seg.nrrd` whole), as [`crate::geometry::display_name`] shows it.
 pub(crate) fn shape_name(path: &Path) -> String {
     let name = path
         .file_name()
@@ -121,12 +121,12 @@ pub(crate) fn shape_name(path: &Path) -> String {
         ".mhd",
     ] {
         if name.to_lowercase().ends_with(ext) {
-            return name[..name.len() - ext.len()].to_string();
+            return crate::geometry::display_name(&name[..name.len() - ext.len()]);
         }
     }
     PathBuf::from(name)
         .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
+        .map(|s| crate::geometry::display_name(&s.to_string_lossy()))
         .unwrap_or_default()
 }
 

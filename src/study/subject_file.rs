@@ -44,7 +44,8 @@ pub struct Subject<const D: usize> {
 ///
 /// # Errors
 /// [`Error::Parse`] naming `origin` (a file, or `"shape K"`) for a shape that is not valid.
-pub fn prepare_subject<const D: usize>(shape: Shape<D>, origin: &Path) -> Result<Subject<D>> {
+pub fn prepare_subject<const D: usize>(mut shape: Shape<D>, origin: &Path) -> Result<Subject<D>> {
+    shape.name = crate::geometry::display_name(&shape.name);
     // The readers check this on every file; a shape made in memory (Python arrays) is
     // checked here, before any work.
     crate::formats::check_points(origin, shape.points.len(), 1)?;

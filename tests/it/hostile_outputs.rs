@@ -299,5 +299,57 @@ fn a_spike_never_gives_an_invalid_mesh() {
                 .join(format!("{}_mesh.vtu", f.name))
                 .exists()
         );
+        // A refused subject leaves no empty folder.
+        let dir = out.join(&f.name);
+        assert!(
+            !dir.exists() || !files_in(&dir).is_empty(),
+            "{}",
+            dir.display()
+        );
+    }
+}
+
+#[test]
+fn names_are_shown_safely_and_never_echoed_whole() {
+    let d = common::temp_dir("hostile-names");
+    let atlas = atlas_2d(&d);
+    let subjects = d.join("subjects");
+    std::fs::create_dir_all(&subjects).unwrap();
+    // A right-to-left override in a file name (it would show as "okgnp.txt" reversed).
+    std::fs::write(subjects.join("ok\u{202E}gnp.txt"), ellipse(1.0, 0.6)).unwrap();
+    // A CSV whose shape name is 100 000 characters long.
+    let long = "n".repeat(100_000);
+    let mut csv = String::from("shape,point,x,y\n");
+    for (k, l) in ellipse(1.0, 0.6).lines().enumerate() {
+        let (x, y) = l.split_once(' ').unwrap();
+        csv.push_str(&format!("{long},{k},{x},{y}\n"));
+    }
+    std::fs::write(subjects.join("long.csv"), csv).unwrap();
+    let out = d.join("fit");
+    let o = atlasmesh(&[
+        "fit",
+        "--atlas",
+        &s(&atlas),
+        "--subjects",
+        &s(&subjects),
+        "--out",
+        &s(&out),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(6), "{err}");
+    assert!(
+        err.len() < 2_000 && err.contains("100000 characters"),
+        "{err}"
+    );
+    let r = report(&out);
+    assert_eq!((r.subjects.len(), r.failed.len()), (1, 1), "{err}");
+    assert!(r.failed[0].error.len() < 1_000);
+    assert_eq!(r.subjects[0].name, "ok\u{FFFD}gnp");
+    for f in files_in(&out) {
+        // (report.json keeps the input's path as it is: it names the file.)
+        if f.extension().is_some_and(|e| e == "html") {
+            let text = std::fs::read_to_string(&f).unwrap();
+            assert!(!text.contains('\u{202E}'), "{}", f.display());
+        }
     }
 }

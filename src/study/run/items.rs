@@ -155,7 +155,11 @@ impl Units<'_> {
         // files of an interrupted run with it.
         let _ = std::fs::remove_file(dir.join(self.looping.record));
         remove_temporaries(&dir);
-        let mut report = make(&dir)?;
+        let mut report = make(&dir).inspect_err(|_| {
+            // A unit refused before it wrote anything leaves no empty folder behind (one that
+            // holds files is left as it is).
+            let _ = std::fs::remove_dir(&dir);
+        })?;
         for f in report.files_mut() {
             *f = format!("{folder}/{f}");
         }

@@ -99,7 +99,7 @@ class Atlas:
         shapes: List[ShapeLike],
         modes: Optional[int] = None,
         variance: float = 0.985,
-        element_size: str = "auto",
+        element_size: Union[str, float] = "auto",
         register: bool = False,
         mesh: bool = True,
     ) -> "Atlas": ...

@@ -64,6 +64,15 @@ pub(crate) fn split_cells(
                 format!("the cell offsets decrease at cell {c}"),
             ));
         }
+        // An empty cell holds nothing; refusing it also bounds the cells by the
+        // connectivity's length (an `offsets` array of zeros would make millions).
+        if o == prev {
+            return Err(Error::parse(
+                path,
+                0,
+                format!("cell {c} has no points (its offset repeats the previous one)"),
+            ));
+        }
         cells.push(
             conn[prev..o]
                 .iter()

@@ -34,7 +34,10 @@ pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};
 pub use fe_mesh::{FeMesh, HexMesh, MAX_SET_NAME, MeshSets, QuadMesh, set_name_problem};
 pub use hex_mesh::{HexMeshParams, hex_mesh};
-pub use mean_mesh::{MEAN_MESH_COVERAGE, MEAN_MESH_EDGE_RATIO_MAX, mesh_mean_shape};
+pub use mean_mesh::{
+    MEAN_MESH_COVERAGE, MEAN_MESH_EDGE_RATIO_MAX, MEAN_MESH_SCALED_JACOBIAN_MIN,
+    MEAN_MESH_SCALED_JACOBIAN_TARGET, mesh_mean_shape,
+};
 pub use morph::{Correspondence, MAX_STIFFENINGS, Morph, Morpher, STIFFEN_FACTOR};
 pub use quad_mesh::{QuadMeshParams, quad_mesh};
 pub use quality::{ElementQuality, QualityDistribution, QualitySummary, mesh_quality, summarize};

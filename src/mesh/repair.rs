@@ -33,6 +33,10 @@ pub struct RepairParams {
     /// A boundary node within this share of the median edge length of the surface slides
     /// on it; farther ones stay.
     pub on_surface: f64,
+    /// When set, no move makes an element's edge ratio (longest edge over shortest) exceed
+    /// this, or its value before the move when that was already larger: the scaled Jacobian
+    /// alone would let a boundary node slide until an edge is tiny.
+    pub edge_ratio_max: Option<f64>,
 }
 
 impl Default for RepairParams {
@@ -41,6 +45,7 @@ impl Default for RepairParams {
             bound: None,
             max_sweeps: 60,
             on_surface: 0.25,
+            edge_ratio_max: None,
         }
     }
 }
@@ -229,6 +234,7 @@ struct Repairer<'a, const D: usize> {
     boundary: Boundary<D>,
     surface: Option<&'a ClosestPointIndex<D>>,
     bound: f64,
+    edge_ratio_max: Option<f64>,
 }
 
 impl<'a, const D: usize> Repairer<'a, D> {
@@ -251,7 +257,16 @@ impl<'a, const D: usize> Repairer<'a, D> {
             boundary: Boundary::of(mesh, surface, params),
             surface,
             bound,
+            edge_ratio_max: params.edge_ratio_max,
         }
+    }
+
+    /// The largest edge ratio of node `n`'s elements.
+    fn edge_ratio_around(&self, n: usize, nodes: &[Point<D>]) -> f64 {
+        self.incident[n]
+            .iter()
+            .map(|&e| super::quality::edge_ratio(self.kind, self.element(e), nodes))
+            .fold(1.0, f64::max)
     }
 
     fn element(&self, e: usize) -> &[usize] {
@@ -392,11 +407,15 @@ impl<'a, const D: usize> Repairer<'a, D> {
                 .min(median_edge)
                 * 0.3
         };
+        // The edge ratio a move may reach around the node, when bounded.
+        let ratio_cap = self
+            .edge_ratio_max
+            .map(|m| m.max(self.edge_ratio_around(n, nodes)));
         let mut trial = |p: Point<D>, nodes: &mut [Point<D>]| {
             let p = self.place(n, p);
             nodes[n] = p;
             let s = score_at(nodes);
-            if better(s, best) {
+            if better(s, best) && ratio_cap.is_none_or(|c| self.edge_ratio_around(n, nodes) <= c) {
                 best = s;
                 bx = p;
                 true

@@ -8,6 +8,7 @@
 //! | `element_size` | [`ElementSize`]: the mean mesh's element size from a length, a share or the thickness |
 //! | `fe_mesh` | [`FeMesh`] and [`MeshSets`] |
 //! | `boundary` | the boundary faces of a mesh, outward |
+//! | `boundary_fit` | the boundary nodes moved onto the subject after the morph, the interior relaxed |
 //! | `quad_mesh` | quadrilateral mesh of a 2D outline |
 //! | `hex_mesh` | hexahedral mesh of a closed surface |
 //! | `mean_mesh` | the mesh of the mean shape, by dimension |
@@ -17,6 +18,7 @@
 //! | `repair` | untangling and improving poor elements |
 
 mod boundary;
+mod boundary_fit;
 mod element;
 pub mod element_size;
 mod fe_mesh;
@@ -29,6 +31,7 @@ pub mod repair;
 pub mod sets;
 
 pub use boundary::{BoundaryFace, FacePair, boundary_faces, boundary_surface, face_pairs};
+pub use boundary_fit::{BoundaryFit, fit_boundary};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};

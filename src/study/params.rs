@@ -37,6 +37,9 @@ pub struct RunParams {
     pub deck: Option<std::sync::Arc<crate::formats::Deck>>,
     /// Repair of every morphed mesh (untangling and quality; `None`: off).
     pub repair: Option<crate::mesh::repair::RepairParams>,
+    /// The boundary fit after the morph ([`crate::mesh::fit_boundary`]): the delivered mesh's
+    /// boundary nodes moved onto the subject, kept when the mesh stays valid and comes closer.
+    pub boundary_fit: bool,
     /// A fit whose two-way RMS distance to its subject (eq. 6 both ways) exceeds this share
     /// of the subject's robust size ([`Shape::robust_diagonal`](crate::geometry::Shape::robust_diagonal)),
     /// or the 95th percentile of whose subject-to-instance distances exceeds twice it, did
@@ -74,6 +77,7 @@ impl Default for RunParams {
             sets: None,
             deck: None,
             repair: Some(crate::mesh::repair::RepairParams::default()),
+            boundary_fit: true,
             max_misfit: default_max_misfit(),
             max_instance_distance: 0.02,
             max_mesh_distance: 0.01,

@@ -68,10 +68,15 @@ pub fn fit_subject<const D: usize>(
         per_element = q;
         repair = Some(r);
     }
+    let mut delivered = delivered_distances(&mesh, subject, &index, params);
+    if params.boundary_fit
+        && let Some(better) = boundary_fitted(&mesh, &index, subject, params, &delivered)?
+    {
+        (mesh, per_element, delivered) = better;
+    }
     let q = summarize(&per_element);
     check_valid(subject, &mesh, &q, params)?;
     let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
-    let delivered = delivered_distances(&mesh, subject, &index, params);
     let dist = distribution(&mesh, &per_element);
     let mean_normals = atlas.mean_shape().vertex_normals();
     let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
@@ -136,6 +141,108 @@ pub fn fit_subject<const D: usize>(
         report,
         materials: None,
     })
+}
+
+/// How far a boundary node may move onto the subject in the boundary fit, in element sizes:
+/// far for a whole subject (the tips a smooth morph leaves short), one element for a partial
+/// one (where the subject has no counterpart, nothing is pulled in).
+const BOUNDARY_REACH: f64 = 8.0;
+const BOUNDARY_REACH_PARTIAL: f64 = 1.0;
+
+/// The morphed (and repaired) `mesh` after the boundary fit ([`crate::mesh::fit_boundary`]),
+/// repaired again with its boundary sliding on the subject, with its quality and distances;
+/// `None` when that mesh is not better: an element inverted, a smallest scaled Jacobian below
+/// the repair bound (or below the mesh's before, when that was lower), or a two-way RMS or
+/// 95th percentile distance larger than before.
+#[allow(
+    clippy::type_complexity,
+    reason = "the three parts of the delivered mesh"
+)]
+fn boundary_fitted<const D: usize>(
+    mesh: &FeMesh<D>,
+    index: &ClosestPointIndex<D>,
+    subject: &Shape<D>,
+    params: &RunParams,
+    before: &Delivered,
+) -> Result<Option<(FeMesh<D>, Vec<ElementQuality>, Delivered)>> {
+    if !before.element_size.is_finite() {
+        return Ok(None);
+    }
+    let reach = before.element_size
+        * if params.fit.partial {
+            BOUNDARY_REACH_PARTIAL
+        } else {
+            BOUNDARY_REACH
+        };
+    // A repair that has not untangled the moves in a few sweeps rarely does: the next try
+    // leaves the nodes there instead.
+    let rp = crate::mesh::repair::RepairParams {
+        max_sweeps: BOUNDARY_REPAIR_SWEEPS,
+        ..params.repair.unwrap_or_default()
+    };
+    let was = summarize(&crate::mesh::quality::mesh_quality(mesh));
+    let bound = rp
+        .bound
+        .unwrap_or_else(|| crate::mesh::repair::default_bound(mesh.kind))
+        .min(was.scaled_jacobian_min);
+    // Boundary nodes near an element the moves left invalid or poor stay where they were in
+    // the next try.
+    let mut keep = vec![false; mesh.nodes.len()];
+    for _ in 0..BOUNDARY_FIT_TRIES {
+        let mut fitted = mesh.clone();
+        let moved = crate::mesh::fit_boundary(&mut fitted, index, reach, &keep);
+        if moved.moved == 0 {
+            return Ok(None);
+        }
+        let quality = crate::mesh::quality::mesh_quality(&fitted);
+        let (_, quality) = repair_with_quality(&mut fitted, Some(index), &rp, &quality)?;
+        let bad: Vec<usize> = (0..quality.len())
+            .filter(|&e| {
+                let sj = quality[e].scaled_jacobian_min;
+                sj.is_nan() || sj < bound
+            })
+            .collect();
+        if bad.is_empty() {
+            let after = delivered_distances(&fitted, subject, index, params);
+            let closer = after.distances.rms <= before.distances.rms
+                && after.distances.p95 <= before.distances.p95;
+            return Ok(closer.then_some((fitted, quality, after)));
+        }
+        mark_around(&fitted, &bad, BOUNDARY_KEEP_RINGS, &mut keep);
+    }
+    Ok(None)
+}
+
+/// Sweeps of the repair after a boundary fit's try.
+const BOUNDARY_REPAIR_SWEEPS: usize = 8;
+
+/// Tries of the boundary fit, each leaving more nodes where they were.
+const BOUNDARY_FIT_TRIES: usize = 4;
+
+/// Rings of elements around a poor one whose nodes the next try leaves.
+const BOUNDARY_KEEP_RINGS: usize = 2;
+
+/// Marks in `keep` the nodes of `elements` and of `rings - 1` rings of elements around them.
+fn mark_around<const D: usize>(
+    mesh: &FeMesh<D>,
+    elements: &[usize],
+    rings: usize,
+    keep: &mut [bool],
+) {
+    let mut marked: std::collections::HashSet<usize> = elements
+        .iter()
+        .flat_map(|&e| mesh.element(e).iter().copied())
+        .collect();
+    for _ in 1..rings {
+        let more: Vec<usize> = (0..mesh.num_elements())
+            .filter(|&e| mesh.element(e).iter().any(|n| marked.contains(n)))
+            .flat_map(|e| mesh.element(e).iter().copied())
+            .collect();
+        marked.extend(more);
+    }
+    for n in marked {
+        keep[n] = true;
+    }
 }
 
 /// Refuses a morphed (and repaired) mesh no solver could use: no elements, a node with a NaN

@@ -136,6 +136,11 @@ pub struct RunArgs {
     /// The scaled-Jacobian bound of the repair, in (0, 1) (default by element kind).
     #[arg(long, value_name = "SJ", value_parser = open_share)]
     pub repair_bound: Option<f64>,
+    /// Move the morphed mesh's boundary nodes onto the subject along their normals (the
+    /// interior relaxed and repaired after them), kept where the mesh stays valid and comes
+    /// closer to the subject: on or off.
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub boundary_fit: String,
     /// A solver deck built around the atlas's mean mesh: Abaqus/CalculiX (`atlasmesh convert
     /// ATLAS mean.inp`, then add the material and steps) or FEBio (`mean.feb`, then add
     /// Material, MeshDomains and Step): every subject gets a copy with its node coordinates,
@@ -202,6 +207,7 @@ impl RunArgs {
         p.plots = !self.no_plots;
         p.baselines = self.baselines;
         p.max_misfit = self.max_misfit;
+        p.boundary_fit = self.boundary_fit == "on";
         p.repair = (self.repair == "on").then_some(atlasmesh::mesh::RepairParams {
             bound: self.repair_bound,
             ..Default::default()

@@ -199,7 +199,7 @@ fn boundary_fitted<const D: usize>(
         let bad: Vec<usize> = (0..quality.len())
             .filter(|&e| {
                 let sj = quality[e].scaled_jacobian_min;
-                sj.is_nan() || sj < bound
+                sj.is_nan() || sj < bound || quality[e].jacobian_min <= 0.0
             })
             .collect();
         if bad.is_empty() {

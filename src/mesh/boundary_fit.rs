@@ -72,7 +72,7 @@ fn boundary_with_nodes<const D: usize>(mesh: &FeMesh<D>) -> (Shape<D>, Vec<usize
 /// where the subject is partial, only the part it has is fitted; so does a node `keep`
 /// marks, where an earlier try made the mesh invalid), and carries the moves into
 /// the interior by harmonic relaxation (each interior node moved by the mean of its
-/// neighbours' moves, [`RELAXATION_SWEEPS`] sweeps). Linear elements only: a quadratic mesh
+/// neighbours' moves, 40 sweeps: `RELAXATION_SWEEPS`). Linear elements only: a quadratic mesh
 /// is left as it is (its mid-edge nodes follow their corners when it is made quadratic).
 ///
 /// The caller repairs the mesh afterwards (the elements the moves made poor) with the

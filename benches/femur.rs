@@ -8,6 +8,9 @@
 //! mean with about 100k hexahedra, and the repair of the 2 mm mesh with 1 % of its elements
 //! spoiled. Without the data, seeded synthetic surfaces of the 3D demo (7322 vertices) stand
 //! in.
+//!
+//! Budget: about 10 minutes of wall time on 2 cores (`cargo bench -p atlasmesh-bench --bench femur`;
+//! docs/benchmarks.md lists every bench's).
 
 #[path = "../tests/it/raw_femurs.rs"]
 mod raw_femurs;
@@ -49,6 +52,9 @@ fn bench(c: &mut Criterion) {
     let index = ClosestPointIndex::from_shape(subject);
     let mut g = c.benchmark_group("femur");
     g.sample_size(10);
+    // Ten samples of as few iterations as fill the measurement time (one, for the slow ones):
+    // the budget holds whatever the machine.
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.bench_function("femur_fit_7313pts_15modes", |b| {
         b.iter(|| {
             fitter
@@ -168,6 +174,7 @@ fn bench(c: &mut Criterion) {
     );
     let mut g = c.benchmark_group("repair");
     g.sample_size(10);
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.bench_function("repair_femur_hex_1pct", |b| {
         b.iter(|| {
             let mut m = spoiled.clone();
@@ -178,6 +185,7 @@ fn bench(c: &mut Criterion) {
     let (raw, _) = raw_femurs::raw_femurs(&shapes, 30);
     let mut g = c.benchmark_group("raw_femurs");
     g.sample_size(10);
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.bench_function("atlas_from_30_raw_femurs_2_cores", |b| {
         b.iter(|| {
             let corresponded = atlasmesh::study::register_population(

@@ -1,6 +1,9 @@
 //! Benchmarks on the hands: one hand fit (2001 points, 11 modes) on one core, and the whole
 //! 40-hand leave-one-out. Reads `$ATLASMESH_DATA/imm-hands-2d`; without it, a seeded
 //! synthetic population of the same size stands in.
+//!
+//! Budget: about 3 minutes of wall time on 2 cores (`cargo bench -p atlasmesh-bench --bench fit`;
+//! docs/benchmarks.md lists every bench's).
 
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::{ClosestPointIndex, Shape};
@@ -49,6 +52,9 @@ fn bench(c: &mut Criterion) {
     let index = ClosestPointIndex::from_shape(subject);
     let mut g = c.benchmark_group("hands");
     g.sample_size(10);
+    // Ten samples of as few iterations as fill the measurement time (one, for the slow ones):
+    // the budget holds whatever the machine.
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.bench_function(format!("hand_fit_2001pts_11modes_{label}"), |b| {
         b.iter(|| {
             fitter
@@ -97,8 +103,13 @@ fn bench(c: &mut Criterion) {
         plots: false,
         ..RunParams::default()
     };
-    let out = std::env::temp_dir().join("atlasmesh-bench-loo");
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-bench-loo-")
+        .tempdir()
+        .expect("temporary folder");
+    let out = tmp.path().to_path_buf();
     g.sample_size(10);
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.measurement_time(std::time::Duration::from_secs(60));
     g.bench_function(format!("hands_loo_40_{label}"), |b| {
         b.iter(|| {

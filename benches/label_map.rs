@@ -5,6 +5,9 @@
 //! cavities, marching tetrahedra, edge collapse, smoothing; sequential: one core), as
 //! `atlasmesh convert seg.nii.gz l1.ply --label 31` does. The file is written once to
 //! `target/label_map_bench.nii.gz` (for measuring memory with `/usr/bin/time -v`).
+//!
+//! Budget: about 1 minutes of wall time on 2 cores (`cargo bench -p atlasmesh-bench --bench label_map`;
+//! docs/benchmarks.md lists every bench's).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::io::Write;
@@ -88,6 +91,9 @@ fn bench(c: &mut Criterion) {
     );
     let mut g = c.benchmark_group("label_map");
     g.sample_size(10);
+    // Ten samples of as few iterations as fill the measurement time (one, for the slow ones):
+    // the budget holds whatever the machine.
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.bench_function("read 384x384x160 and extract label 31 (one core)", |b| {
         b.iter(|| atlasmesh::study::read_label_surface(&path, &reading).expect("surface"))
     });

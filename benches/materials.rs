@@ -2,6 +2,9 @@
 //! distorted) mapped on a 512 × 512 × 300 CT of 0.7 × 0.7 × 1 mm (int16 HU, a smooth field
 //! with noise), on one core (`map_materials`: V3 integration over every element, binning,
 //! checks). The CT's conversion to a field (`CtField::new`) is measured apart.
+//!
+//! Budget: about 2 minutes of wall time on 2 cores (`cargo bench -p atlasmesh-bench --bench materials`;
+//! docs/benchmarks.md lists every bench's).
 
 use atlasmesh::image::{Image, VoxelType, WorldConvention};
 use atlasmesh::materials::{CtField, MaterialRecipe, map_materials};
@@ -100,6 +103,9 @@ fn bench(c: &mut Criterion) {
         .expect("pool");
     let mut g = c.benchmark_group("materials");
     g.sample_size(10);
+    // Ten samples of as few iterations as fill the measurement time (one, for the slow ones):
+    // the budget holds whatever the machine.
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.bench_function("60k_hex8_on_512x512x300_ct_one_core", |b| {
         b.iter(|| one.install(|| map_materials(&mesh, &field, &recipe).expect("map")))
     });

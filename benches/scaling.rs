@@ -10,6 +10,9 @@
 //! vertices, atlas and subject together (without the data, only these). After the
 //! measurements the medians are plotted to `docs/scaling.png` and printed with the fitted
 //! exponent of time against vertices.
+//!
+//! Budget: about 8 minutes of wall time on 2 cores (`cargo bench -p atlasmesh-bench --bench scaling`;
+//! docs/benchmarks.md lists every bench's).
 
 use atlasmesh::fit::{FitParams, Fitter};
 use atlasmesh::geometry::{ClosestPointIndex, Shape};
@@ -152,6 +155,9 @@ fn bench(c: &mut Criterion) {
     faer::set_global_parallelism(faer::Par::Seq);
     let mut g = c.benchmark_group("scaling_vertices");
     g.sample_size(10);
+    // Ten samples of as few iterations as fill the measurement time (one, for the slow ones):
+    // the budget holds whatever the machine.
+    g.sampling_mode(criterion::SamplingMode::Flat);
     let mut sizes: Vec<(&str, usize)> = Vec::new();
     let femurs = femurs();
     let populations = populations(femurs.as_deref());
@@ -178,6 +184,7 @@ fn bench(c: &mut Criterion) {
     // Modes: the synthetic 10k family has 4 true modes; the femurs (when there) have more.
     let mut g = c.benchmark_group("scaling_modes");
     g.sample_size(10);
+    g.sampling_mode(criterion::SamplingMode::Flat);
     let fallback;
     let (family, shapes): (&str, &[Shape<3>]) = match populations
         .iter()

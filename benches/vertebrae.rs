@@ -3,6 +3,9 @@
 //! dropped, the automatic template registered to the other nine (10 landmarks each), GPA,
 //! PCA and the hexahedral mesh of the mean at the automatic element size, the atlas file
 //! written. On both cores, as a user runs it. Skipped without the data.
+//!
+//! Budget: about 6 minutes of wall time on 2 cores (`cargo bench -p atlasmesh-bench --bench vertebrae`;
+//! docs/benchmarks.md lists every bench's).
 
 use atlasmesh::study::{
     ISLAND_SHARE, RunParams, Silent, Template, attach_landmarks, build, clean_shapes,
@@ -24,13 +27,18 @@ fn bench(c: &mut Criterion) {
         .collect();
     surfaces.sort();
     let landmarks: Vec<PathBuf> = surfaces.iter().map(|p| p.with_extension("json")).collect();
-    let out =
-        std::env::temp_dir().join(format!("atlasmesh-bench-vertebrae-{}", std::process::id()));
-    std::fs::create_dir_all(&out).expect("temporary folder");
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-bench-vertebrae-")
+        .tempdir()
+        .expect("temporary folder");
+    let out = tmp.path();
     let params = RunParams::default();
     let register = atlasmesh::register::RegisterParams::for_dimension(3);
     let mut g = c.benchmark_group("vertebrae");
     g.sample_size(10);
+    // Ten samples of as few iterations as fill the measurement time (one, for the slow ones):
+    // the budget holds whatever the machine.
+    g.sampling_mode(criterion::SamplingMode::Flat);
     g.bench_function("vertebra_atlas_build_register_10_shapes", |b| {
         b.iter(|| {
             let mut shapes = load_surfaces(&surfaces, &Default::default()).expect("surfaces");
@@ -42,7 +50,6 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.finish();
-    std::fs::remove_dir_all(&out).ok();
 }
 
 criterion_group! {

@@ -37,6 +37,7 @@ def assert_same(atlas, subjects, tmp_path):
         + [str(s) for s in subjects],
         capture_output=True,
         text=True,
+        timeout=600,
     )
     assert run.returncode == 0, run.stderr
     report = json.loads((out / "report.json").read_text())

@@ -1,12 +1,8 @@
 use super::*;
 use crate::mesh::ElementKind;
 
-fn tmp(name: &str, text: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("atlasmesh-femesh-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
+fn tmp(name: &str, text: &str) -> super::outline_tests::TmpFile {
+    super::outline_tests::tmp_file("atlasmesh-femesh-", name, text.as_bytes())
 }
 
 #[test]

@@ -306,8 +306,11 @@ mod tests {
 
     #[test]
     fn json_pts_and_csv_landmarks() {
-        let dir = std::env::temp_dir().join(format!("atlasmesh-lm-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new()
+            .prefix("atlasmesh-lm-")
+            .tempdir()
+            .unwrap();
+        let dir = tmp.path();
         let j = dir.join("a.json");
         std::fs::write(
             &j,
@@ -346,6 +349,5 @@ mod tests {
         ];
         let e = attach(&mut s, &two, &c).unwrap_err().to_string();
         assert!(e.contains("a and b of s1 fall on the same point"), "{e}");
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -1,12 +1,35 @@
 use super::*;
 use std::path::Path;
 
-fn tmp(name: &str, content: &[u8]) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("atlasmesh-io-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, content).unwrap();
-    p
+/// A file named `name` in a temporary folder of its own; both are removed on drop.
+pub(super) struct TmpFile {
+    path: std::path::PathBuf,
+    _dir: tempfile::TempDir,
+}
+
+impl std::ops::Deref for TmpFile {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for TmpFile {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+/// [`TmpFile`] `name` holding `content`, its folder named `PREFIXXXXXXX`.
+pub(super) fn tmp_file(prefix: &str, name: &str, content: &[u8]) -> TmpFile {
+    let dir = tempfile::Builder::new().prefix(prefix).tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, content).unwrap();
+    TmpFile { path, _dir: dir }
+}
+
+fn tmp(name: &str, content: &[u8]) -> TmpFile {
+    tmp_file("atlasmesh-io-", name, content)
 }
 
 #[test]

@@ -61,8 +61,11 @@ fn quads() -> FeMesh<2> {
 }
 
 fn round_trip<const D: usize>(m: &FeMesh<D>, name: &str) {
-    let dir = std::env::temp_dir().join(format!("atlasmesh-rt-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-rt-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let q = crate::mesh::quality::mesh_quality(m);
     for ext in ["inp", "msh", "vtk", "vtu"] {
         let p = dir.join(format!("{name}.{ext}"));
@@ -90,7 +93,6 @@ fn round_trip<const D: usize>(m: &FeMesh<D>, name: &str) {
     let feb = dir.join(format!("{name}.feb"));
     let w = write_mesh(&feb, m, None, &q);
     assert_eq!(w.is_ok(), D == 3);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -126,8 +128,11 @@ fn every_format_reads_back_with_its_sets() {
 
 #[test]
 fn deck_nodes_are_replaced_and_nothing_else() {
-    let dir = std::env::temp_dir().join(format!("atlasmesh-deck-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-deck-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let m = two_cubes();
     let mut text = inp(&m, &dir.join("d.inp"));
     text.push_str("*MATERIAL, NAME=BONE\n*ELASTIC\n17000., 0.3\n*STEP\n*STATIC\n*END STEP\n");
@@ -144,7 +149,6 @@ fn deck_nodes_are_replaced_and_nothing_else() {
     }
     assert_eq!(again.mesh.connectivity, m.connectivity);
     assert_eq!(again.mesh.sets, m.sets);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -188,8 +192,11 @@ fn outlines_written_as_vtp_and_vtk_read_back() {
         })
         .collect();
     let s = crate::geometry::Shape::polyline("o", t.clone(), true);
-    let dir = std::env::temp_dir().join(format!("atlasmesh-outline-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-outline-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     for f in [ShapeFormat::Vtp, ShapeFormat::Vtk] {
         let p = dir.join(format!("o.{}", f.extension()));
         write_shape(&p, &s, f).unwrap();
@@ -200,7 +207,6 @@ fn outlines_written_as_vtp_and_vtk_read_back() {
     }
     let e = write_shape(&dir.join("o.ply"), &s, ShapeFormat::Ply).unwrap_err();
     assert!(e.to_string().contains("vtp or vtk"), "{e}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

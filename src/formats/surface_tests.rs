@@ -27,8 +27,11 @@ fn a_closed_surface_is_oriented_outwards() {
 #[test]
 fn ply_and_stl_round_trip() {
     let s = prepare_surface(tetra()).unwrap();
-    let dir = std::env::temp_dir().join(format!("atlasmesh-surf-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-surf-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     for ext in ["ply", "stl"] {
         let p = dir.join(format!("t.{ext}"));
         if ext == "ply" {
@@ -41,13 +44,15 @@ fn ply_and_stl_round_trip() {
         assert_eq!(r.facets.len(), 4, "{ext}");
         assert!((signed_volume(&r) - 1.0 / 6.0).abs() < 1e-6, "{ext}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn legacy_vtk_polygons_are_read_as_a_surface() {
-    let dir = std::env::temp_dir().join(format!("atlasmesh-vtk3-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-vtk3-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let p = dir.join("t.vtk");
     std::fs::write(
         &p,
@@ -57,7 +62,6 @@ fn legacy_vtk_polygons_are_read_as_a_surface() {
     let s = read_surface(&p).unwrap();
     assert_eq!((s.points.len(), s.facets.len()), (4, 4));
     assert!((signed_volume(&s) - 1.0 / 6.0).abs() < 1e-9);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -67,13 +71,15 @@ fn non_manifold_and_truncated_inputs_are_refused() {
     s.facets.push([0, 1, 4]);
     let e = prepare_surface(s).unwrap_err().to_string();
     assert!(e.contains("edge-manifold"), "{e}");
-    let dir = std::env::temp_dir().join(format!("atlasmesh-trunc-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-trunc-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let p = dir.join("t.ply");
     write_ply(&p, &prepare_surface(tetra()).unwrap()).unwrap();
     let b = std::fs::read(&p).unwrap();
     std::fs::write(&p, &b[..b.len() - 7]).unwrap();
     let e = read_surface(&p).unwrap_err().to_string();
     assert!(e.contains("truncated") && e.contains("t.ply"), "{e}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -4,8 +4,11 @@ use crate::mesh::{ElementKind, FeMesh};
 
 #[test]
 fn written_vtp_and_vtu_read_back() {
-    let dir = std::env::temp_dir().join(format!("atlasmesh-xml-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-xml-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let s = Shape::<3> {
         name: "t".into(),
         points: vec![
@@ -50,7 +53,6 @@ fn written_vtp_and_vtu_read_back() {
     std::fs::write(&p, &t[..t.len() / 2]).unwrap();
     let e = read_vtu(&p).unwrap_err().to_string();
     assert!(e.contains("c.vtu") && e.contains("not closed"), "{e}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A VTU of one hexahedron whose eight point-data arrays share one appended zlib block that

@@ -482,8 +482,11 @@ mod tests {
 
     #[test]
     fn sets_from_a_config() {
-        let dir = std::env::temp_dir().join(format!("atlasmesh-sets-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new()
+            .prefix("atlasmesh-sets-")
+            .tempdir()
+            .unwrap();
+        let dir = tmp.path();
         let p = dir.join("sets.toml");
         std::fs::write(
             &p,

@@ -59,8 +59,11 @@ fn atlas_survives_a_save_load_round_trip() {
         },
     )
     .unwrap();
-    let dir = std::env::temp_dir().join(format!("atlasmesh-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-test-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let p = dir.join("a.safetensors");
     atlas.save(&p).unwrap();
     let b = Atlas::<2>::load(&p).unwrap();
@@ -71,7 +74,6 @@ fn atlas_survives_a_save_load_round_trip() {
     assert!(Atlas::<3>::load(&p).unwrap_err().to_string().contains("2D"));
     std::fs::write(&p, b"garbage").unwrap();
     assert!(Atlas::<2>::load(&p).is_err());
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 fn three_mode_atlas() -> Atlas<2> {
@@ -291,8 +293,11 @@ fn the_atlas_knows_the_data_frame() {
     }
     // The reference mean has a largest side of 1: the data's extent is about 2 × 25 × 1.1.
     assert!(frame.s > 40.0 && frame.s < 70.0, "{}", frame.s);
-    let dir = std::env::temp_dir().join(format!("atlasmesh-frame-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-frame-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let p = dir.join("a.safetensors");
     atlas.save(&p).unwrap();
     let back = Atlas::<2>::load(&p).unwrap();
@@ -304,7 +309,6 @@ fn the_atlas_knows_the_data_frame() {
     let back = Atlas::<2>::from_bytes(&p, &bytes).unwrap();
     assert_eq!(back.data_frame, None);
     assert_eq!(back.to_data_frame(&back.mean), back.mean);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

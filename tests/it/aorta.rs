@@ -249,10 +249,10 @@ fn aorta_loo_through_the_cli_with_template_meshes() {
     args.extend(["--format", "vtu,inp"].map(String::from));
     args.extend(["--modes", "4", "--no-plots", "--quiet", "--out"].map(String::from));
     args.push(out.display().to_string());
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(&args)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh")).args(&args),
+        crate::common::deadline::ATLASMESH,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let r: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();

@@ -553,7 +553,10 @@ fn a_full_disk() {
         pop.display(),
         out.display()
     );
-    let o = Command::new("sh").arg("-c").arg(&cmd).output().unwrap();
+    let o = crate::common::run(
+        Command::new("sh").arg("-c").arg(&cmd),
+        crate::common::deadline::ATLASMESH,
+    );
     // Every fold fails to write its mesh: each is listed with the I/O error, the report
     // (small) is written, exit 6.
     fails(&o, 6, &["File too large", "6 of 6 subjects failed"]);

@@ -15,7 +15,7 @@ fn s(p: &Path) -> String {
 }
 
 /// An atlas of 16 synthetic surfaces and `n` other ones as subjects (PLY files).
-fn setup(name: &str, n: usize) -> (PathBuf, PathBuf, Vec<PathBuf>) {
+fn setup(name: &str, n: usize) -> (common::TempDir, PathBuf, Vec<PathBuf>) {
     let d = common::temp_dir(name);
     let shapes = atlasmesh::study::demo_population_3d(16 + n, 12, 7).unwrap();
     let mut files = Vec::new();
@@ -261,52 +261,251 @@ fn a_failing_subject_is_reported_and_the_batch_goes_on() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// The test cluster (`scripts/slurm-single-node.sh`, which `.ci/run` starts): its folder (that
+/// of `SLURM_CONF`) and a lock on it, so that the tests using it take turns, when its one node
+/// answers `idle`; otherwise `None`: the test is skipped, or fails when the tools are required
+/// (`ATLASMESH_REQUIRE_TOOLS`). A drained, allocated or silent node is never waited on.
+fn cluster(test: &str) -> Option<(PathBuf, std::fs::File)> {
+    let required = std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_some();
+    let skip = |why: String| {
+        assert!(!required, "{test}: a Slurm cluster is required: {why}");
+        eprintln!("{test}: skipped ({why}; scripts/slurm-single-node.sh start starts one)");
+        None
+    };
+    let Some(conf) = std::env::var_os("SLURM_CONF").map(PathBuf::from) else {
+        return skip("SLURM_CONF is not set".into());
+    };
+    let dir = conf.parent().unwrap().to_path_buf();
+    let Ok(lock) = std::fs::File::create(dir.join("tests.lock")) else {
+        return skip(format!("no cluster folder {}", dir.display()));
+    };
+    // SAFETY: flock(2) on a file this function owns; blocks until the other test is done.
+    unsafe {
+        use std::os::fd::AsRawFd;
+        libc::flock(lock.as_raw_fd(), libc::LOCK_EX);
+    }
+    let state = common::try_run(
+        Command::new("sinfo").args(["-h", "-o", "%T"]),
+        common::deadline::SHORT,
+    );
+    match state {
+        Ok(o) if o.status.success() && String::from_utf8_lossy(&o.stdout).trim() == "idle" => {
+            Some((dir, lock))
+        }
+        Ok(o) => skip(format!(
+            "its node is not idle: sinfo says {:?} {}",
+            String::from_utf8_lossy(&o.stdout).trim(),
+            String::from_utf8_lossy(&o.stderr).trim()
+        )),
+        Err(e) => skip(e),
+    }
+}
+
+/// The cluster's script, `scripts/slurm-single-node.sh`.
+fn cluster_script() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/slurm-single-node.sh")
+}
+
+/// Submits a job that sleeps 10 minutes (its limit 5), waits until it runs; its id and the
+/// pid of its task.
+fn long_job(d: &Path, name: &str) -> (String, u32) {
+    let pid_file = d.join(format!("{name}.pid"));
+    let o = common::run(
+        Command::new("sbatch")
+            .args(["--parsable", "--time=5", "--job-name=atlasmesh-test-long"])
+            .arg(format!("--chdir={}", d.display()))
+            .arg(format!(
+                "--output={}",
+                d.join(format!("{name}.out")).display()
+            ))
+            .arg(format!(
+                "--wrap=echo $$ > '{}.tmp' && mv '{0}.tmp' '{0}' && exec sleep 600",
+                pid_file.display()
+            )),
+        common::deadline::SHORT,
+    );
+    assert!(
+        o.status.success(),
+        "sbatch: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let job = String::from_utf8_lossy(&o.stdout).trim().to_string();
+    let t = std::time::Instant::now();
+    while !pid_file.is_file() {
+        assert!(
+            t.elapsed().as_secs() < 60,
+            "job {job} did not start in 60 s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let pid = std::fs::read_to_string(&pid_file)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    assert!(common::alive(pid), "job {job}: its task {pid} does not run");
+    (job, pid)
+}
+
+/// `scripts/slurm-single-node.sh ACTION` on the cluster folder `dir`.
+fn cluster_do(dir: &Path, action: &str) -> std::process::Output {
+    common::run(
+        Command::new(cluster_script()).arg(action).arg(dir),
+        std::time::Duration::from_secs(180),
+    )
+}
+
+/// The pid in the cluster's pid file `name` (`slurmctld.pid`, `slurmd.pid`).
+fn daemon(dir: &Path, name: &str) -> u32 {
+    std::fs::read_to_string(dir.join(name))
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+/// The test cluster starts clean after a run that was killed (its daemons gone, a job's task
+/// still running: the task is ended, the job and its node state forgotten), and `stop`
+/// cancels a running job, ends its task and every daemon; then the cluster is started again
+/// for the other tests.
+#[test]
+fn the_test_cluster_stops_everything_and_starts_clean() {
+    let Some((dir, _lock)) = cluster("Slurm cluster stop and start") else {
+        return;
+    };
+    let d = common::temp_dir("slurm-stop");
+    let squeue = || {
+        let o = common::run(
+            Command::new("squeue").args(["-h", "-o", "%A"]),
+            common::deadline::SHORT,
+        );
+        assert!(
+            o.status.success(),
+            "squeue: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).trim().to_string()
+    };
+    // A run killed with a job running: its controller and node daemon die, the task lives on.
+    let (job, task) = long_job(&d, "left");
+    for f in ["slurmctld.pid", "slurmd.pid"] {
+        // SAFETY: kill(2) of a daemon of this test cluster, by the pid it wrote.
+        unsafe {
+            libc::kill(daemon(&dir, f) as libc::pid_t, libc::SIGKILL);
+        }
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(
+        common::alive(task),
+        "the left task should outlive its daemons"
+    );
+    let o = cluster_do(&dir, "start");
+    assert!(
+        o.status.success(),
+        "start: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        dir.join("slurm.conf").display().to_string()
+    );
+    assert!(
+        !common::alive(task),
+        "start left the earlier run's task {task} running"
+    );
+    assert_eq!(squeue(), "", "start: jobs of the earlier run came back");
+    let o = common::run(
+        Command::new("scontrol").args(["show", "job", &job]),
+        common::deadline::SHORT,
+    );
+    assert!(
+        !o.status.success() && String::from_utf8_lossy(&o.stderr).contains("Invalid job id"),
+        "job {job} of the earlier run is known: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    // stop: the job cancelled, its task and every daemon ended.
+    let (_, task) = long_job(&d, "stopped");
+    let (ctld, slurmd) = (daemon(&dir, "slurmctld.pid"), daemon(&dir, "slurmd.pid"));
+    let o = cluster_do(&dir, "stop");
+    assert!(
+        o.status.success(),
+        "stop: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for (what, pid) in [
+        ("the job's task", task),
+        ("slurmctld", ctld),
+        ("slurmd", slurmd),
+    ] {
+        assert!(!common::alive(pid), "stop left {what} ({pid}) running");
+    }
+    let o = cluster_do(&dir, "status");
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(!o.status.success(), "status after stop: {said}");
+    assert!(said.contains("step daemons: none"), "{said}");
+    // Started again for the array job.
+    let o = cluster_do(&dir, "start");
+    assert!(
+        o.status.success(),
+        "start: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(squeue(), "");
+}
+
 /// The shipped Slurm array script (`scripts/atlasmesh-array.sbatch`) through a real cluster
-/// (`scripts/slurm-single-node.sh` starts one; `.ci/run` does): three array tasks, one shard
-/// each, then `merge-reports`.
+/// (`scripts/slurm-single-node.sh start` starts one; `.ci/run` does): three array tasks, one
+/// shard each, then `merge-reports`. The job has a time limit and the test its own deadline;
+/// on a failure the job is cancelled and its logs printed.
 #[test]
 fn a_slurm_array_job_fits_the_shards() {
-    let up = Command::new("sinfo")
-        .args(["-h", "-o", "%T"])
-        .output()
-        .is_ok_and(|o| o.status.success() && !o.stdout.is_empty());
-    if !up {
-        assert!(
-            std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
-            "a Slurm cluster is required (sinfo does not answer; see scripts/slurm-single-node.sh)"
-        );
-        eprintln!("Slurm array job: skipped (no cluster; scripts/slurm-single-node.sh starts one)");
+    let Some((_cluster, _lock)) = cluster("Slurm array job") else {
         return;
-    }
+    };
     let (d, atlas, subjects) = setup("batch-slurm", 7);
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/atlasmesh-array.sbatch");
     let out = d.join("out");
-    let o = Command::new("sbatch")
-        .args(["--wait", "--array=0-2", "--mem=500M"])
-        .arg(format!("--chdir={}", d.display()))
-        .arg(&script)
-        .arg(&atlas)
-        .arg(subjects[0].parent().unwrap())
-        .arg(&out)
-        .env("ATLASMESH", env!("CARGO_BIN_EXE_atlasmesh"))
-        .output()
-        .unwrap();
-    let logs: String = std::fs::read_dir(&d)
-        .unwrap()
-        .flatten()
-        .filter(|e| e.file_name().to_string_lossy().ends_with(".log"))
-        .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
-        .collect();
-    assert!(
-        o.status.success(),
-        "sbatch: {}{}\n{logs}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
+    let name = format!("atlasmesh-test-array-{}", std::process::id());
+    let o = common::try_run(
+        Command::new("sbatch")
+            .args(["--wait", "--array=0-2", "--mem=500M", "--time=10"])
+            .arg(format!("--job-name={name}"))
+            .arg(format!("--chdir={}", d.display()))
+            .arg(&script)
+            .arg(&atlas)
+            .arg(subjects[0].parent().unwrap())
+            .arg(&out)
+            .env("ATLASMESH", env!("CARGO_BIN_EXE_atlasmesh")),
+        std::time::Duration::from_secs(12 * 60),
     );
+    let logs = || -> String {
+        std::fs::read_dir(&d)
+            .unwrap()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".log"))
+            .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
+            .collect()
+    };
+    let failure = match &o {
+        Ok(o) if o.status.success() => None,
+        Ok(o) => Some(format!(
+            "sbatch: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )),
+        Err(e) => Some(e.clone()),
+    };
+    if let Some(f) = failure {
+        let _ = common::try_run(
+            Command::new("scancel").arg(format!("--name={name}")),
+            common::deadline::SHORT,
+        );
+        panic!("{f}\njob logs:\n{}", logs());
+    }
     let mut args = vec!["merge-reports".to_string()];
     for i in 0..3 {
         let r = out.join(format!("shard-{i}/report.json"));
-        assert!(r.is_file(), "task {i} wrote no report: {logs}");
+        assert!(r.is_file(), "task {i} wrote no report: {}", logs());
         args.push(s(&r));
     }
     args.extend(["--out".into(), s(&out.join("report.json"))]);
@@ -315,5 +514,4 @@ fn a_slurm_array_job_fits_the_shards() {
     let r = report(&out);
     assert_eq!(r.summary.subjects, 7);
     assert_eq!(r.summary.meshes_valid, 7);
-    std::fs::remove_dir_all(&d).ok();
 }

@@ -26,11 +26,12 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
 fn demo_writes_meshes_report_and_plots() {
     let d = common::temp_dir("demo");
     let out = d.join("demo");
-    let o = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(["demo", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+            .args(["demo", "--out"])
+            .arg(&out),
+        crate::common::deadline::ATLASMESH,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let r: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();

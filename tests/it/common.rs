@@ -1,6 +1,8 @@
 //! Shared helpers of the integration tests.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// The data folder named by `ATLASMESH_DATA`, or `None` (the test prints that it was skipped).
 /// When the variable is set, a missing folder is a failure.
@@ -18,12 +20,184 @@ pub fn data_dir(test: &str) -> Option<PathBuf> {
     }
 }
 
-/// A fresh temporary folder for one test.
-pub fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("atlasmesh-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh temporary folder for one test, `atlasmesh-NAME-XXXXXX` in the system's temporary
+/// directory, removed with everything in it when the guard is dropped, whether the test passed
+/// or failed. `ATLASMESH_KEEP_TMP=1` keeps it (its path is printed) to look at a failure.
+pub fn temp_dir(name: &str) -> TempDir {
+    let keep = std::env::var_os("ATLASMESH_KEEP_TMP").is_some_and(|v| !v.is_empty() && v != "0");
+    let dir = tempfile::Builder::new()
+        .prefix(&format!("atlasmesh-{name}-"))
+        .disable_cleanup(keep)
+        .tempdir()
+        .unwrap();
+    if keep {
+        eprintln!("{name}: files kept in {}", dir.path().display());
+    }
+    TempDir(dir)
+}
+
+/// A test's temporary folder ([`temp_dir`]): a path, removed on drop.
+#[derive(Debug)]
+pub struct TempDir(tempfile::TempDir);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for TempDir {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.path().as_os_str()
+    }
+}
+
+/// Deadlines of the external programs the tests run ([`run`]): a hang fails its test with
+/// the program's output instead of holding the suite.
+pub mod deadline {
+    use std::time::Duration;
+    /// The command-line tool on the largest data of a test (a leave-one-out of femurs).
+    pub const ATLASMESH: Duration = Duration::from_secs(20 * 60);
+    /// Headless Chromium opening one page (known to hang at exit now and then).
+    pub const CHROMIUM: Duration = Duration::from_secs(120);
+    /// CalculiX solving one deck.
+    pub const CCX: Duration = Duration::from_secs(600);
+    /// Gmsh checking or meshing one file.
+    pub const GMSH: Duration = Duration::from_secs(120);
+    /// One Python script (meshio, PyVista, nibabel, SimpleITK, pydicom).
+    pub const PYTHON: Duration = Duration::from_secs(600);
+    /// A shell utility (`mkfifo`, `sinfo`, `squeue`, `scancel`).
+    pub const SHORT: Duration = Duration::from_secs(60);
+}
+
+/// Runs `cmd` to its end or its `deadline`, with its standard input empty and its output
+/// captured; panics, with the command and what it printed, when it could not start or ran
+/// past its deadline ([`try_run`]).
+pub fn run(cmd: &mut Command, deadline: Duration) -> Output {
+    try_run(cmd, deadline).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`run`], with the reason as an error: `cmd` runs in a process group of its own; at the
+/// deadline the whole group (the program and every child it started) is killed; after the
+/// program exits, whatever it left running in its group is killed too, so that nothing a test
+/// started outlives it.
+pub fn try_run(cmd: &mut Command, deadline: Duration) -> Result<Output, String> {
+    use std::io::Read;
+    use std::os::unix::process::CommandExt;
+    use std::sync::{Arc, Mutex};
+    let what = describe(cmd);
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .process_group(0)
+        .spawn()
+        .map_err(|e| format!("{what}: could not start: {e}"))?;
+    let group = child.id() as libc::pid_t;
+    // Readers fill shared buffers, so that what was printed is there even when a process
+    // outside the group keeps a pipe open.
+    let reader = |mut pipe: Box<dyn Read + Send>| {
+        let buf = Arc::new(Mutex::new(Vec::new()));
+        let b = Arc::clone(&buf);
+        let handle = std::thread::spawn(move || {
+            let mut chunk = [0u8; 8192];
+            while let Ok(n) = pipe.read(&mut chunk) {
+                if n == 0 {
+                    break;
+                }
+                b.lock().unwrap().extend_from_slice(&chunk[..n]);
+            }
+        });
+        (buf, handle)
+    };
+    let (out, out_reader) = reader(Box::new(child.stdout.take().unwrap()));
+    let (err, err_reader) = reader(Box::new(child.stderr.take().unwrap()));
+    let start = Instant::now();
+    let mut timed_out = false;
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if start.elapsed() >= deadline => {
+                timed_out = true;
+                kill_group(group);
+                break child.wait().map_err(|e| format!("{what}: {e}"))?;
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(
+                (start.elapsed().as_millis() as u64 / 10).clamp(2, 50),
+            )),
+            Err(e) => return Err(format!("{what}: {e}")),
+        }
+    };
+    kill_group(group);
+    let drained = Instant::now();
+    while !(out_reader.is_finished() && err_reader.is_finished())
+        && drained.elapsed() < Duration::from_secs(5)
+    {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let stdout = std::mem::take(&mut *out.lock().unwrap());
+    let stderr = std::mem::take(&mut *err.lock().unwrap());
+    if timed_out {
+        return Err(format!(
+            "{what}: killed at its deadline of {} s (with its process group)\n--- stdout (end) ---\n{}\n--- stderr (end) ---\n{}",
+            deadline.as_secs_f64(),
+            tail(&stdout),
+            tail(&stderr)
+        ));
+    }
+    Ok(Output {
+        status,
+        stdout,
+        stderr,
+    })
+}
+
+/// Whether the process `pid` runs (a zombie, ended but not yet reaped, does not).
+#[allow(dead_code)]
+pub fn alive(pid: u32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/status")).is_ok_and(|s| {
+        !s.lines()
+            .any(|l| l.starts_with("State:") && l.contains('Z'))
+    })
+}
+
+/// SIGKILL to every process of the group `group` (none left is fine).
+fn kill_group(group: libc::pid_t) {
+    // SAFETY: kill(2) with a negative pid signals a process group; no memory is involved.
+    unsafe {
+        libc::kill(-group, libc::SIGKILL);
+    }
+}
+
+/// The program and its arguments, cut to a readable length.
+fn describe(cmd: &Command) -> String {
+    let mut s = cmd.get_program().to_string_lossy().into_owned();
+    for a in cmd.get_args() {
+        s.push(' ');
+        s.push_str(&a.to_string_lossy());
+    }
+    if s.len() > 300 {
+        let cut = (0..=300)
+            .rev()
+            .find(|&i| s.is_char_boundary(i))
+            .unwrap_or(0);
+        s.truncate(cut);
+        s.push_str(" …");
+    }
+    s
+}
+
+/// The last 4000 bytes of a program's output, as text.
+fn tail(bytes: &[u8]) -> String {
+    let from = bytes.len().saturating_sub(4000);
+    String::from_utf8_lossy(&bytes[from..]).into_owned()
 }
 
 /// The 40 IMM hands of `data`, resampled in correspondence to 2001 points (`Some`) or as
@@ -103,12 +277,10 @@ U
 pub fn solve(deck: &std::path::Path) -> Vec<[f64; 3]> {
     let dir = deck.parent().unwrap();
     let stem = deck.file_stem().unwrap().to_string_lossy().to_string();
-    let o = std::process::Command::new("ccx")
-        .arg("-i")
-        .arg(&stem)
-        .current_dir(dir)
-        .output()
-        .unwrap();
+    let o = run(
+        Command::new("ccx").arg("-i").arg(&stem).current_dir(dir),
+        deadline::CCX,
+    );
     let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "ccx on {stem}: {log}");
     assert!(!log.contains("*ERROR"), "ccx on {stem}: {log}");
@@ -272,11 +444,12 @@ pub fn assert_repaired(name: &str, r: &atlasmesh::report::Report) {
 /// Runs the command-line tool with `args` and `--quiet`.
 #[allow(dead_code)]
 pub fn atlasmesh<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap()
+    run(
+        Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+            .args(args)
+            .arg("--quiet"),
+        deadline::ATLASMESH,
+    )
 }
 
 /// The Python with meshio named by `ATLASMESH_PYTHON`, or `None` (the check is skipped with a
@@ -312,12 +485,10 @@ for f in sys.argv[1:]:
     out.append([m.points.tolist(), m.cells[0].data.tolist()])
 print(json.dumps(out))
 "#;
-    let o = std::process::Command::new(py)
-        .arg("-c")
-        .arg(script)
-        .args(files)
-        .output()
-        .unwrap();
+    let o = run(
+        Command::new(py).arg("-c").arg(script).args(files),
+        deadline::PYTHON,
+    );
     assert!(
         o.status.success(),
         "meshio: {}",

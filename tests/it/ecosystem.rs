@@ -57,11 +57,10 @@ fn files_saved_by_pyvista_vtk_meshio_and_gmsh_read_as_written() {
     }
     let dir = temp_dir("ecosystem");
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ecosystem/write_files.py");
-    let o = std::process::Command::new(&py)
-        .arg(&script)
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(&py).arg(&script).arg(&dir),
+        crate::common::deadline::PYTHON,
+    );
     assert!(
         o.status.success(),
         "the writers ran: {}",
@@ -202,15 +201,16 @@ fn a_femur_saved_by_pyvista_fits_as_its_ply() {
     std::fs::create_dir_all(&subjects).unwrap();
     std::fs::copy(ply(1), subjects.join("S001_Femur.ply")).unwrap();
     let vtp = subjects.join("S001_pyvista.vtp");
-    let o = std::process::Command::new(&py)
-        .args([
-            "-c",
-            "import sys, pyvista; pyvista.read(sys.argv[1]).save(sys.argv[2])",
-        ])
-        .arg(ply(1))
-        .arg(&vtp)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(&py)
+            .args([
+                "-c",
+                "import sys, pyvista; pyvista.read(sys.argv[1]).save(sys.argv[2])",
+            ])
+            .arg(ply(1))
+            .arg(&vtp),
+        crate::common::deadline::PYTHON,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let head = std::fs::read(&vtp).unwrap();
     assert!(
@@ -282,11 +282,12 @@ for ext in ["vtp", "vtk", "ply", "stl"]:
     assert s.n_cells == len(fit.cells[0].data), (ext, s.n_cells)
 print(len(nodes), "nodes,", len(fit.cells[0].data), "triangles")
 "#;
-    let o = std::process::Command::new(&py)
-        .args(["-c", check])
-        .arg(&base)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(&py)
+            .args(["-c", check])
+            .arg(&base),
+        crate::common::deadline::PYTHON,
+    );
     assert!(
         o.status.success(),
         "febio-python and meshio read the deck and surfaces: {}{}",

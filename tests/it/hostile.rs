@@ -159,11 +159,11 @@ fn devices_fifos_and_oversized_inputs_are_refused() {
     let zero = d.join("zero.txt");
     std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
     let fifo = d.join("fifo.txt");
-    let made = std::process::Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .unwrap();
-    assert!(made.success());
+    let made = common::run(
+        std::process::Command::new("mkfifo").arg(&fifo),
+        common::deadline::SHORT,
+    );
+    assert!(made.status.success());
     for (p, name) in [(&zero, "zero"), (&fifo, "fifo")] {
         let out = d.join(format!("fit-{name}"));
         let o = atlasmesh(&[
@@ -185,19 +185,20 @@ fn devices_fifos_and_oversized_inputs_are_refused() {
     let big = d.join("big.txt");
     std::fs::write(&big, ellipse(1.0, 0.6).repeat(30)).unwrap();
     let out = d.join("fit-big");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args([
-            "fit",
-            "--atlas",
-            &s(&atlas),
-            "--subject",
-            &s(&big),
-            "--out",
-            &s(&out),
-        ])
-        .env("ATLASMESH_MAX_INPUT_BYTES", "60000")
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+            .args([
+                "fit",
+                "--atlas",
+                &s(&atlas),
+                "--subject",
+                &s(&big),
+                "--out",
+                &s(&out),
+            ])
+            .env("ATLASMESH_MAX_INPUT_BYTES", "60000"),
+        crate::common::deadline::ATLASMESH,
+    );
     fails(
         &o,
         6,

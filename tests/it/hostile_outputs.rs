@@ -36,7 +36,7 @@ pub(crate) fn limited(limit: &str, args: &[&str], env: &[(&str, &str)]) -> Outpu
     for (k, v) in env {
         c.env(k, v);
     }
-    c.output().unwrap()
+    crate::common::run(&mut c, crate::common::deadline::ATLASMESH)
 }
 
 /// Under 1 GiB of address space.

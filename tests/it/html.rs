@@ -14,26 +14,32 @@ fn chromium(args: &[&str], page: &Path) -> std::process::Output {
     chromium_url(args, &format!("file://{}", page.display()))
 }
 
+/// Headless Chromium on `url` with `args`, in a profile of its own (a temporary folder,
+/// removed after; its temporary files there too), killed with its helpers at the deadline.
 fn chromium_url(args: &[&str], url: &str) -> std::process::Output {
-    Command::new("chromium")
-        .args([
-            "--headless=new",
-            "--no-sandbox",
-            "--disable-gpu",
-            // WebGL in software, as on a machine without a GPU.
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--hide-scrollbars",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--virtual-time-budget=15000",
-        ])
-        .args(args)
-        .arg(url)
-        .output()
-        .unwrap()
+    let profile = common::temp_dir("chromium-profile");
+    crate::common::run(
+        Command::new("chromium")
+            .env("TMPDIR", &*profile)
+            .arg(format!("--user-data-dir={}", profile.display()))
+            .args([
+                "--headless=new",
+                "--no-sandbox",
+                "--disable-gpu",
+                // WebGL in software, as on a machine without a GPU.
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
+                "--hide-scrollbars",
+                "--no-first-run",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--virtual-time-budget=15000",
+            ])
+            .args(args)
+            .arg(url),
+        crate::common::deadline::CHROMIUM,
+    )
 }
 
 /// The number of triangles the view of `page` draws, seen from the address `hash`.
@@ -288,11 +294,12 @@ fn the_demo_report_opens_in_chromium_and_every_view_draws() {
     }
     let d = common::temp_dir("html");
     let out = d.join("demo");
-    let o = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(["demo", "--quiet", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+            .args(["demo", "--quiet", "--out"])
+            .arg(&out),
+        crate::common::deadline::ATLASMESH,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -361,13 +368,14 @@ fn the_forty_hands_leave_one_out_index_stays_small() {
     };
     let d = common::temp_dir("html-hands");
     let out = d.join("loo");
-    let o = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .args(["loo", "--quiet", "--shapes"])
-        .arg(data.join("imm-hands-2d/hands_long.csv"))
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+            .args(["loo", "--quiet", "--shapes"])
+            .arg(data.join("imm-hands-2d/hands_long.csv"))
+            .arg("--out")
+            .arg(&out),
+        crate::common::deadline::ATLASMESH,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     // What the index loads: itself and its pictures.

@@ -564,12 +564,13 @@ for f in glob.glob(sys.argv[1] + "/*"):
     out.append([float(d.ImagePositionPatient[2]), a.min(), a.max(), a.sum()])
 print(json.dumps(sorted(out)))
 "#;
-    let o = std::process::Command::new(py)
-        .arg("-c")
-        .arg(script)
-        .arg(ts.join("example_ct_dicom"))
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(py)
+            .arg("-c")
+            .arg(script)
+            .arg(ts.join("example_ct_dicom")),
+        crate::common::deadline::PYTHON,
+    );
     assert!(
         o.status.success(),
         "pydicom: {}",
@@ -623,12 +624,13 @@ fn a_dicom_folder_with_a_missing_slice_or_two_series_is_refused() {
         std::fs::copy(f, mixed.join(f.file_name().unwrap())).unwrap();
     }
     let one = mixed.join(files[3].file_name().unwrap());
-    let o = std::process::Command::new(py)
+    let o = crate::common::run(
+std::process::Command::new(py)
         .arg("-c")
         .arg("import sys, pydicom; d = pydicom.dcmread(sys.argv[1]); d.SeriesInstanceUID = '1.2.826.0.1.3680043.8.498.1'; d.save_as(sys.argv[1])")
-        .arg(&one)
-        .output()
-        .unwrap();
+        .arg(&one),
+crate::common::deadline::PYTHON,
+);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let e = atlasmesh::formats::read_image(&mixed)
         .unwrap_err()
@@ -665,13 +667,14 @@ h = n.header.copy()
 h = h.as_byteswapped(">")
 nib.save(nib.Nifti1Image(np.asanyarray(n.dataobj).astype(">i2"), n.affine, h), os.path.join(out, "mbe.nii"))
 "#;
-    let o = std::process::Command::new(py)
-        .arg("-c")
-        .arg(script)
-        .arg(&src)
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(py)
+            .arg("-c")
+            .arg(script)
+            .arg(&src)
+            .arg(&dir),
+        crate::common::deadline::PYTHON,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let reference = read_label_surface(&src, &label("20")).unwrap();
     for name in ["m.nhdr", "m.nrrd", "m.mha", "m2.nii", "mbe.nii"] {

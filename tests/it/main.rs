@@ -12,6 +12,7 @@ mod ecosystem;
 mod femur;
 mod fuzz_regressions;
 mod hands;
+mod harness;
 mod hostile;
 mod hostile_inputs;
 mod hostile_outputs;

@@ -29,12 +29,13 @@ fn args(v: &[&str]) -> Vec<String> {
 
 /// Runs a Python script with `argv`; its stdout. Fails with its output.
 fn python(py: &Path, script: &str, argv: &[String]) -> String {
-    let o = std::process::Command::new(py)
-        .arg("-c")
-        .arg(script)
-        .args(argv)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(py)
+            .arg("-c")
+            .arg(script)
+            .args(argv),
+        crate::common::deadline::PYTHON,
+    );
     assert!(
         o.status.success(),
         "python: {}{}",
@@ -146,12 +147,13 @@ fn calculix_stiffness(mesh_inp: &Path, dir: &Path, name: &str) -> f64 {
             ids(&|z| z >= hi - band)
         );
     std::fs::write(&deck, text).unwrap();
-    let o = std::process::Command::new("ccx")
-        .arg("-i")
-        .arg(name)
-        .current_dir(dir)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new("ccx")
+            .arg("-i")
+            .arg(name)
+            .current_dir(dir),
+        crate::common::deadline::CCX,
+    );
     let log = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success() && !log.contains("*ERROR"), "ccx: {log}");
     let dat = std::fs::read_to_string(dir.join(format!("{name}.dat"))).unwrap();
@@ -245,11 +247,12 @@ fn totalsegmentators_l1_gets_its_materials_from_its_ct_in_every_solver_file() {
         (v["E_min_feb"].as_f64().unwrap() - v["E_min"].as_f64().unwrap()).abs() <= m.gap + 1e-6
     );
     if common::tool("gmsh", "gmsh -check of a .msh with element data") {
-        let o = std::process::Command::new("gmsh")
-            .arg("-check")
-            .arg(base.with_extension("msh"))
-            .output()
-            .unwrap();
+        let o = crate::common::run(
+            std::process::Command::new("gmsh")
+                .arg("-check")
+                .arg(base.with_extension("msh")),
+            crate::common::deadline::GMSH,
+        );
         let log =
             String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success() && !log.contains("Error"), "{log}");
@@ -446,13 +449,14 @@ fn quadratic_tetrahedra_from_gmsh_on_a_ramp_written_by_nibabel_are_exact() {
     }
     let dir = common::temp_dir("materials-ramp");
     python(&py, RAMP_AND_TETS, &[s(&dir)]);
-    let o = std::process::Command::new("gmsh")
-        .args(["-3", "-order", "2", "-format", "msh41"])
-        .arg(dir.join("box.geo"))
-        .arg("-o")
-        .arg(dir.join("box.msh"))
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new("gmsh")
+            .args(["-3", "-order", "2", "-format", "msh41"])
+            .arg(dir.join("box.geo"))
+            .arg("-o")
+            .arg(dir.join("box.msh")),
+        crate::common::deadline::GMSH,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let recipe = dir.join("recipe.toml");
     std::fs::write(&recipe, "[calibration]\nslope = 0.001\nintercept = 0.05\n").unwrap();

@@ -125,10 +125,10 @@ mean, X = A[0], A[1:]\n\
 s = np.linalg.svd(X - mean, compute_uv=False)\n\
 l = s**2 / (X.shape[0] - 1)\n\
 print(' '.join(repr(float(v)) for v in np.cumsum(l) / l.sum()))\n";
-        let o = std::process::Command::new(py)
-            .args(["-c", script, &s(&aligned)])
-            .output()
-            .unwrap();
+        let o = crate::common::run(
+            std::process::Command::new(py).args(["-c", script, &s(&aligned)]),
+            crate::common::deadline::PYTHON,
+        );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let numpy: Vec<f64> = String::from_utf8_lossy(&o.stdout)
             .split_whitespace()

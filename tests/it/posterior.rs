@@ -117,10 +117,10 @@ print(json.dumps(rows))
 "#;
     let mean_vtp = d.join("femur_mean.vtp");
     let lms = FEMUR_LANDMARKS.map(|i| i.to_string()).join(",");
-    let o = std::process::Command::new(py)
-        .args(["-c", script, &o_s, &s(&dir), &s(&mean_vtp), &lms])
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(py).args(["-c", script, &o_s, &s(&dir), &s(&mean_vtp), &lms]),
+        crate::common::deadline::PYTHON,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows: Vec<serde_json::Value> = serde_json::from_slice(&o.stdout).unwrap();
     let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();

@@ -266,19 +266,20 @@ fn register_command_writes_the_correspondence() {
     };
     let d = data.join("unibas-hands-2d-dense/aligned");
     let out = common::temp_dir("register-cli");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-        .arg("register")
-        .arg("--template")
-        .arg(d.join("mesh/hand-0.vtk"))
-        .arg("--target")
-        .arg(d.join("mesh/hand-5.vtk"))
-        .arg("--landmarks")
-        .arg(d.join("landmarks/hand-0.json"))
-        .arg(d.join("landmarks/hand-5.json"))
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+            .arg("register")
+            .arg("--template")
+            .arg(d.join("mesh/hand-0.vtk"))
+            .arg("--target")
+            .arg(d.join("mesh/hand-5.vtk"))
+            .arg("--landmarks")
+            .arg(d.join("landmarks/hand-0.json"))
+            .arg(d.join("landmarks/hand-5.json"))
+            .arg("--out")
+            .arg(&out),
+        crate::common::deadline::ATLASMESH,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let j: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("registration.json")).unwrap()).unwrap();

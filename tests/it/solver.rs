@@ -165,7 +165,10 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
     if common::tool("gmsh", "gmsh -check") {
         for k in 1..=3 {
             let p = out.join(format!("S{k:03}_Femur/S{k:03}_Femur_mesh.msh"));
-            let o = Command::new("gmsh").arg("-check").arg(&p).output().unwrap();
+            let o = crate::common::run(
+                Command::new("gmsh").arg("-check").arg(&p),
+                crate::common::deadline::GMSH,
+            );
             let log = String::from_utf8_lossy(&o.stdout).to_string()
                 + &String::from_utf8_lossy(&o.stderr);
             assert!(o.status.success() && !log.contains("Error"), "{log}");
@@ -194,12 +197,13 @@ fn femur_decks_solved_by_calculix_and_formats_read_back() {
         );
         // And a quadrilateral mesh (the 2D demo's atlas, its mean mesh with sets).
         let quad_dir = dir.join("quad");
-        let demo = Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
-            .args(["demo", "--out"])
-            .arg(&quad_dir)
-            .arg("--quiet")
-            .output()
-            .unwrap();
+        let demo = crate::common::run(
+            Command::new(env!("CARGO_BIN_EXE_atlasmesh"))
+                .args(["demo", "--out"])
+                .arg(&quad_dir)
+                .arg("--quiet"),
+            crate::common::deadline::ATLASMESH,
+        );
         assert!(demo.status.success());
         let qsets = dir.join("q.toml");
         std::fs::write(
@@ -265,13 +269,14 @@ for ext in ["inp", "msh", "vtu", "vtk"]:
     out[ext] = {"points": len(m.points), "cells": cells, "sets": sets}
 print(json.dumps(out))
 "#;
-    let o = Command::new(py)
-        .arg("-c")
-        .arg(script)
-        .arg(base.display().to_string())
-        .arg(kind)
-        .output()
-        .unwrap();
+    let o = crate::common::run(
+        Command::new(py)
+            .arg("-c")
+            .arg(script)
+            .arg(base.display().to_string())
+            .arg(kind),
+        crate::common::deadline::PYTHON,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let mut expected: Vec<(String, usize)> = Vec::new();
@@ -449,11 +454,12 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
             "Merge \"s1.stl\";\nClassifySurfaces{40 * Pi / 180, 1, 1, Pi};\nCreateGeometry;\nSurface Loop(1) = Surface{:};\nVolume(1) = {1};\nPhysical Volume(\"SOLID\") = {1};\nMesh.MeshSizeMax = 10;\nMesh.ElementOrder = 2;\nMesh.SecondOrderLinear = 1;\n",
         )
         .unwrap();
-        let o = Command::new("gmsh")
-            .args(["-3", "-format", "msh41", "t10.geo", "-o", "t10.msh"])
-            .current_dir(&dir)
-            .output()
-            .unwrap();
+        let o = crate::common::run(
+            Command::new("gmsh")
+                .args(["-3", "-format", "msh41", "t10.geo", "-o", "t10.msh"])
+                .current_dir(&dir),
+            crate::common::deadline::GMSH,
+        );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
         let m: FeMesh<3> = atlasmesh::formats::read_fe_mesh(&dir.join("t10.msh")).unwrap();
         assert_eq!(m.kind, atlasmesh::mesh::ElementKind::Tet10);
@@ -534,7 +540,10 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
             }
             if common::tool("gmsh", "gmsh -check") {
                 let p = base.join(format!("S{k:03}_Femur_mesh.msh"));
-                let o = Command::new("gmsh").arg("-check").arg(&p).output().unwrap();
+                let o = crate::common::run(
+                    Command::new("gmsh").arg("-check").arg(&p),
+                    crate::common::deadline::GMSH,
+                );
                 let log = String::from_utf8_lossy(&o.stdout).to_string()
                     + &String::from_utf8_lossy(&o.stderr);
                 assert!(o.status.success() && !log.contains("Error"), "{log}");
@@ -545,14 +554,15 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
             meshio_check(&py, &base, &reference, meshio_kind);
             // The same elements in every format (in any order: the .msh groups them by set):
             // meshio reorders Gmsh's mid-edge nodes to VTK's, as atlasmesh does.
-            let o = Command::new(&py)
+            let o = crate::common::run(
+Command::new(&py)
                 .arg("-c")
                 .arg(format!(
                     "import meshio, numpy as np\nb = {:?}\nc = [np.concatenate([x.data for x in meshio.read(b + '.' + e).cells if x.type == {meshio_kind:?}]) for e in ['vtu', 'msh', 'inp', 'vtk']]\nr = [sorted(map(tuple, x.tolist())) for x in c]\nprint(all(r[0] == x for x in r[1:]))",
                     s(&base)
-                ))
-                .output()
-                .unwrap();
+                )),
+crate::common::deadline::PYTHON,
+);
             assert_eq!(
                 String::from_utf8_lossy(&o.stdout).trim(),
                 "True",

@@ -47,11 +47,34 @@ pub(super) enum Packing {
     Zlib,
 }
 
-/// Exactly `want` bytes of voxel data from `data`, unpacked: never more is inflated (a
-/// decompression bomb stops at the size its header announces), and fewer is an error naming
-/// what is missing. Raw data may have more bytes than needed (the last `want` are taken, as
-/// NRRD and MetaImage readers do for a header they skip).
-pub(super) fn unpack(path: &Path, data: &[u8], packing: Packing, want: usize) -> Result<Vec<u8>> {
+/// Where the voxels lie in a data section, and what may follow them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Placement {
+    /// From its first byte; bytes after the voxels are ignored (NIfTI: a file may hold more
+    /// than the volume its header describes, as nibabel reads it).
+    First,
+    /// Its last bytes (NRRD's `byte skip: -1`, MetaImage's `HeaderSize = -1`; raw data only).
+    Last,
+    /// From its first byte, with fewer than `slack` bytes after the voxels (a line end or
+    /// padding, which ITK reads past too; one slice of the image, say); more is an error
+    /// naming both figures: the header's sizes or type do not describe the data.
+    Sized {
+        /// The bytes after the voxels that are ignored.
+        slack: usize,
+    },
+}
+
+/// Exactly `want` bytes of voxel data from `data`, unpacked, placed as `placement` says:
+/// never more than `want` (and the slack of [`Placement::Sized`]) is inflated, so that a
+/// decompression bomb stops at the size its header announces; fewer is an error naming what
+/// is missing.
+pub(super) fn unpack(
+    path: &Path,
+    data: &[u8],
+    packing: Packing,
+    want: usize,
+    placement: Placement,
+) -> Result<Vec<u8>> {
     let truncated = |got: usize| {
         Error::parse(
             path,
@@ -59,16 +82,48 @@ pub(super) fn unpack(path: &Path, data: &[u8], packing: Packing, want: usize) ->
             format!("truncated: the header announces {want} bytes of voxels, the file holds {got}"),
         )
     };
+    let too_long = |got: &str| {
+        Error::parse(
+            path,
+            0,
+            format!(
+                "the header announces {want} bytes of voxels, the data holds {got}: a slice or more \
+                 is left over, so the header's sizes or type do not describe the data"
+            ),
+        )
+    };
     if packing == Packing::Raw {
         if data.len() < want {
             return Err(truncated(data.len()));
         }
-        return Ok(data[data.len() - want..].to_vec());
+        return match placement {
+            Placement::First => Ok(data[..want].to_vec()),
+            Placement::Last => Ok(data[data.len() - want..].to_vec()),
+            Placement::Sized { slack } if data.len() - want >= slack.max(1) => {
+                Err(too_long(&data.len().to_string()))
+            }
+            Placement::Sized { .. } => Ok(data[..want].to_vec()),
+        };
     }
-    let out = inflate(path, data, packing, want)?;
+    let limit = match placement {
+        Placement::First => want,
+        Placement::Last => {
+            return Err(Error::parse(
+                path,
+                0,
+                "compressed data cannot be placed at the end of its file (byte skip or HeaderSize -1)",
+            ));
+        }
+        Placement::Sized { slack } => want.saturating_add(slack.max(1)),
+    };
+    let mut out = inflate(path, data, packing, limit)?;
     if out.len() < want {
         return Err(truncated(out.len()));
     }
+    if out.len() == limit && limit > want {
+        return Err(too_long(&format!("{limit} or more once inflated")));
+    }
+    out.truncate(want);
     Ok(out)
 }
 

@@ -8,7 +8,7 @@
 //! (ITK's MetaIO).
 
 use super::image_data::{
-    ImageFile, Packing, announced_bytes, numbers, read_with_data_file, unpack,
+    ImageFile, Packing, Placement, announced_bytes, numbers, read_with_data_file, unpack,
 };
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
@@ -67,6 +67,10 @@ pub fn parse_metaimage(
     let compressed = get("CompressedData").is_some_and(|v| v.trim().eq_ignore_ascii_case("true"));
     let data_file = need("ElementDataFile")?.trim();
     let detached_data;
+    // Up to a slice's bytes after the voxels are ignored (as ITK reads past them).
+    let mut placement = Placement::Sized {
+        slack: want / dims[2].max(1),
+    };
     let stored: &[u8] = if data_file.eq_ignore_ascii_case("local") {
         &bytes[data_at..]
     } else if data_file.contains(' ') || data_file.eq_ignore_ascii_case("list") {
@@ -80,7 +84,11 @@ pub fn parse_metaimage(
     } else {
         detached_data = detached(data_file)?;
         match get("HeaderSize").map(str::trim) {
-            Some(n) if n != "-1" && n != "0" => {
+            Some("-1") => {
+                placement = Placement::Last;
+                &detached_data
+            }
+            Some(n) if n != "0" => {
                 let n: usize = n
                     .parse()
                     .map_err(|_| Error::parse(path, 0, "HeaderSize is not a count"))?;
@@ -94,7 +102,7 @@ pub fn parse_metaimage(
     } else {
         Packing::Raw
     };
-    let data = unpack(path, stored, packing, want)?;
+    let data = unpack(path, stored, packing, want, placement)?;
     let affine = affine(path, &get)?;
     Ok(ImageFile {
         image: Image {

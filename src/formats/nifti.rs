@@ -11,7 +11,7 @@
 //! `scl_slope · stored + scl_inter` when `scl_slope` is neither 0 nor NaN. Spatial units of
 //! metres or microns (`xyzt_units`) are brought to mm.
 
-use super::image_data::{ImageFile, Packing, announced_bytes, inflate, is_gzip, unpack};
+use super::image_data::{ImageFile, Packing, Placement, announced_bytes, inflate, is_gzip, unpack};
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
 use std::path::Path;
@@ -67,7 +67,7 @@ pub fn parse_nifti(path: &Path, bytes: &[u8]) -> Result<ImageFile> {
         .vox_offset
         .checked_add(want)
         .ok_or_else(|| Error::parse(path, 0, "vox_offset and the voxels overflow"))?;
-    let all = unpack(path, bytes, packing, total).map_err(|e| match e {
+    let all = unpack(path, bytes, packing, total, Placement::First).map_err(|e| match e {
         Error::Parse { message, .. } if message.starts_with("truncated") => Error::parse(
             path,
             0,
@@ -139,11 +139,11 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
                 "not a NIfTI-1 file: its magic is not n+1",
             ));
         }
-        let ndim = r.i16(40).clamp(0, 7) as usize;
+        let ndim = dimensions(path, i64::from(r.i16(40)))?;
         Header {
             dims: (1..=ndim)
-                .map(|k| r.i16(40 + 2 * k).max(0) as usize)
-                .collect(),
+                .map(|k| axis(path, k, i64::from(r.i16(40 + 2 * k))))
+                .collect::<Result<_>>()?,
             datatype: r.i16(70),
             pixdim: std::array::from_fn(|k| r.f32(76 + 4 * k)),
             vox_offset: nonneg(path, r.f32(108), "vox_offset")?,
@@ -168,10 +168,11 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
                 "not a NIfTI-2 file: its magic is not n+2",
             ));
         }
-        let ndim = r.i64(16).clamp(0, 7) as usize;
-        let dim = |k: usize| usize::try_from(r.i64(16 + 8 * k)).unwrap_or(0);
+        let ndim = dimensions(path, r.i64(16))?;
         Header {
-            dims: (1..=ndim).map(dim).collect(),
+            dims: (1..=ndim)
+                .map(|k| axis(path, k, r.i64(16 + 8 * k)))
+                .collect::<Result<_>>()?,
             datatype: r.i16(12),
             pixdim: std::array::from_fn(|k| r.f64(104 + 8 * k)),
             vox_offset: usize::try_from(r.i64(168))
@@ -187,6 +188,19 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
             little,
         }
     };
+    // The voxels of a single file follow its header and the 4-byte extension flag.
+    let first = if version == 1 { 352 } else { 544 };
+    if h.vox_offset < first {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "vox_offset {} lies inside the header: the voxels of a single-file NIfTI-{version} \
+                 start at byte {first} or later",
+                h.vox_offset
+            ),
+        ));
+    }
     if h.dims.is_empty() || h.dims.iter().take(3).any(|&d| d == 0) {
         return Err(Error::parse(
             path,
@@ -195,6 +209,25 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
         ));
     }
     Ok(h)
+}
+
+/// The number of dimensions `dim[0]`: 1 to 7, as the standard says (nifti1_io refuses others).
+fn dimensions(path: &Path, n: i64) -> Result<usize> {
+    if (1..=7).contains(&n) {
+        Ok(n as usize)
+    } else {
+        Err(Error::parse(
+            path,
+            0,
+            format!("dim[0] = {n}: the number of dimensions is 1 to 7"),
+        ))
+    }
+}
+
+/// The size `dim[k]` of axis `k` (1-based), not negative.
+fn axis(path: &Path, k: usize, n: i64) -> Result<usize> {
+    usize::try_from(n)
+        .map_err(|_| Error::parse(path, 0, format!("dim[{k}] = {n}: a size is not negative")))
 }
 
 /// A non-negative whole number of bytes from a float field.
@@ -290,6 +323,10 @@ fn voxel_type(path: &Path, code: i16) -> Result<VoxelType> {
     })
 }
 
+/// How far beyond 1 the squared norm of a qform's (b, c, d) may be: the rounding of three
+/// float32 fields (nibabel's threshold is of the same order).
+const QUATERNION_TOLERANCE: f64 = 1e-6;
+
 /// The index → world (RAS, mm) affine by the standard's precedence (module doc).
 fn affine(path: &Path, h: &Header) -> Result<[[f64; 4]; 3]> {
     let unit = match h.xyzt_units & 0x07 {
@@ -302,7 +339,21 @@ fn affine(path: &Path, h: &Header) -> Result<[[f64; 4]; 3]> {
         h.srow
     } else if h.qform_code > 0 {
         let [b, c, d] = h.quatern;
-        let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+        // a² = 1 - (b² + c² + d²); below 0 beyond the rounding of float32 fields, (b, c, d) is
+        // not the vector part of a unit quaternion, and nibabel refuses it too.
+        let a2 = 1.0 - (b * b + c * c + d * d);
+        if !(a2 >= -QUATERNION_TOLERANCE) {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "the qform quaternion (b, c, d) = ({b}, {c}, {d}) is not a rotation: \
+                     b² + c² + d² = {} > 1",
+                    1.0 - a2
+                ),
+            ));
+        }
+        let a = a2.max(0.0).sqrt();
         let r = [
             [
                 a * a + b * b - c * c - d * d,

@@ -8,7 +8,7 @@
 //! the header is `key: value` lines (the NRRD0005 specification, teem.sourceforge.net).
 
 use super::image_data::{
-    ImageFile, Packing, announced_bytes, numbers, read_with_data_file, unpack,
+    ImageFile, Packing, Placement, announced_bytes, numbers, read_with_data_file, unpack,
 };
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
@@ -65,6 +65,10 @@ pub fn parse_nrrd(
     };
     let dims = [spatial[0], spatial[1], spatial[2]];
     let want = announced_bytes(path, &dims, voxel_type.size())?;
+    // Up to a slice's bytes after the voxels are ignored (as ITK and teem read past them).
+    let sized = Placement::Sized {
+        slack: want / dims[2].max(1),
+    };
     let encoding = get("encoding").unwrap_or("raw").trim().to_lowercase();
     let data_file = get("data file").or(get("datafile"));
     let stored: Cow<'_, [u8]> = match data_file {
@@ -73,13 +77,11 @@ pub fn parse_nrrd(
     };
     let little = get("endian").map(str::trim) != Some("big");
     let data = match encoding.as_str() {
-        "raw" => unpack(
-            path,
-            skip(path, &stored, get("byte skip"))?,
-            Packing::Raw,
-            want,
-        )?,
-        "gzip" | "gz" => unpack(path, &stored, Packing::Gzip, want)?,
+        "raw" => {
+            let (data, placement) = skip(path, &stored, get("byte skip"), sized)?;
+            unpack(path, data, Packing::Raw, want, placement)?
+        }
+        "gzip" | "gz" => unpack(path, &stored, Packing::Gzip, want, sized)?,
         "ascii" | "text" | "txt" => ascii(path, &stored, voxel_type, dims, little)?,
         other => {
             return Err(Error::parse(
@@ -169,15 +171,22 @@ fn header(path: &Path, bytes: &[u8]) -> Result<(Fields, Fields, usize)> {
     Ok((fields, pairs, at))
 }
 
-/// The data after `byte skip` bytes (`-1`: the last bytes of the file, taken by `unpack`).
-fn skip<'a>(path: &Path, data: &'a [u8], byte_skip: Option<&str>) -> Result<&'a [u8]> {
+/// The data after `byte skip` bytes, placed as `sized` ([`Placement::Sized`]), or, for
+/// `-1`, the whole data with the voxels at its end ([`Placement::Last`]).
+fn skip<'a>(
+    path: &Path,
+    data: &'a [u8],
+    byte_skip: Option<&str>,
+    sized: Placement,
+) -> Result<(&'a [u8], Placement)> {
     match byte_skip.map(str::trim) {
-        None | Some("-1") => Ok(data),
+        None => Ok((data, sized)),
+        Some("-1") => Ok((data, Placement::Last)),
         Some(n) => {
             let n: usize = n
                 .parse()
                 .map_err(|_| Error::parse(path, 0, format!("byte skip {n:?} is not a count")))?;
-            Ok(data.get(n..).unwrap_or(&[]))
+            Ok((data.get(n..).unwrap_or(&[]), sized))
         }
     }
 }

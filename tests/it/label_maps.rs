@@ -250,6 +250,172 @@ fn nifti1(
     h
 }
 
+/// `b` compressed by gzip.
+fn gzip(b: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(b).unwrap();
+    e.finish().unwrap()
+}
+
+/// nibabel's (`.nii*`) or SimpleITK's (other) voxels of each file of `files`, in x-fastest
+/// order, and nibabel's affine (RAS) for NIfTI; `None` without the Python tools.
+fn voxels_by_python(files: &[PathBuf]) -> Option<Vec<(Vec<f64>, Vec<Vec<f64>>)>> {
+    let py = common::python()?;
+    let script = r#"
+import sys, json
+import numpy as np, nibabel as nib, SimpleITK as sitk
+out = []
+for f in sys.argv[1:]:
+    if ".nii" in f:
+        img = nib.load(f)
+        v = np.asarray(img.dataobj).reshape(img.shape[:3], order="F")
+        out.append([v.flatten(order="F").astype(float).tolist(), img.affine[:3].tolist()])
+    else:
+        v = sitk.GetArrayFromImage(sitk.ReadImage(f))
+        out.append([v.flatten().astype(float).tolist(), []])
+print(json.dumps(out))
+"#;
+    let o = common::run(
+        std::process::Command::new(py)
+            .arg("-c")
+            .arg(script)
+            .args(files),
+        common::deadline::PYTHON,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    Some(serde_json::from_slice(&o.stdout).unwrap())
+}
+
+/// Voxels come from where the header says they start, and the header's sizes are checked
+/// against the data. Odd but valid files read the voxels nibabel and SimpleITK read: a NIfTI
+/// with a byte after its volume (plain and gzip), one holding a second volume its
+/// `dim[0] = 3` does not describe, an NRRD and a MetaImage with a line end after their
+/// voxels, a detached NRRD whose voxels end its data file (`byte skip: -1`). Refused, naming
+/// the cause: NRRD and MetaImage data a slice or more longer than their sizes (SimpleITK reads
+/// the first slices of it), a `vox_offset` inside the header, a qform quaternion that is not a
+/// rotation (nibabel refuses it), `dim[0]` outside 1..7 and a negative size.
+#[test]
+fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
+    let dir = common::temp_dir("image-placement");
+    let good = nifti1([8, 8, 8], 2, 8, [1.0, 1.0, 2.0], true, &block());
+    let nrrd = |sizes: &str, extra: &str| {
+        format!("NRRD0004\ntype: uchar\ndimension: 3\nsizes: {sizes}\nencoding: raw\n{extra}\n")
+            .into_bytes()
+    };
+    let mhd = b"ObjectType = Image\nNDims = 3\nDimSize = 8 8 8\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n";
+    let with = |head: &[u8], tail: &[u8]| [head, &block(), tail].concat();
+    let mut trailing = good.clone();
+    trailing.push(7);
+    let two_volumes = [&good[..], &[9u8; 512]].concat();
+    std::fs::write(dir.join("d.raw"), [&b"0123456789"[..], &block()].concat()).unwrap();
+    let valid: Vec<(&str, Vec<u8>)> = vec![
+        ("trailing.nii", trailing.clone()),
+        ("trailing.nii.gz", gzip(&trailing)),
+        ("two-volumes.nii", two_volumes),
+        ("newline.nrrd", with(&nrrd("8 8 8", ""), b"\n")),
+        ("newline.mhd", with(mhd, b"\n")),
+        (
+            "end.nhdr",
+            nrrd("8 8 8", "byte skip: -1\ndata file: d.raw\n"),
+        ),
+    ];
+    let mut files = Vec::new();
+    for (name, bytes) in &valid {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let image = atlasmesh::formats::read_image(&path)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .image;
+        assert_eq!(image.dims, [8, 8, 8], "{name}");
+        assert!(
+            image.data == block(),
+            "{name}: not the voxels of the header's volume"
+        );
+        files.push(path);
+    }
+    if let Some(theirs) = voxels_by_python(&files) {
+        let want: Vec<f64> = block().iter().map(|&v| f64::from(v)).collect();
+        for (k, (v, affine)) in theirs.iter().enumerate() {
+            assert_eq!(
+                v, &want,
+                "{}: other voxels than nibabel's or SimpleITK's",
+                valid[k].0
+            );
+            if !affine.is_empty() {
+                let ours = atlasmesh::formats::read_image(&files[k])
+                    .unwrap()
+                    .image
+                    .affine;
+                for (r, row) in affine.iter().enumerate() {
+                    for (c, x) in row.iter().enumerate() {
+                        assert!(
+                            (ours[r][c] - x).abs() <= 1e-9,
+                            "{}: affine {ours:?}",
+                            valid[k].0
+                        );
+                    }
+                }
+            }
+        }
+    }
+    let mut inside = good.clone();
+    inside[108..112].copy_from_slice(&100f32.to_le_bytes());
+    // The qform alone (sform code 0), its (b, c, d) = (1, 1, 1).
+    let mut quaternion = nifti1([8, 8, 8], 2, 8, [1.0; 3], false, &block());
+    quaternion[252..254].copy_from_slice(&1i16.to_le_bytes());
+    for k in 0..3 {
+        quaternion[256 + 4 * k..260 + 4 * k].copy_from_slice(&1f32.to_le_bytes());
+    }
+    let mut nine = good.clone();
+    nine[40..42].copy_from_slice(&9i16.to_le_bytes());
+    let mut negative = good.clone();
+    negative[46..48].copy_from_slice(&(-2i16).to_le_bytes());
+    let refused: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "sizes-short.nrrd",
+            with(&nrrd("8 8 7", ""), b""),
+            "announces 448 bytes of voxels, the data holds 512",
+        ),
+        (
+            "sizes-short.nrrd.gz.nrrd",
+            [
+                &b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 8 8 6\nencoding: gzip\n\n"[..],
+                &gzip(&block()),
+            ]
+            .concat(),
+            "announces 384 bytes of voxels",
+        ),
+        (
+            "sizes-short.mhd",
+            with(
+                &String::from_utf8_lossy(mhd)
+                    .replace("8 8 8", "8 8 7")
+                    .into_bytes(),
+                b"",
+            ),
+            "the data holds 512",
+        ),
+        (
+            "inside.nii",
+            inside,
+            "vox_offset 100 lies inside the header",
+        ),
+        ("quaternion.nii", quaternion, "is not a rotation"),
+        ("nine.nii", nine, "dim[0] = 9"),
+        ("negative.nii", negative, "dim[3] = -2"),
+    ];
+    for (name, bytes, want) in &refused {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let e = match atlasmesh::formats::read_image(&path) {
+            Ok(_) => panic!("{name}: read, should be refused"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains(name) && e.contains(want), "{name}: {e}");
+    }
+}
+
 /// A 6³ block of label 1 inside an 8³ image.
 fn block() -> Vec<u8> {
     let mut v = vec![0u8; 512];
@@ -266,12 +432,7 @@ fn block() -> Vec<u8> {
 #[test]
 fn bad_label_maps_are_refused_with_the_file_and_the_problem() {
     let dir = common::temp_dir("bad-label-maps");
-    let gz = |b: &[u8]| {
-        use std::io::Write;
-        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-        e.write_all(b).unwrap();
-        e.finish().unwrap()
-    };
+    let gz = gzip;
     let good = nifti1([8, 8, 8], 2, 8, [1.0, 1.0, 2.0], true, &block());
     let mut floats = Vec::new();
     for (k, v) in block().iter().enumerate() {

@@ -105,6 +105,21 @@ pub(super) fn unpack(
             Placement::Sized { .. } => Ok(data[..want].to_vec()),
         };
     }
+    let budget = super::input::decode_budget(data.len());
+    if want > budget {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "the header announces {} MB of voxels from {} kB of compressed data, more than \
+                 the {} MB its size allows (a decompression bomb, or a header that lies; set \
+                 ATLASMESH_MAX_DECODED_BYTES to raise it)",
+                want >> 20,
+                data.len() >> 10,
+                budget >> 20
+            ),
+        ));
+    }
     let limit = match placement {
         Placement::First => want,
         Placement::Last => {

@@ -21,6 +21,25 @@ pub fn max_input_bytes() -> u64 {
         .unwrap_or(DEFAULT_MAX_INPUT_BYTES)
 }
 
+/// What decoding one compressed file may take, in bytes: [`DECODE_FACTOR`] times the file's
+/// size, at least [`DECODE_FLOOR`] (or `ATLASMESH_MAX_DECODED_BYTES` when set to a number:
+/// label maps of large, mostly empty volumes compress beyond the factor). Real data compress
+/// a few times (meshes) to some tens of times (label maps: the shared VerSe and
+/// TotalSegmentator maps 11-68 times); a file announcing more is refused before anything is
+/// inflated: a decompression bomb, or a header that lies.
+pub fn decode_budget(compressed_bytes: usize) -> usize {
+    let floor = std::env::var("ATLASMESH_MAX_DECODED_BYTES")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(DECODE_FLOOR);
+    compressed_bytes.saturating_mul(DECODE_FACTOR).max(floor)
+}
+
+/// See [`decode_budget`].
+pub const DECODE_FACTOR: usize = 64;
+/// See [`decode_budget`].
+pub const DECODE_FLOOR: usize = 256 << 20;
+
 /// The default largest number of points (vertices, nodes) of an input shape or mesh.
 pub const DEFAULT_MAX_POINTS: usize = 4_000_000;
 

@@ -19,7 +19,7 @@ use std::path::Path;
 /// Reads a NIfTI file (see the module doc).
 pub fn read_nifti(path: &Path) -> Result<ImageFile> {
     let bytes = super::read_input(path)?;
-    parse_nifti(path, &bytes)
+    parse(path, std::borrow::Cow::Owned(bytes))
 }
 
 /// The fields of a NIfTI header atlasmesh uses (both versions).
@@ -41,12 +41,18 @@ struct Header {
 
 /// [`read_nifti`] of a file's bytes (`path` only names it in messages).
 pub fn parse_nifti(path: &Path, bytes: &[u8]) -> Result<ImageFile> {
-    let packing = if is_gzip(bytes) {
+    parse(path, std::borrow::Cow::Borrowed(bytes))
+}
+
+/// [`parse_nifti`]; a file's bytes given whole become the voxels in place (one copy of a
+/// plain file's voxels in memory, not two).
+fn parse(path: &Path, bytes: std::borrow::Cow<'_, [u8]>) -> Result<ImageFile> {
+    let packing = if is_gzip(&bytes) {
         Packing::Gzip
     } else {
         Packing::Raw
     };
-    let head = inflate(path, bytes, packing, 540)?;
+    let head = inflate(path, &bytes, packing, 540)?;
     let h = header(path, &head)?;
     let voxel_type = voxel_type(path, h.datatype)?;
     let extra = h.dims.get(3..).unwrap_or(&[]);
@@ -67,7 +73,7 @@ pub fn parse_nifti(path: &Path, bytes: &[u8]) -> Result<ImageFile> {
         .vox_offset
         .checked_add(want)
         .ok_or_else(|| Error::parse(path, 0, "vox_offset and the voxels overflow"))?;
-    let all = unpack(path, bytes, packing, total, Placement::First).map_err(|e| match e {
+    let truncated = |e| match e {
         Error::Parse { message, .. } if message.starts_with("truncated") => Error::parse(
             path,
             0,
@@ -78,8 +84,20 @@ pub fn parse_nifti(path: &Path, bytes: &[u8]) -> Result<ImageFile> {
             ),
         ),
         e => e,
-    })?;
-    let data = all[h.vox_offset..total].to_vec();
+    };
+    let data = match (packing, bytes) {
+        (Packing::Raw, std::borrow::Cow::Owned(mut all)) if all.len() >= total => {
+            all.truncate(total);
+            all.drain(..h.vox_offset);
+            all
+        }
+        (_, bytes) => {
+            let mut all =
+                unpack(path, &bytes, packing, total, Placement::First).map_err(truncated)?;
+            all.drain(..h.vox_offset);
+            all
+        }
+    };
     let (slope, intercept) = if h.slope.is_finite() && h.slope != 0.0 {
         (h.slope, if h.inter.is_finite() { h.inter } else { 0.0 })
     } else {

@@ -12,14 +12,11 @@ use std::path::Path;
 /// The largest decoded array, in bytes (a compressed header announcing more is refused).
 const MAX_ARRAY_BYTES: usize = 8 * super::MAX_COUNT;
 
-/// What decoding one file may take, in bytes of decoded data and of the `f64` values made
-/// from it, all its arrays together: [`DECODE_FACTOR`] times the file's size, at least
-/// [`DECODE_FLOOR`]. Real data compress a few times; a file that inflates beyond this is
-/// refused before the memory is taken (a decompression bomb, or many arrays sharing one
-/// appended block).
-const DECODE_FACTOR: usize = 64;
-/// See [`DECODE_FACTOR`].
-const DECODE_FLOOR: usize = 256 << 20;
+// What decoding one file may take, in bytes of decoded data and of the `f64` values made
+// from it, all its arrays together: `decode_budget` of the file's size. A file that inflates
+// beyond it is refused before the memory is taken (a decompression bomb, or many arrays
+// sharing one appended block).
+use super::input::{DECODE_FACTOR, decode_budget};
 
 /// Where an array's values are.
 enum Source {
@@ -84,7 +81,7 @@ pub(crate) struct Document<'a> {
     compressor: Compressor,
     /// The appended block after its `_`: raw bytes, or base64 text.
     appended: Option<(&'a [u8], bool)>,
-    /// Bytes decoding may still take ([`DECODE_FACTOR`]).
+    /// Bytes decoding may still take ([`decode_budget`]).
     budget: std::cell::Cell<usize>,
     /// The whole budget, for messages.
     budget_total: usize,
@@ -128,7 +125,7 @@ impl<'a> Document<'a> {
             compressor: Compressor::None,
             appended: None,
             budget: std::cell::Cell::new(0),
-            budget_total: bytes.len().saturating_mul(DECODE_FACTOR).max(DECODE_FLOOR),
+            budget_total: decode_budget(bytes.len()),
         };
         doc.budget.set(doc.budget_total);
         let mut stack: Vec<String> = Vec::new();

@@ -404,6 +404,13 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
         ("quaternion.nii", quaternion, "is not a rotation"),
         ("nine.nii", nine, "dim[0] = 9"),
         ("negative.nii", negative, "dim[3] = -2"),
+        // 1 GiB of voxels announced by 1 MB of zeros compressed (1 kB): refused before any
+        // inflating (the input limit, 2 GiB, lets its size through).
+        (
+            "bomb.nii.gz",
+            gzip(&nifti1([1024; 3], 2, 8, [1.0; 3], true, &[0u8; 1 << 20])),
+            "decompression bomb",
+        ),
     ];
     for (name, bytes, want) in &refused {
         let path = dir.join(name);
@@ -414,6 +421,28 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
         };
         assert!(e.contains(name) && e.contains(want), "{name}: {e}");
     }
+    // The bomb through the command line, in 1 GiB of address space: as a label map to
+    // `convert` and as a CT to `materials`, refused with its cause and nothing written.
+    let mesh = dir.join("block.vtu");
+    atlasmesh::formats::write_vtu(&mesh, &atlasmesh::mesh::FeMesh::block(2), None).unwrap();
+    let bomb = dir.join("bomb.nii.gz").display().to_string();
+    let (ply, out) = (dir.join("bomb.ply"), dir.join("materials-out"));
+    for args in [
+        vec!["convert", &bomb, ply.to_str().unwrap(), "--label", "1"],
+        vec![
+            "materials",
+            "--mesh",
+            mesh.to_str().unwrap(),
+            "--ct",
+            &bomb,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    ] {
+        let o = crate::hostile_outputs::in_1gib(&args);
+        crate::bad_input::fails(&o, 2, &["bomb.nii.gz", "decompression bomb"]);
+    }
+    assert!(!ply.exists() && !out.exists());
 }
 
 /// A 6³ block of label 1 inside an 8³ image.

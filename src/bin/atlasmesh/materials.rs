@@ -55,9 +55,16 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
     if !a.ct.exists() {
         return Err(atlasmesh::Error::io(&a.ct, std::io::ErrorKind::NotFound.into()).into());
     }
+    // A folder made here is removed again when the mesh or the CT is refused: a failed run
+    // leaves nothing behind (a folder that was there stays).
+    let made = !a.out.exists();
     std::fs::create_dir_all(&a.out).map_err(|e| atlasmesh::Error::io(&a.out, e))?;
-    let r =
-        atlasmesh::study::map_mesh_file(&a.mesh, &a.ct, &recipe, &formats, !a.no_plots, &a.out)?;
+    let r = atlasmesh::study::map_mesh_file(&a.mesh, &a.ct, &recipe, &formats, !a.no_plots, &a.out)
+        .inspect_err(|_| {
+            if made {
+                let _ = std::fs::remove_dir_all(&a.out);
+            }
+        })?;
     let m = &r.materials;
     for w in &m.warnings {
         eprintln!("warning: {w}");

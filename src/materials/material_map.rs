@@ -128,6 +128,7 @@ pub fn map_materials<const D: usize>(
     recipe: &ResolvedRecipe,
 ) -> Result<MaterialMap> {
     mesh.check_connectivity().map_err(Error::Mesh)?;
+    recipe.check_over(ct.range)?;
     if mesh.kind.dimension() != D {
         return Err(Error::Mesh(format!(
             "{} elements in a {D}D mesh",

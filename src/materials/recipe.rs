@@ -435,6 +435,10 @@ impl MaterialRecipe {
     }
 }
 
+/// The values between the ends of a CT's range at which [`ResolvedRecipe::check_over`]
+/// evaluates the law.
+pub const RANGE_SAMPLES: usize = 256;
+
 /// A recipe checked and ready: the calibration line in use and the law.
 #[derive(Clone, Debug)]
 pub struct ResolvedRecipe {
@@ -460,6 +464,49 @@ impl ResolvedRecipe {
             DensityKind::Ash => d.ash_slope * qct + d.ash_intercept,
             DensityKind::App => (d.ash_slope * qct + d.ash_intercept) / d.ash_per_apparent,
         }
+    }
+
+    /// Checks that the calibration and the law give a finite density and modulus over the
+    /// CT's whole range `range` (HU): at both ends and at [`RANGE_SAMPLES`] values between
+    /// (the density is affine in HU; each piece of the law is a power, monotone between its
+    /// joints, which are sampled too), so that no element gets an infinite modulus, or a
+    /// NaN the floor would hide.
+    ///
+    /// # Errors
+    /// [`Error::Parameter`] naming the HU, the density, the modulus and the CT's range.
+    pub fn check_over(&self, range: [f64; 2]) -> Result<()> {
+        let [lo, hi] = range;
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Err(Error::Parameter(format!(
+                "the CT's values span {lo} to {hi} HU: not finite"
+            )));
+        }
+        let joints = self.law.pieces.iter().skip(1).filter_map(|p| {
+            // The HU where the density reaches the joint, when the calibration is invertible.
+            let d = &self.recipe.density;
+            let qct = match self.law.density {
+                DensityKind::Qct => p.from,
+                DensityKind::Ash => (p.from - d.ash_intercept) / d.ash_slope,
+                DensityKind::App => (p.from * d.ash_per_apparent - d.ash_intercept) / d.ash_slope,
+            };
+            let hu = (qct - self.calibration.intercept) / self.calibration.slope;
+            (hu > lo && hu < hi).then_some(hu)
+        });
+        let samples = (0..=RANGE_SAMPLES)
+            .map(|i| lo + (hi - lo) * i as f64 / RANGE_SAMPLES as f64)
+            .chain(joints);
+        for hu in samples {
+            let rho = self.density(hu);
+            let e = self.law.modulus(rho);
+            if !(rho.is_finite() && e.is_finite()) {
+                return Err(Error::Parameter(format!(
+                    "material recipe: at {hu} HU (the CT spans {lo} to {hi}) the calibration gives \
+                     a density of {rho} g/cm³ and the law E = {e} MPa, not a finite modulus: \
+                     check the calibration's slope and the law's coefficients against the CT"
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Young's modulus (MPa) at `hu`: the law at [`ResolvedRecipe::density`], at least the

@@ -531,3 +531,35 @@ fn v2_takes_e_of_the_mean_and_v3_the_mean_of_e() {
         a.modulus
     );
 }
+
+#[test]
+fn a_law_or_calibration_without_a_finite_modulus_over_the_ct_is_refused() {
+    // The default recipe over a clinical CT's range: finite everywhere.
+    recipe("").check_over([-1024.0, 3071.0]).unwrap();
+    // A coefficient of 1e308 (E = inf), a calibration slope of 1e300, a CT of 1e300 HU.
+    let huge_law = recipe(
+        "[modulus]\nlaw = \"custom\"\ndensity = \"app\"\npieces = [{ coefficient = 1e308, exponent = 2.0 }]\n",
+    );
+    let huge_slope = recipe("[calibration]\nslope = 1e300\n");
+    for (r, range, what) in [
+        (&huge_law, [-1024.0, 3071.0], "E = inf"),
+        (&huge_slope, [-1024.0, 3071.0], "E = inf"),
+        (&recipe(""), [0.0, 1e300], "E = inf"),
+        (&recipe(""), [0.0, f64::INFINITY], "not finite"),
+    ] {
+        let e = r.check_over(range).unwrap_err().to_string();
+        assert!(e.contains(what), "{range:?}: {e}");
+    }
+    // And through the map: no element mapped, the error says why.
+    let affine = [
+        [1.0, 0.0, 0.0, -0.5],
+        [0.0, 1.0, 0.0, -0.5],
+        [0.0, 0.0, 1.0, -0.5],
+    ];
+    let ct = CtField::new(&image([4, 4, 4], affine, |p| 1e300 * (1.0 + p[0]))).unwrap();
+    let e = map_materials(&FeMesh::block(2), &ct, &recipe(""))
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a finite modulus"), "{e}");
+}

@@ -31,6 +31,11 @@ else
 fi
 set -- $TARGETS
 echo "fuzzing $# targets for $SECONDS_PER_TARGET s each, two at a time: about $(( ($# + 1) / 2 * SECONDS_PER_TARGET / 60 )) minutes after the build"
+# The targets' temporary files (the atlas target writes its input to one) in a folder removed
+# when the run ends.
+TMPDIR=$(mktemp -d "${TMPDIR:-/tmp}/atlasmesh-fuzz-run.XXXXXX")
+export TMPDIR
+trap 'rm -rf "$TMPDIR"' EXIT
 export RUSTC_BOOTSTRAP=1
 if cargo fuzz --version >/dev/null 2>&1; then
     cargo fuzz build -O >/dev/null 2>&1 || cargo fuzz build -O

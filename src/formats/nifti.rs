@@ -206,19 +206,7 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
             little,
         }
     };
-    // The voxels of a single file follow its header and the 4-byte extension flag.
-    let first = if version == 1 { 352 } else { 544 };
-    if h.vox_offset < first {
-        return Err(Error::parse(
-            path,
-            0,
-            format!(
-                "vox_offset {} lies inside the header: the voxels of a single-file NIfTI-{version} \
-                 start at byte {first} or later",
-                h.vox_offset
-            ),
-        ));
-    }
+    check_offset(path, version, h.vox_offset)?;
     if h.dims.is_empty() || h.dims.iter().take(3).any(|&d| d == 0) {
         return Err(Error::parse(
             path,
@@ -227,6 +215,23 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
         ));
     }
     Ok(h)
+}
+
+/// The voxels of a single file follow its header and the 4-byte extension flag: a
+/// `vox_offset` before byte 352 (NIfTI-1) or 544 (NIfTI-2) is refused.
+fn check_offset(path: &Path, version: u8, vox_offset: usize) -> Result<()> {
+    let first = if version == 1 { 352 } else { 544 };
+    if vox_offset < first {
+        return Err(Error::parse(
+            path,
+            0,
+            format!(
+                "vox_offset {vox_offset} lies inside the header: the voxels of a single-file \
+                 NIfTI-{version} start at byte {first} or later"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The number of dimensions `dim[0]`: 1 to 7, as the standard says (nifti1_io refuses others).
@@ -360,7 +365,7 @@ fn affine(path: &Path, h: &Header) -> Result<[[f64; 4]; 3]> {
         // a² = 1 - (b² + c² + d²); below 0 beyond the rounding of float32 fields, (b, c, d) is
         // not the vector part of a unit quaternion, and nibabel refuses it too.
         let a2 = 1.0 - (b * b + c * c + d * d);
-        if !(a2 >= -QUATERNION_TOLERANCE) {
+        if a2.is_nan() || a2 < -QUATERNION_TOLERANCE {
             return Err(Error::parse(
                 path,
                 0,

@@ -91,10 +91,15 @@ impl LabelTable {
                             )));
                         }
                         None => {
-                            let known: Vec<&str> =
-                                self.names.values().take(20).map(String::as_str).collect();
+                            let known: Vec<String> = self
+                                .names
+                                .values()
+                                .take(20)
+                                .map(|n| crate::geometry::display_name(n))
+                                .collect();
                             return Err(Error::Parameter(format!(
-                                "{source}: no label named {name:?}; the table names {}{}",
+                                "{source}: no label named {:?}; the table names {}{}",
+                                crate::geometry::display_name(name),
                                 known.join(", "),
                                 if self.names.len() > 20 { ", ..." } else { "" }
                             )));

@@ -47,7 +47,6 @@ pub fn label_mask(
     table: &LabelTable,
 ) -> Result<LabelMask> {
     let [nx, ny, nz] = image.dims;
-    let wanted: Vec<f64> = labels.iter().map(|&l| l as f64).collect();
     let mut lo = [usize::MAX; 3];
     let mut hi = [0usize; 3];
     let mut any = false;
@@ -55,15 +54,11 @@ pub fn label_mask(
         for y in 0..ny {
             let row = nx * (y + ny * z);
             for x in 0..nx {
-                let v = image.value(row + x);
-                if v.is_nan() {
-                    return Err(Error::parse(
-                        source,
-                        0,
-                        format!("voxel ({x}, {y}, {z}) is NaN; a label map holds label numbers"),
-                    ));
-                }
-                if v != 0.0 && wanted.contains(&v) {
+                let v = match image.label(row + x) {
+                    Ok(v) => v,
+                    Err(v) => return Err(not_a_label(source, [x, y, z], v)),
+                };
+                if v != 0 && labels.contains(&v) {
                     any = true;
                     for (d, c) in [x, y, z].into_iter().enumerate() {
                         lo[d] = lo[d].min(c);
@@ -91,9 +86,9 @@ pub fn label_mask(
         for y in 1..dims[1] - 1 {
             for x in 1..dims[0] - 1 {
                 let (i, j, k) = (lo[0] + x - 1, lo[1] + y - 1, lo[2] + z - 1);
-                let v = image.value(i + nx * (j + ny * k));
+                let v = image.label(i + nx * (j + ny * k)).unwrap_or(0);
                 let at = mask.at(x, y, z);
-                mask.inside[at] = v != 0.0 && wanted.contains(&v);
+                mask.inside[at] = v != 0 && labels.contains(&v);
             }
         }
     }
@@ -126,32 +121,50 @@ fn cut_faces(mask: &LabelMask, dims: [usize; 3]) -> [bool; 6] {
     cut
 }
 
+/// The error for voxel `at` of `source` whose value `v` is no label number.
+fn not_a_label(source: &std::path::Path, at: [usize; 3], v: f64) -> Error {
+    let [x, y, z] = at;
+    let why = if v.is_nan() {
+        "NaN".to_string()
+    } else if v.is_finite() && v.fract() != 0.0 {
+        format!("{v}, not a whole number (resampled with interpolation?)")
+    } else {
+        format!("{v}, beyond the label numbers (64-bit integers)")
+    };
+    Error::parse(
+        source,
+        0,
+        format!("voxel ({x}, {y}, {z}) is {why}; a label map holds label numbers"),
+    )
+}
+
 /// The error for labels no voxel has: the labels present (up to 30, with their voxel counts
 /// and names).
 fn absent(image: &Image, labels: &[i64], source: &std::path::Path, table: &LabelTable) -> Error {
     let mut present: BTreeMap<i64, usize> = BTreeMap::new();
-    let mut last = f64::NAN;
+    let mut last = 0i64;
     let mut run = 0usize;
     for i in 0..image.voxel_count() {
-        let v = image.value(i);
+        // Every voxel is a label number here (the mask's pass refused the others).
+        let v = image.label(i).unwrap_or(0);
         if v == last {
             run += 1;
             continue;
         }
-        if run > 0 && last != 0.0 {
-            *present.entry(last as i64).or_default() += run;
+        if run > 0 && last != 0 {
+            *present.entry(last).or_default() += run;
         }
         last = v;
         run = 1;
     }
-    if run > 0 && last != 0.0 && last.is_finite() {
-        *present.entry(last as i64).or_default() += run;
+    if run > 0 && last != 0 {
+        *present.entry(last).or_default() += run;
     }
     let listed: Vec<String> = present
         .iter()
         .take(30)
         .map(|(l, n)| match table.name(*l) {
-            Some(name) => format!("{l} ({name}, {n} voxels)"),
+            Some(name) => format!("{l} ({}, {n} voxels)", crate::geometry::display_name(name)),
             None => format!("{l} ({n} voxels)"),
         })
         .collect();

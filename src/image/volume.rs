@@ -194,6 +194,42 @@ impl Image {
         }
     }
 
+    /// The label number of voxel `i`: an integer voxel (unscaled) read exactly, as an integer
+    /// (never through `f64`, which merges labels beyond 2⁵³); any other its value when that is
+    /// a whole number. `Err` holds a value that is no label number (NaN, a fraction, beyond
+    /// `i64`).
+    #[inline]
+    pub fn label(&self, i: usize) -> std::result::Result<i64, f64> {
+        let s = self.voxel_type.size();
+        let b = &self.data[i * s..(i + 1) * s];
+        let exact = self.slope == 1.0 && self.intercept == 0.0;
+        macro_rules! int {
+            ($t:ty) => {{
+                let a: [u8; std::mem::size_of::<$t>()] = b.try_into().unwrap_or_default();
+                let v = if self.little_endian {
+                    <$t>::from_le_bytes(a)
+                } else {
+                    <$t>::from_be_bytes(a)
+                };
+                i64::try_from(v).map_err(|_| v as f64)
+            }};
+        }
+        match self.voxel_type {
+            VoxelType::U64 if exact => int!(u64),
+            VoxelType::I64 if exact => int!(i64),
+            VoxelType::U32 if exact => int!(u32),
+            VoxelType::I32 if exact => int!(i32),
+            _ => {
+                let v = self.value(i);
+                if v.is_finite() && v.fract() == 0.0 && v.abs() < 9.2e18 {
+                    Ok(v as i64)
+                } else {
+                    Err(v)
+                }
+            }
+        }
+    }
+
     /// The value of voxel `i`: `slope · stored + intercept` (HU for a CT).
     #[inline]
     pub fn value(&self, i: usize) -> f64 {

@@ -437,7 +437,7 @@ impl MaterialRecipe {
 
 /// The values between the ends of a CT's range at which [`ResolvedRecipe::check_over`]
 /// evaluates the law.
-pub const RANGE_SAMPLES: usize = 256;
+const RANGE_SAMPLES: usize = 256;
 
 /// A recipe checked and ready: the calibration line in use and the law.
 #[derive(Clone, Debug)]
@@ -467,7 +467,7 @@ impl ResolvedRecipe {
     }
 
     /// Checks that the calibration and the law give a finite density and modulus over the
-    /// CT's whole range `range` (HU): at both ends and at [`RANGE_SAMPLES`] values between
+    /// CT's whole range `range` (HU): at both ends and at 255 values between
     /// (the density is affine in HU; each piece of the law is a power, monotone between its
     /// joints, which are sampled too), so that no element gets an infinite modulus, or a
     /// NaN the floor would hide.

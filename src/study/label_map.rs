@@ -32,13 +32,19 @@ impl LabelReading {
 }
 
 /// Reads a label table: `label,name` rows (TotalSegmentator's classes, a Slicer color table
-/// exported as CSV), an optional header line.
+/// exported as CSV), an optional header line, a UTF-8 byte-order mark ignored.
 ///
 /// # Errors
-/// [`Error::Parse`] naming the file and the line.
+/// [`Error::Parse`] naming the file and the line; a number or a name (case aside) given twice
+/// names both lines.
 pub fn read_label_table(path: &Path) -> Result<LabelTable> {
     let text = crate::formats::read_input_text(path)?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut table = LabelTable::default();
+    // The line of each number and of each name (lower case), for the duplicates' message.
+    let mut line_of: std::collections::HashMap<i64, usize> = Default::default();
+    let mut line_of_name: std::collections::HashMap<String, usize> = Default::default();
+    let shown = |s: &str| crate::geometry::display_name(s);
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
@@ -48,16 +54,34 @@ pub fn read_label_table(path: &Path) -> Result<LabelTable> {
         let (a, b) = (cols.next().unwrap_or(""), cols.next().unwrap_or(""));
         match a.trim().parse::<i64>() {
             Ok(v) if !b.trim().is_empty() => {
-                table
-                    .names
-                    .insert(v, b.trim().trim_matches('"').to_string());
+                let name = b.trim().trim_matches('"').to_string();
+                if let Some(first) = line_of.insert(v, k + 1) {
+                    return Err(Error::parse(
+                        path,
+                        k + 1,
+                        format!("label {v} is named twice, on lines {first} and {}", k + 1),
+                    ));
+                }
+                if let Some(first) = line_of_name.insert(name.to_lowercase(), k + 1) {
+                    return Err(Error::parse(
+                        path,
+                        k + 1,
+                        format!(
+                            "the name {:?} is given twice, on lines {first} and {} (names are \
+                             compared without case)",
+                            shown(&name),
+                            k + 1
+                        ),
+                    ));
+                }
+                table.names.insert(v, name);
             }
             Err(_) if k == 0 => continue,
             _ => {
                 return Err(Error::parse(
                     path,
                     k + 1,
-                    format!("{line:?} is not a `label,name` row"),
+                    format!("{:?} is not a `label,name` row", shown(line)),
                 ));
             }
         }

@@ -258,9 +258,12 @@ fn gzip(b: &[u8]) -> Vec<u8> {
     e.finish().unwrap()
 }
 
+/// An image as another program reads it: its voxels (x fastest) and its affine (NIfTI only).
+type TheirImage = (Vec<f64>, Vec<Vec<f64>>);
+
 /// nibabel's (`.nii*`) or SimpleITK's (other) voxels of each file of `files`, in x-fastest
 /// order, and nibabel's affine (RAS) for NIfTI; `None` without the Python tools.
-fn voxels_by_python(files: &[PathBuf]) -> Option<Vec<(Vec<f64>, Vec<Vec<f64>>)>> {
+fn voxels_by_python(files: &[PathBuf]) -> Option<Vec<TheirImage>> {
     let py = common::python()?;
     let script = r#"
 import sys, json
@@ -443,6 +446,82 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
         crate::bad_input::fails(&o, 2, &["bomb.nii.gz", "decompression bomb"]);
     }
     assert!(!ply.exists() && !out.exists());
+}
+
+/// Labels are whole numbers compared as integers: an int64 label 2⁵³ + 1 beside a background
+/// of 2⁵³ (one number in `f64`) is told apart; a float map whose voxels are 1.0000001 is
+/// refused as no label numbers. Label tables: a byte-order mark does not hide the first
+/// row, a number or a name given twice is refused naming both lines, names are shown cut and
+/// without control characters.
+#[test]
+fn labels_are_integers_and_label_tables_say_each_name_once() {
+    let dir = common::temp_dir("label-numbers");
+    let (big, background) = ((1i64 << 53) + 1, 1i64 << 53);
+    let voxels: Vec<u8> = block()
+        .iter()
+        .flat_map(|&v| if v == 1 { big } else { background }.to_le_bytes())
+        .collect();
+    let path = dir.join("int64.nii");
+    std::fs::write(&path, nifti1([8, 8, 8], 1024, 64, [1.0; 3], true, &voxels)).unwrap();
+    let s = read_label_surface(&path, &label(&big.to_string())).unwrap();
+    let (lo, hi) = atlasmesh::geometry::bounding_box(&s.shape.points);
+    for k in 0..3 {
+        assert!(
+            (lo[k] - 0.5).abs() <= 0.5 && (hi[k] - 6.5).abs() <= 0.5,
+            "the label's surface is not the block's: {lo:?} {hi:?}"
+        );
+    }
+    let floats: Vec<u8> = block()
+        .iter()
+        .flat_map(|&v| if v == 1 { 1.000_000_1f32 } else { 0.0 }.to_le_bytes())
+        .collect();
+    let path = dir.join("float.nii");
+    std::fs::write(&path, nifti1([8, 8, 8], 16, 32, [1.0; 3], true, &floats)).unwrap();
+    let e = read_label_surface(&path, &label("1"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("float.nii") && e.contains("not a whole number"),
+        "{e}"
+    );
+    // Label tables.
+    let table = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        atlasmesh::study::read_label_table(&p)
+    };
+    let t = table("bom.csv", "\u{feff}1,vertebrae_L1\n2,vertebrae_L2\n").unwrap();
+    assert_eq!(t.name(1), Some("vertebrae_L1"));
+    for (name, text, want) in [
+        (
+            "number.csv",
+            "label,name\n1,a\n2,b\n1,c\n",
+            "label 1 is named twice, on lines 2 and 4",
+        ),
+        (
+            "name.csv",
+            "1,Femur\n2,tibia\n3,femur\n",
+            "given twice, on lines 1 and 3",
+        ),
+    ] {
+        let e = table(name, text).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains(want), "{name}: {e}");
+    }
+    let long = format!("1,\u{1b}[31m{}\n", "x".repeat(100_000));
+    let t = table("long.csv", &long).unwrap();
+    let reading = LabelReading {
+        choice: Some("nope".parse().unwrap()),
+        table: t,
+    };
+    let e = read_label_surface(&dir.join("int64.nii"), &reading)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.len() < 1000 && !e.contains('\u{1b}'),
+        "{} bytes: {:?}",
+        e.len(),
+        &e[..200]
+    );
 }
 
 /// A 6³ block of label 1 inside an 8³ image.

@@ -91,16 +91,43 @@ pub fn read_dicom_series(dir: &Path) -> Result<ImageFile> {
             ),
         ));
     }
-    let slices: Vec<Slice> = files.iter().map(|f| slice(f)).collect::<Result<_>>()?;
-    assemble(dir, slices)
+    let mut slices = Vec::new();
+    let mut notes = Vec::new();
+    for f in &files {
+        match slice(f)? {
+            Some(s) => slices.push(s),
+            None => notes.push(format!(
+                "{}: a DICOM object without pixel data (a report or a structured document?), \
+                 skipped",
+                f.display()
+            )),
+        }
+    }
+    if slices.is_empty() {
+        return Err(Error::parse(
+            dir,
+            0,
+            format!(
+                "no DICOM image in the folder ({} objects without pixel data)",
+                notes.len()
+            ),
+        ));
+    }
+    let mut image = assemble(dir, slices)?;
+    image.notes = notes;
+    Ok(image)
 }
 
-/// One file's slice.
-fn slice(file: &Path) -> Result<Slice> {
+/// One file's slice; `None` for an object without pixel data (a dose report, a structured
+/// document), which a viewer passes over too.
+fn slice(file: &Path) -> Result<Option<Slice>> {
     let bad = |m: String| Error::parse(file, 0, m);
     let obj: DefaultDicomObject = OpenFileOptions::new()
         .open_file(file)
         .map_err(|e| bad(format!("not a readable DICOM file: {e}")))?;
+    if obj.element(tags::PIXEL_DATA).is_err() {
+        return Ok(None);
+    }
     let text = |tag, what: &str| -> Result<String> {
         obj.element(tag)
             .ok()
@@ -125,13 +152,6 @@ fn slice(file: &Path) -> Result<Slice> {
             .and_then(|e| e.to_int::<i64>().ok())
             .ok_or_else(|| bad(format!("no {what}")))
     };
-    let opt_float = |tag, default: f64| {
-        obj.element(tag)
-            .ok()
-            .and_then(|e| e.to_float64().ok())
-            .filter(|v| v.is_finite())
-            .unwrap_or(default)
-    };
     if obj
         .element(tags::NUMBER_OF_FRAMES)
         .ok()
@@ -153,7 +173,9 @@ fn slice(file: &Path) -> Result<Slice> {
         "ImageOrientationPatient",
         6,
     )?;
+    orientation_is_a_frame(&o).map_err(bad)?;
     let s = floats(tags::PIXEL_SPACING, "PixelSpacing", 2)?;
+    let (slope, intercept) = rescale(&obj).map_err(bad)?;
     let rows = int(tags::ROWS, "Rows")?;
     let cols = int(tags::COLUMNS, "Columns")?;
     let bits = int(tags::BITS_ALLOCATED, "BitsAllocated")?;
@@ -171,7 +193,7 @@ fn slice(file: &Path) -> Result<Slice> {
             pixels.len()
         )));
     }
-    Ok(Slice {
+    Ok(Some(Slice {
         file: file.to_path_buf(),
         series: text(tags::SERIES_INSTANCE_UID, "SeriesInstanceUID")?,
         position: [p[0], p[1], p[2]],
@@ -179,12 +201,61 @@ fn slice(file: &Path) -> Result<Slice> {
         spacing: [s[0], s[1]],
         rows: rows as usize,
         cols: cols as usize,
-        slope: opt_float(tags::RESCALE_SLOPE, 1.0),
-        intercept: opt_float(tags::RESCALE_INTERCEPT, 0.0),
+        slope,
+        intercept,
         signed: int(tags::PIXEL_REPRESENTATION, "PixelRepresentation").unwrap_or(0) == 1,
         bits: bits as u16,
         pixels: pixels[..want].to_vec(),
-    })
+    }))
+}
+
+/// The slice's `RescaleSlope` and `RescaleIntercept`: an absent tag takes its default (1, 0);
+/// one present must be a finite number (a NaN was taken as the default, silently), and the
+/// slope not 0 (every voxel would be the intercept); the reason otherwise.
+fn rescale(obj: &DefaultDicomObject) -> std::result::Result<(f64, f64), String> {
+    let get = |tag, what: &str, default: f64| {
+        let Ok(e) = obj.element(tag) else {
+            return Ok(default);
+        };
+        match e.to_float64() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(format!(
+                "{what} {:?} is not a finite number",
+                e.to_str().map(|s| s.trim().to_string()).unwrap_or_default()
+            )),
+        }
+    };
+    let slope = get(tags::RESCALE_SLOPE, "RescaleSlope", 1.0)?;
+    if slope == 0.0 {
+        return Err("RescaleSlope 0 would give every voxel the same value (the intercept)".into());
+    }
+    Ok((
+        slope,
+        get(tags::RESCALE_INTERCEPT, "RescaleIntercept", 0.0)?,
+    ))
+}
+
+/// How far from unit length and from orthogonal `ImageOrientationPatient`'s two directions may
+/// be (the rounding of their decimal strings; GDCM's check is of the same order).
+const ORIENTATION_TOLERANCE: f64 = 1e-3;
+
+/// Checks that `o` (`ImageOrientationPatient`: the row, then the column direction) holds two
+/// orthogonal unit vectors; the reason otherwise.
+fn orientation_is_a_frame(o: &[f64]) -> std::result::Result<(), String> {
+    let (row, col) = ([o[0], o[1], o[2]], [o[3], o[4], o[5]]);
+    let norm = |v: [f64; 3]| crate::geometry::dot(v, v).sqrt();
+    let (nr, nc) = (norm(row), norm(col));
+    let cosine = crate::geometry::dot(row, col) / (nr * nc).max(f64::MIN_POSITIVE);
+    if (nr - 1.0).abs() > ORIENTATION_TOLERANCE
+        || (nc - 1.0).abs() > ORIENTATION_TOLERANCE
+        || cosine.abs() > ORIENTATION_TOLERANCE
+    {
+        return Err(format!(
+            "ImageOrientationPatient {o:?} is not two orthogonal unit directions (lengths \
+             {nr:.4} and {nc:.4}, cosine {cosine:.4})"
+        ));
+    }
+    Ok(())
 }
 
 /// The slices of one series as one image: checked alike, sorted along their normal, evenly
@@ -282,6 +353,7 @@ fn assemble(dir: &Path, mut slices: Vec<Slice>) -> Result<ImageFile> {
             file_convention: WorldConvention::Lps,
         },
         labels: LabelTable::default(),
+        notes: Vec::new(),
     })
 }
 

@@ -14,6 +14,9 @@ pub struct ImageFile {
     pub image: Image,
     /// The labels' names the file carries.
     pub labels: LabelTable,
+    /// What the reader passed over and the user should know (a DICOM folder's objects
+    /// without pixel data, skipped), one sentence each.
+    pub notes: Vec<String>,
 }
 
 /// The bytes a header announces, checked against the input limit before anything is

@@ -116,6 +116,7 @@ pub fn parse_metaimage(
             file_convention: WorldConvention::Lps,
         },
         labels: LabelTable::default(),
+        notes: Vec::new(),
     })
 }
 

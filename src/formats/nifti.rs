@@ -116,6 +116,7 @@ fn parse(path: &Path, bytes: std::borrow::Cow<'_, [u8]>) -> Result<ImageFile> {
     Ok(ImageFile {
         image,
         labels: LabelTable::default(),
+        notes: Vec::new(),
     })
 }
 

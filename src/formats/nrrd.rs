@@ -125,6 +125,7 @@ pub fn parse_nrrd(
     Ok(ImageFile {
         image,
         labels: segment_names(&pairs),
+        notes: Vec::new(),
     })
 }
 

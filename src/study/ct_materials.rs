@@ -163,15 +163,17 @@ fn read_ct_table(path: &Path) -> Result<BTreeMap<String, PathBuf>> {
     Ok(rows)
 }
 
-/// Reads a CT (any image atlasmesh reads, or a DICOM series' folder) as a field in HU.
+/// Reads a CT (any image atlasmesh reads, or a DICOM series' folder) as a field in HU, with
+/// the reader's notes (objects of a DICOM folder it passed over).
 ///
 /// # Errors
 /// The reader's errors; [`Error::Parameter`] naming the file for a voxel that is not a
 /// number.
-pub fn read_ct(path: &Path) -> Result<CtField> {
+pub fn read_ct(path: &Path) -> Result<(CtField, Vec<String>)> {
     let file = read_image(path)?;
-    CtField::new(&file.image)
-        .map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))
+    let field = CtField::new(&file.image)
+        .map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))?;
+    Ok((field, file.notes))
 }
 
 /// Reads a material recipe (TOML; see [`MaterialRecipe`]), checked.
@@ -194,12 +196,13 @@ pub fn map_ct<const D: usize>(
     recipe: &MaterialRecipe,
 ) -> Result<MaterialMap> {
     let resolved = recipe.law()?;
-    let field = read_ct(ct)?;
+    let (field, notes) = read_ct(ct)?;
     let mut map = map_materials(mesh, &field, &resolved).map_err(|e| match e {
         Error::Parameter(m) => Error::Parameter(format!("{}: {m}", ct.display())),
         e => e,
     })?;
     map.summary.ct = ct.display().to_string();
+    map.summary.warnings.extend(notes);
     Ok(map)
 }
 

@@ -115,6 +115,7 @@ pub fn read_label_surface(path: &Path, reading: &LabelReading) -> Result<LabelSu
     let labels = table.resolve(choice, &path.display().to_string())?;
     let mask = label_mask(&file.image, &labels, path, &table)?;
     let mut surface = label_surface(&file.image, &mask, &shape_name(path));
+    surface.warnings.extend(file.notes);
     surface.shape = prepare_surface(std::mem::replace(
         &mut surface.shape,
         Shape {

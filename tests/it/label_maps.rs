@@ -524,6 +524,147 @@ fn labels_are_integers_and_label_tables_say_each_name_once() {
     );
 }
 
+/// Writes DICOM series with pydicom (a good one of 4 slices of 6 × 8 int16 pixels with a
+/// structured report beside it, and bad ones), prints SimpleITK's reading of the good one.
+const DICOM_SERIES: &str = r#"
+import sys, os, numpy as np, pydicom
+from pydicom.dataset import Dataset, FileMetaDataset
+from pydicom.uid import ExplicitVRLittleEndian, generate_uid, CTImageStorage
+out = sys.argv[1]
+series = generate_uid()
+def slice_ds(k, **kw):
+    meta = FileMetaDataset()
+    meta.MediaStorageSOPClassUID = CTImageStorage
+    meta.MediaStorageSOPInstanceUID = generate_uid()
+    meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    ds = Dataset(); ds.file_meta = meta
+    ds.SOPClassUID = CTImageStorage; ds.SOPInstanceUID = meta.MediaStorageSOPInstanceUID
+    ds.Modality = "CT"; ds.SeriesInstanceUID = series; ds.StudyInstanceUID = series
+    ds.PatientName = "test"; ds.InstanceNumber = k + 1
+    ds.ImagePositionPatient = [-10.0, -20.0, 5.0 + 2.0 * k]
+    ds.ImageOrientationPatient = kw.get("orientation", [1, 0, 0, 0, 1, 0])
+    ds.PixelSpacing = [0.5, 0.75]
+    ds.Rows, ds.Columns = 8, 6
+    ds.SamplesPerPixel = 1; ds.PhotometricInterpretation = "MONOCHROME2"
+    ds.BitsAllocated = 16; ds.BitsStored = 16; ds.HighBit = 15; ds.PixelRepresentation = 1
+    ds.RescaleSlope = kw.get("slope", "1"); ds.RescaleIntercept = kw.get("intercept", "-1024")
+    px = (np.arange(48, dtype=np.int16).reshape(8, 6) * 10 + 100 * k).astype(np.int16)
+    ds.PixelData = px.tobytes()
+    return ds
+def write(folder, n, **kw):
+    os.makedirs(folder, exist_ok=True)
+    for k in range(n):
+        slice_ds(k, **kw).save_as(os.path.join(folder, f"s{k:02d}.dcm"), enforce_file_format=True)
+write(out + "/good", 4)
+# a structured report beside the series: no pixel data
+meta = FileMetaDataset(); meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.88.67"
+meta.MediaStorageSOPInstanceUID = generate_uid(); meta.TransferSyntaxUID = ExplicitVRLittleEndian
+sr = Dataset(); sr.file_meta = meta; sr.SOPClassUID = meta.MediaStorageSOPClassUID
+sr.SOPInstanceUID = meta.MediaStorageSOPInstanceUID; sr.Modality = "SR"; sr.SeriesInstanceUID = generate_uid()
+sr.save_as(out + "/good/dose_report.dcm", enforce_file_format=True)
+write(out + "/slope-nan", 4, slope="NaN")
+write(out + "/intercept-nan", 4, intercept="NaN")
+write(out + "/slope-zero", 1, slope="0")
+write(out + "/orientation-long", 4, orientation=[1, 1, 1, 0, 1, 0])
+write(out + "/orientation-zero", 4, orientation=[0, 0, 0, 0, 1, 0])
+write(out + "/orientation-parallel", 4, orientation=[1, 0, 0, 1, 0, 0])
+# SimpleITK's reading of the good series (the report left aside by its series reader)
+import SimpleITK as sitk, json
+r = sitk.ImageSeriesReader(); r.SetFileNames([out + f"/good/s{k:02d}.dcm" for k in range(4)])
+img = r.Execute()
+a = sitk.GetArrayFromImage(img).astype(float)  # z, y, x
+print(json.dumps({"values": a.flatten().tolist(), "origin": list(img.GetOrigin()), "spacing": list(img.GetSpacing()), "direction": list(img.GetDirection())}))
+"#;
+
+/// DICOM series: an object without pixel data beside the slices (a dose report) is passed
+/// over with a note, and the series reads the HU and the geometry SimpleITK reads; a rescale
+/// slope or intercept that is NaN, a slope of 0, and an orientation that is not two
+/// orthogonal unit directions (too long, zero, parallel) are refused, naming the file and the
+/// cause. Needs pydicom and SimpleITK (`ATLASMESH_PYTHON`).
+#[test]
+fn dicom_series_refuse_bad_rescales_and_orientations_and_skip_reports() {
+    let Some(py) = common::python() else {
+        return;
+    };
+    let dir = common::temp_dir("dicom-checks");
+    let o = common::run(
+        std::process::Command::new(py)
+            .arg("-W")
+            .arg("ignore")
+            .arg("-c")
+            .arg(DICOM_SERIES)
+            .arg(&*dir),
+        common::deadline::PYTHON,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let theirs: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let file = atlasmesh::formats::read_image(&dir.join("good")).unwrap();
+    assert!(
+        file.notes.len() == 1
+            && file.notes[0].contains("dose_report.dcm")
+            && file.notes[0].contains("without pixel data"),
+        "{:?}",
+        file.notes
+    );
+    let image = file.image;
+    assert_eq!(image.dims, [6, 8, 4]);
+    let values: Vec<f64> = theirs["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for (i, v) in values.iter().enumerate() {
+        assert!(
+            (image.value(i) - v).abs() <= 1e-9,
+            "voxel {i}: {} against {v}",
+            image.value(i)
+        );
+    }
+    // SimpleITK's origin and spacing are LPS; the image's affine is RAS.
+    let origin: Vec<f64> = theirs["origin"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let spacing: Vec<f64> = theirs["spacing"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let a = image.affine;
+    for r in 0..3 {
+        let sign = if r < 2 { -1.0 } else { 1.0 };
+        assert!(
+            (a[r][3] - sign * origin[r]).abs() <= 1e-9,
+            "origin {a:?} against {origin:?}"
+        );
+        assert!(
+            (a[r][r].abs() - spacing[r]).abs() <= 1e-9,
+            "spacing {a:?} against {spacing:?}"
+        );
+    }
+    for (folder, want) in [
+        ("slope-nan", "RescaleSlope \"NaN\" is not a finite number"),
+        (
+            "intercept-nan",
+            "RescaleIntercept \"NaN\" is not a finite number",
+        ),
+        ("slope-zero", "RescaleSlope 0"),
+        ("orientation-long", "is not two orthogonal unit directions"),
+        ("orientation-zero", "is not two orthogonal unit directions"),
+        ("orientation-parallel", "cosine 1.0000"),
+    ] {
+        let e = atlasmesh::formats::read_image(&dir.join(folder))
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(folder) && e.contains(want), "{folder}: {e}");
+    }
+}
+
 /// A 6³ block of label 1 inside an 8³ image.
 fn block() -> Vec<u8> {
     let mut v = vec![0u8; 512];
@@ -893,13 +1034,14 @@ fn a_dicom_folder_with_a_missing_slice_or_two_series_is_refused() {
         std::fs::copy(f, mixed.join(f.file_name().unwrap())).unwrap();
     }
     let one = mixed.join(files[3].file_name().unwrap());
+    let script = "import sys, pydicom; d = pydicom.dcmread(sys.argv[1]); d.SeriesInstanceUID = '1.2.826.0.1.3680043.8.498.1'; d.save_as(sys.argv[1])";
     let o = crate::common::run(
-std::process::Command::new(py)
-        .arg("-c")
-        .arg("import sys, pydicom; d = pydicom.dcmread(sys.argv[1]); d.SeriesInstanceUID = '1.2.826.0.1.3680043.8.498.1'; d.save_as(sys.argv[1])")
-        .arg(&one),
-crate::common::deadline::PYTHON,
-);
+        std::process::Command::new(py)
+            .arg("-c")
+            .arg(script)
+            .arg(&one),
+        crate::common::deadline::PYTHON,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let e = atlasmesh::formats::read_image(&mixed)
         .unwrap_err()

@@ -554,15 +554,14 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
             meshio_check(&py, &base, &reference, meshio_kind);
             // The same elements in every format (in any order: the .msh groups them by set):
             // meshio reorders Gmsh's mid-edge nodes to VTK's, as atlasmesh does.
+            let script = format!(
+                "import meshio, numpy as np\nb = {:?}\nc = [np.concatenate([x.data for x in meshio.read(b + '.' + e).cells if x.type == {meshio_kind:?}]) for e in ['vtu', 'msh', 'inp', 'vtk']]\nr = [sorted(map(tuple, x.tolist())) for x in c]\nprint(all(r[0] == x for x in r[1:]))",
+                s(&base)
+            );
             let o = crate::common::run(
-Command::new(&py)
-                .arg("-c")
-                .arg(format!(
-                    "import meshio, numpy as np\nb = {:?}\nc = [np.concatenate([x.data for x in meshio.read(b + '.' + e).cells if x.type == {meshio_kind:?}]) for e in ['vtu', 'msh', 'inp', 'vtk']]\nr = [sorted(map(tuple, x.tolist())) for x in c]\nprint(all(r[0] == x for x in r[1:]))",
-                    s(&base)
-                )),
-crate::common::deadline::PYTHON,
-);
+                Command::new(&py).arg("-c").arg(script),
+                crate::common::deadline::PYTHON,
+            );
             assert_eq!(
                 String::from_utf8_lossy(&o.stdout).trim(),
                 "True",

@@ -164,7 +164,8 @@ pub(super) fn inflate(path: &Path, data: &[u8], packing: Packing, limit: usize) 
 }
 
 /// A detached data file named in a header (`name`, as written there), beside the header:
-/// a plain file name, or a path relative to the header's folder that stays in it.
+/// a plain file name, or a path relative to the header's folder that stays in it, links
+/// resolved (a link out of the folder is refused as `../` is).
 pub(super) fn beside(header: &Path, name: &str) -> Result<PathBuf> {
     let rel = Path::new(name.trim());
     let plain = rel
@@ -179,7 +180,29 @@ pub(super) fn beside(header: &Path, name: &str) -> Result<PathBuf> {
             ),
         ));
     }
-    Ok(header.parent().unwrap_or(Path::new(".")).join(rel))
+    let folder = header.parent().unwrap_or(Path::new("."));
+    let folder = if folder.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        folder
+    };
+    let data = folder.join(rel);
+    // Both resolved: where the data file really is must be inside the header's folder. A
+    // file that does not exist is left to the read, which names it.
+    if let (Ok(real), Ok(home)) = (data.canonicalize(), folder.canonicalize())
+        && !real.starts_with(&home)
+    {
+        return Err(Error::parse(
+            header,
+            0,
+            format!(
+                "the data file {name:?} is a link to {}, outside the header's folder; the data \
+                 must be inside it",
+                real.display()
+            ),
+        ));
+    }
+    Ok(data)
 }
 
 /// Whether the gzip magic starts `b`.

@@ -241,12 +241,31 @@ fn ascii(
     let mut out = Vec::with_capacity(n * voxel_type.size());
     let mut count = 0;
     for t in text.split_whitespace().take(n) {
+        let shown = crate::geometry::display_name(&t.chars().take(40).collect::<String>());
         let v: f64 = t
             .parse()
-            .map_err(|_| Error::parse(path, 0, format!("data: {t:?} is not a number")))?;
+            .map_err(|_| Error::parse(path, 0, format!("data: {shown:?} is not a number")))?;
+        // A value the type cannot hold exactly is refused, never saturated or truncated.
+        let misfit = |what: &str| {
+            Error::parse(
+                path,
+                0,
+                format!("data: {shown:?} is {what} for the type {voxel_type:?}"),
+            )
+        };
         macro_rules! put {
             ($t:ty) => {{
                 let x = v as $t;
+                if !v.is_finite() && !voxel_type.is_float() {
+                    return Err(misfit("not a whole number"));
+                }
+                if <$t>::MIN as f64 <= v && v <= <$t>::MAX as f64 {
+                    if v.fract() != 0.0 && !voxel_type.is_float() {
+                        return Err(misfit("not a whole number"));
+                    }
+                } else if v.is_finite() {
+                    return Err(misfit("out of the range"));
+                }
                 out.extend_from_slice(&if little {
                     x.to_le_bytes()
                 } else {

@@ -297,7 +297,9 @@ print(json.dumps(out))
 /// voxels, a detached NRRD whose voxels end its data file (`byte skip: -1`). Refused, naming
 /// the cause: NRRD and MetaImage data a slice or more longer than their sizes (SimpleITK reads
 /// the first slices of it), a `vox_offset` inside the header, a qform quaternion that is not a
-/// rotation (nibabel refuses it), `dim[0]` outside 1..7 and a negative size.
+/// rotation (nibabel refuses it), `dim[0]` outside 1..7, a negative size, a detached data
+/// file linked from outside the header's folder, ASCII values the type cannot hold (300 as
+/// `uchar`, 20.7 as an integer: they were saturated and truncated).
 #[test]
 fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
     let dir = common::temp_dir("image-placement");
@@ -372,6 +374,14 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
     }
     let mut nine = good.clone();
     nine[40..42].copy_from_slice(&9i16.to_le_bytes());
+    // A detached data file that is a link out of the header's folder.
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    std::fs::write(dir.join("outside.raw"), block()).unwrap();
+    std::os::unix::fs::symlink("../outside.raw", dir.join("sub/link.raw")).unwrap();
+    let ascii = |data: &str| {
+        format!("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 1 1\nencoding: ascii\n\n{data}\n")
+            .into_bytes()
+    };
     let mut negative = good.clone();
     negative[46..48].copy_from_slice(&(-2i16).to_le_bytes());
     let refused: Vec<(&str, Vec<u8>, &str)> = vec![
@@ -407,6 +417,21 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
         ("quaternion.nii", quaternion, "is not a rotation"),
         ("nine.nii", nine, "dim[0] = 9"),
         ("negative.nii", negative, "dim[3] = -2"),
+        (
+            "sub/link.nhdr",
+            nrrd("8 8 8", "data file: link.raw\n"),
+            "outside the header's folder",
+        ),
+        (
+            "ascii-range.nrrd",
+            ascii("300 1"),
+            "\"300\" is out of the range",
+        ),
+        (
+            "ascii-fraction.nrrd",
+            ascii("20.7 1"),
+            "\"20.7\" is not a whole number",
+        ),
         // 1 GiB of voxels announced by 1 MB of zeros compressed (1 kB): refused before any
         // inflating (the input limit, 2 GiB, lets its size through).
         (

@@ -176,7 +176,8 @@ pub(super) fn beside(header: &Path, name: &str) -> Result<PathBuf> {
             header,
             0,
             format!(
-                "the data file {name:?} must be named relative to the header's folder, inside it"
+                "the data file {:?} must be named relative to the header's folder, inside it",
+                shown(name)
             ),
         ));
     }
@@ -196,13 +197,26 @@ pub(super) fn beside(header: &Path, name: &str) -> Result<PathBuf> {
             header,
             0,
             format!(
-                "the data file {name:?} is a link to {}, outside the header's folder; the data \
+                "the data file {:?} is a link to {}, outside the header's folder; the data \
                  must be inside it",
+                shown(name),
                 real.display()
             ),
         ));
     }
     Ok(data)
+}
+
+/// A piece of a header for a message: its first 80 characters (`…` after a longer one),
+/// control characters and bidirectional overrides shown as `�`; a 20 MB header line or
+/// binary taken for one is never echoed whole.
+pub(super) fn shown(s: &str) -> String {
+    let cut: String = s.chars().take(80).collect();
+    let mut out = crate::geometry::display_name(&cut);
+    if s.chars().nth(80).is_some() {
+        out.push('…');
+    }
+    out
 }
 
 /// Whether the gzip magic starts `b`.
@@ -214,8 +228,9 @@ pub(super) fn is_gzip(b: &[u8]) -> bool {
 pub(super) fn numbers<T: std::str::FromStr>(path: &Path, s: &str, what: &str) -> Result<Vec<T>> {
     s.split_whitespace()
         .map(|t| {
-            t.parse::<T>()
-                .map_err(|_| Error::parse(path, 0, format!("{what}: {t:?} is not a number")))
+            t.parse::<T>().map_err(|_| {
+                Error::parse(path, 0, format!("{what}: {:?} is not a number", shown(t)))
+            })
         })
         .collect()
 }

@@ -8,7 +8,7 @@
 //! (ITK's MetaIO).
 
 use super::image_data::{
-    ImageFile, Packing, Placement, announced_bytes, numbers, read_with_data_file, unpack,
+    ImageFile, Packing, Placement, announced_bytes, numbers, read_with_data_file, shown, unpack,
 };
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
@@ -78,7 +78,8 @@ pub fn parse_metaimage(
             path,
             0,
             format!(
-                "ElementDataFile {data_file:?}: one data file (or LOCAL) is read, not a list of slices"
+                "ElementDataFile {:?}: one data file (or LOCAL) is read, not a list of slices",
+                shown(data_file)
             ),
         ));
     } else {
@@ -176,7 +177,7 @@ fn header(path: &Path, bytes: &[u8]) -> Result<(HashMap<String, String>, usize)>
             return Err(Error::parse(
                 path,
                 line_no,
-                format!("not a `Key = Value` line: {line:?}"),
+                format!("not a `Key = Value` line: {:?}", shown(line)),
             ));
         };
         let key = k.trim().to_lowercase();

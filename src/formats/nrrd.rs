@@ -8,7 +8,7 @@
 //! the header is `key: value` lines (the NRRD0005 specification, teem.sourceforge.net).
 
 use super::image_data::{
-    ImageFile, Packing, Placement, announced_bytes, numbers, read_with_data_file, unpack,
+    ImageFile, Packing, Placement, announced_bytes, numbers, read_with_data_file, shown, unpack,
 };
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
@@ -49,21 +49,7 @@ pub fn parse_nrrd(
             format!("dimension {dimension} but {} sizes", sizes.len()),
         ));
     }
-    // A leading non-spatial axis of one sample (a one-layer segmentation) is allowed.
-    let spatial: Vec<usize> = match sizes.as_slice() {
-        [1, a, b, c] => vec![*a, *b, *c],
-        [a, b, c] => vec![*a, *b, *c],
-        _ => {
-            return Err(Error::parse(
-                path,
-                0,
-                format!(
-                    "sizes {sizes:?}: a 3D image is read (a segmentation of several layers is not)"
-                ),
-            ));
-        }
-    };
-    let dims = [spatial[0], spatial[1], spatial[2]];
+    let dims = spatial_dims(path, &sizes)?;
     let want = announced_bytes(path, &dims, voxel_type.size())?;
     // Up to a slice's bytes after the voxels are ignored (as ITK and teem read past them).
     let sized = Placement::Sized {
@@ -87,7 +73,10 @@ pub fn parse_nrrd(
             return Err(Error::parse(
                 path,
                 0,
-                format!("encoding {other:?} is not read (raw, gzip and ascii are)"),
+                format!(
+                    "encoding {:?} is not read (raw, gzip and ascii are)",
+                    shown(other)
+                ),
             ));
         }
     };
@@ -99,7 +88,8 @@ pub fn parse_nrrd(
                 path,
                 0,
                 format!(
-                    "space {other:?} is not read (left-posterior-superior and right-anterior-superior are)"
+                    "space {:?} is not read (left-posterior-superior and right-anterior-superior are)",
+                    shown(other)
                 ),
             ));
         }
@@ -158,7 +148,7 @@ fn header(path: &Path, bytes: &[u8]) -> Result<(Fields, Fields, usize)> {
             return Err(Error::parse(
                 path,
                 line_no,
-                format!("not a `field: value` line: {line:?}"),
+                format!("not a `field: value` line: {:?}", shown(line)),
             ));
         }
         if line_no > 10_000 {
@@ -170,6 +160,21 @@ fn header(path: &Path, bytes: &[u8]) -> Result<(Fields, Fields, usize)> {
         }
     }
     Ok((fields, pairs, at))
+}
+
+/// The three spatial sizes of `sizes`: a leading non-spatial axis of one sample (a one-layer
+/// segmentation) is allowed.
+fn spatial_dims(path: &Path, sizes: &[usize]) -> Result<[usize; 3]> {
+    match sizes {
+        [1, a, b, c] | [a, b, c] => Ok([*a, *b, *c]),
+        _ => Err(Error::parse(
+            path,
+            0,
+            format!(
+                "sizes {sizes:?}: a 3D image is read (a segmentation of several layers is not)"
+            ),
+        )),
+    }
 }
 
 /// The data after `byte skip` bytes, placed as `sized` ([`Placement::Sized`]), or, for
@@ -184,9 +189,9 @@ fn skip<'a>(
         None => Ok((data, sized)),
         Some("-1") => Ok((data, Placement::Last)),
         Some(n) => {
-            let n: usize = n
-                .parse()
-                .map_err(|_| Error::parse(path, 0, format!("byte skip {n:?} is not a count")))?;
+            let n: usize = n.parse().map_err(|_| {
+                Error::parse(path, 0, format!("byte skip {:?} is not a count", shown(n)))
+            })?;
             Ok((data.get(n..).unwrap_or(&[]), sized))
         }
     }
@@ -221,7 +226,10 @@ fn voxel_type(path: &Path, t: &str) -> Result<VoxelType> {
             return Err(Error::parse(
                 path,
                 0,
-                format!("type {other:?} is not read (integers, float, double are)"),
+                format!(
+                    "type {:?} is not read (integers, float, double are)",
+                    shown(other)
+                ),
             ));
         }
     })
@@ -312,13 +320,13 @@ fn affine(
         let v: Vec<f64> = inner
             .split(',')
             .map(|t| {
-                t.trim()
-                    .parse::<f64>()
-                    .map_err(|_| Error::parse(path, 0, format!("{what}: {s:?} is not a vector")))
+                t.trim().parse::<f64>().map_err(|_| {
+                    Error::parse(path, 0, format!("{what}: {:?} is not a vector", shown(s)))
+                })
             })
             .collect::<Result<_>>()?;
         <[f64; 3]>::try_from(v)
-            .map_err(|_| Error::parse(path, 0, format!("{what}: {s:?} is not a 3-vector")))
+            .map_err(|_| Error::parse(path, 0, format!("{what}: {:?} is not a 3-vector", shown(s))))
     };
     let cols: Vec<[f64; 3]> = match (directions, spacings) {
         (Some(d), _) => d

@@ -690,6 +690,91 @@ fn dicom_series_refuse_bad_rescales_and_orientations_and_skip_reports() {
     }
 }
 
+/// Messages about images stay short and on their lines: a 1 MB NRRD header line, and a
+/// MetaImage header followed by binary, are cut in the message; a label map and a mesh whose
+/// names hold a line break and `error: ...` or an escape code cannot start a line of
+/// `convert`'s or `materials`' output of their own.
+#[test]
+fn image_messages_are_cut_and_keep_to_their_lines() {
+    let dir = common::temp_dir("image-messages");
+    let long = dir.join("long.nrrd");
+    let mut bytes = b"NRRD0004\ntype: uchar\n".to_vec();
+    bytes.extend(std::iter::repeat_n(b'x', 1 << 20));
+    bytes.extend(b"\n\n");
+    std::fs::write(&long, &bytes).unwrap();
+    let binary = dir.join("binary.mhd");
+    let mut bytes = b"ObjectType = Image\nNDims = 3\n".to_vec();
+    bytes.extend((0..14_000u32).map(|i| (i % 200 + 32) as u8));
+    std::fs::write(&binary, &bytes).unwrap();
+    for path in [&long, &binary] {
+        let e = atlasmesh::formats::read_image(path)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(e.len() < 600, "{} bytes: {}", e.len(), &e[..600]);
+    }
+    // Names forging lines.
+    let good = nifti1([8, 8, 8], 2, 8, [1.0; 3], true, &block());
+    let forged = dir.join("a\nerror: forged\u{1b}[2J.nii");
+    std::fs::write(&forged, &good).unwrap();
+    let ct = dir.join("ct\nwarning: forged.nii");
+    let hu: Vec<u8> = (0..512).flat_map(|_| 700i16.to_le_bytes()).collect();
+    std::fs::write(&ct, nifti1([8, 8, 8], 4, 16, [1.0; 3], true, &hu)).unwrap();
+    let mesh = dir.join("m\nerror: forged.vtu");
+    let mut block_mesh = atlasmesh::mesh::FeMesh::block(2);
+    for p in &mut block_mesh.nodes {
+        for c in p.iter_mut() {
+            *c = 2.0 + 1.5 * *c;
+        }
+    }
+    atlasmesh::formats::write_vtu(&mesh, &block_mesh, None).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    for args in [
+        vec![
+            "convert".to_string(),
+            s(&forged),
+            s(&dir.join("o.ply")),
+            "--label".into(),
+            "1".into(),
+        ],
+        vec![
+            "convert".to_string(),
+            s(&forged),
+            s(&dir.join("o.ply")),
+            "--label".into(),
+            "9".into(),
+        ],
+        vec![
+            "materials".to_string(),
+            "--mesh".into(),
+            s(&mesh),
+            "--ct".into(),
+            s(&ct),
+            "--out".into(),
+            s(&dir.join("m-out")),
+        ],
+    ] {
+        let o = common::run(
+            std::process::Command::new(env!("CARGO_BIN_EXE_atlasmesh")).args(&args),
+            common::deadline::ATLASMESH,
+        );
+        let all =
+            String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+        eprintln!("{}: {all}", args[0]);
+        assert!(!all.is_empty(), "{args:?}: no output");
+        for line in all.lines() {
+            assert!(
+                !line.starts_with("error: forged") && !line.starts_with("warning: forged"),
+                "{args:?}: a name started a line: {all}"
+            );
+            assert!(
+                !line.contains('\u{1b}'),
+                "{args:?}: an escape code reached the terminal: {all:?}"
+            );
+        }
+    }
+}
+
 /// A 6³ block of label 1 inside an 8³ image.
 fn block() -> Vec<u8> {
     let mut v = vec![0u8; 512];

@@ -1,6 +1,7 @@
 //! `atlasmesh convert`: an FE mesh (or an atlas's mean mesh) in another format; a label
 //! map's label as a surface.
 
+use crate::terminal::safe;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -34,20 +35,23 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         let reading = atlasmesh::study::LabelReading::new(a.label, a.label_table.as_deref())?;
         let s = atlasmesh::study::convert_label_map(&a.input, &a.output, &reading)?;
         for w in &s.warnings {
-            eprintln!("warning: {}: {w}", a.input.display());
+            eprintln!("warning: {}", safe(&format!("{}: {w}", a.input.display())));
         }
         println!(
-            "{} -> {} ({} points, {} triangles, {} voxels{})",
-            a.input.display(),
-            a.output.display(),
-            s.shape.points.len(),
-            s.shape.facets.len(),
-            s.voxels,
-            if s.partial {
-                "; open where the image cuts it"
-            } else {
-                ""
-            }
+            "{}",
+            safe(&format!(
+                "{} -> {} ({} points, {} triangles, {} voxels{})",
+                a.input.display(),
+                a.output.display(),
+                s.shape.points.len(),
+                s.shape.facets.len(),
+                s.voxels,
+                if s.partial {
+                    "; open where the image cuts it"
+                } else {
+                    ""
+                }
+            ))
         );
         return Ok(());
     }
@@ -62,6 +66,9 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         .map(|f| atlasmesh::mesh::SetsConfig::read(&f))
         .transpose()?;
     atlasmesh::study::convert_mesh_file(&a.input, &a.output, sets.as_ref(), a.quadratic)?;
-    println!("{} -> {}", a.input.display(), a.output.display());
+    println!(
+        "{}",
+        safe(&format!("{} -> {}", a.input.display(), a.output.display()))
+    );
     Ok(())
 }

@@ -104,7 +104,7 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", terminal::safe(&format!("{e:#}")));
             let code = e
                 .downcast_ref::<atlasmesh::Error>()
                 .map(|e| e.exit_code())

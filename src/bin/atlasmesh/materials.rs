@@ -1,6 +1,7 @@
 //! `atlasmesh materials`: any FE mesh's bone materials from a CT (Bonemat's use: a mesh made
 //! elsewhere).
 
+use crate::terminal::safe;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -67,7 +68,7 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
         })?;
     let m = &r.materials;
     for w in &m.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", safe(w));
     }
     let metal = if m.metal_elements > 0 {
         format!(
@@ -77,7 +78,7 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
     } else {
         String::new()
     };
-    println!(
+    let line = format!(
         "{}: {} {} elements mapped on {}; mean HU {:.1} (volume-weighted); E {:.0} to {:.0} MPa \
          (median {:.0}) in {} materials{metal}; {} warnings",
         a.mesh.display(),
@@ -91,6 +92,10 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
         m.materials,
         m.warnings.len()
     );
-    println!("report: {}", a.out.join("report.json").display());
+    println!("{}", safe(&line));
+    println!(
+        "{}",
+        safe(&format!("report: {}", a.out.join("report.json").display()))
+    );
     Ok(())
 }

@@ -9,6 +9,23 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
+/// `s` as a terminal should show it: control characters (escapes, carriage returns) and
+/// bidirectional overrides as `�`, and every line after the first indented, so that nothing
+/// inside a message (a file name holding a line break and `error: ...`) starts a line of its
+/// own.
+pub fn safe(s: &str) -> String {
+    let hidden =
+        |c: char| c.is_control() || matches!(c, '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}');
+    s.trim_end_matches('\n')
+        .chars()
+        .map(|c| match c {
+            '\n' => "\n  ".to_string(),
+            c if hidden(c) => '\u{FFFD}'.to_string(),
+            c => c.to_string(),
+        })
+        .collect()
+}
+
 /// The [`Progress`] of the command line.
 pub struct Terminal {
     quiet: bool,

@@ -358,6 +358,20 @@ impl MaterialRecipe {
     /// # Errors
     /// [`Error::Parse`] naming the file, the line and the problem.
     pub fn parse(path: &Path, text: &str) -> Result<Self> {
+        // Refused before parsing: a recipe of millions of rods would be parsed whole before
+        // its count is checked.
+        if text.len() > MAX_RECIPE_BYTES {
+            return Err(Error::parse(
+                path,
+                0,
+                format!(
+                    "a recipe of {} kB; a recipe is a small TOML file (at most {} kB, \
+                     {MAX_ITEMS} rods and {MAX_ITEMS} law pieces)",
+                    text.len() >> 10,
+                    MAX_RECIPE_BYTES >> 10
+                ),
+            ));
+        }
         let r: MaterialRecipe = toml::from_str(text).map_err(|e| Error::toml(path, text, &e))?;
         r.law()
             .map_err(|e| Error::parse(path, 0, e.to_string().replace("parameter: ", "")))?;
@@ -434,6 +448,9 @@ impl MaterialRecipe {
         })
     }
 }
+
+/// The largest recipe text read, in bytes (a full recipe is about 2 kB).
+const MAX_RECIPE_BYTES: usize = 1 << 20;
 
 /// The values between the ends of a CT's range at which [`ResolvedRecipe::check_over`]
 /// evaluates the law.

@@ -563,3 +563,18 @@ fn a_law_or_calibration_without_a_finite_modulus_over_the_ct_is_refused() {
         .to_string();
     assert!(e.contains("not a finite modulus"), "{e}");
 }
+
+#[test]
+fn a_huge_recipe_is_refused_before_it_is_parsed() {
+    let text = format!(
+        "[calibration]\nrods = [{}]\n",
+        "{ hu = 0.0, density = 0.1 }, ".repeat(40_000)
+    );
+    let e = MaterialRecipe::parse(std::path::Path::new("huge.toml"), &text)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("huge.toml") && e.contains("at most 1024 kB"),
+        "{e}"
+    );
+}

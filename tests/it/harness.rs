@@ -18,6 +18,15 @@ fn ends(pid: u32) -> bool {
     true
 }
 
+/// The pid a shell wrote to `file`.
+fn pid_in(file: &std::path::Path) -> u32 {
+    std::fs::read_to_string(file)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
+}
+
 #[test]
 fn a_program_past_its_deadline_is_killed_with_its_children_and_reported() {
     let d = common::temp_dir("deadline");
@@ -34,11 +43,7 @@ fn a_program_past_its_deadline_is_killed_with_its_children_and_reported() {
     assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
     assert!(e.contains("killed at its deadline of 1 s"), "{e}");
     assert!(e.contains("started") && e.contains("waiting"), "{e}");
-    let child: u32 = std::fs::read_to_string(&pid_file)
-        .unwrap()
-        .trim()
-        .parse()
-        .unwrap();
+    let child = pid_in(&pid_file);
     assert!(
         ends(child),
         "the program's child {child} outlived the deadline"
@@ -64,11 +69,7 @@ fn a_program_past_its_deadline_is_killed_with_its_children_and_reported() {
         Duration::from_secs(30),
     );
     assert!(o.status.success());
-    let child: u32 = std::fs::read_to_string(&pid_file)
-        .unwrap()
-        .trim()
-        .parse()
-        .unwrap();
+    let child = pid_in(&pid_file);
     assert!(
         ends(child),
         "the child {child} left by a program outlived it"

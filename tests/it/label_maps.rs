@@ -601,6 +601,15 @@ a = sitk.GetArrayFromImage(img).astype(float)  # z, y, x
 print(json.dumps({"values": a.flatten().tolist(), "origin": list(img.GetOrigin()), "spacing": list(img.GetSpacing()), "direction": list(img.GetDirection())}))
 "#;
 
+/// The numbers of a JSON array.
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
 /// DICOM series: an object without pixel data beside the slices (a dose report) is passed
 /// over with a note, and the series reads the HU and the geometry SimpleITK reads; a rescale
 /// slope or intercept that is NaN, a slope of 0, and an orientation that is not two
@@ -633,12 +642,7 @@ fn dicom_series_refuse_bad_rescales_and_orientations_and_skip_reports() {
     );
     let image = file.image;
     assert_eq!(image.dims, [6, 8, 4]);
-    let values: Vec<f64> = theirs["values"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let values = numbers(&theirs["values"]);
     for (i, v) in values.iter().enumerate() {
         assert!(
             (image.value(i) - v).abs() <= 1e-9,
@@ -647,18 +651,8 @@ fn dicom_series_refuse_bad_rescales_and_orientations_and_skip_reports() {
         );
     }
     // SimpleITK's origin and spacing are LPS; the image's affine is RAS.
-    let origin: Vec<f64> = theirs["origin"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let spacing: Vec<f64> = theirs["spacing"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let origin = numbers(&theirs["origin"]);
+    let spacing = numbers(&theirs["spacing"]);
     let a = image.affine;
     for r in 0..3 {
         let sign = if r < 2 { -1.0 } else { 1.0 };

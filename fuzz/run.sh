@@ -5,7 +5,7 @@
 #   fuzz/run.sh SECONDS all           every target in fuzz_targets/
 #
 # A run takes about SECONDS × (number of targets) / 2 of wall time on two cores, plus the build
-# (all 19 targets for 600 s each: 100 minutes); the line before the run says how long.
+# (all 20 targets for 600 s each: 100 minutes); the line before the run says how long.
 # Crashes, hangs (10 s) and allocations above 2 GiB stop a target and are written to
 # fuzz/artifacts/TARGET/. With cargo-fuzz (`cargo install cargo-fuzz`) the targets are built
 # by it (RUSTC_BOOTSTRAP=1 lets a stable toolchain use the nightly flags it needs); without

@@ -67,6 +67,17 @@ pub(super) enum Placement {
     },
 }
 
+impl Placement {
+    /// [`Placement::Sized`] with one slice of slack: of `want` voxel bytes over `dims`, the
+    /// bytes of one `dims[0]` × `dims[1]` slice may follow the voxels (as ITK and teem read
+    /// past them).
+    pub(super) fn one_slice(want: usize, dims: [usize; 3]) -> Self {
+        Placement::Sized {
+            slack: want / dims[2].max(1),
+        }
+    }
+}
+
 /// Exactly `want` bytes of voxel data from `data`, unpacked, placed as `placement` says:
 /// never more than `want` (and the slack of [`Placement::Sized`]) is inflated, so that a
 /// decompression bomb stops at the size its header announces; fewer is an error naming what

@@ -67,10 +67,7 @@ pub fn parse_metaimage(
     let compressed = get("CompressedData").is_some_and(|v| v.trim().eq_ignore_ascii_case("true"));
     let data_file = need("ElementDataFile")?.trim();
     let detached_data;
-    // Up to a slice's bytes after the voxels are ignored (as ITK reads past them).
-    let mut placement = Placement::Sized {
-        slack: want / dims[2].max(1),
-    };
+    let mut placement = Placement::one_slice(want, dims);
     let stored: &[u8] = if data_file.eq_ignore_ascii_case("local") {
         &bytes[data_at..]
     } else if data_file.contains(' ') || data_file.eq_ignore_ascii_case("list") {

@@ -51,10 +51,7 @@ pub fn parse_nrrd(
     }
     let dims = spatial_dims(path, &sizes)?;
     let want = announced_bytes(path, &dims, voxel_type.size())?;
-    // Up to a slice's bytes after the voxels are ignored (as ITK and teem read past them).
-    let sized = Placement::Sized {
-        slack: want / dims[2].max(1),
-    };
+    let sized = Placement::one_slice(want, dims);
     let encoding = get("encoding").unwrap_or("raw").trim().to_lowercase();
     let data_file = get("data file").or(get("datafile"));
     let stored: Cow<'_, [u8]> = match data_file {

@@ -50,8 +50,8 @@ pub use point::{
 pub use principal_axes::{principal_axes_of, start_rotations};
 pub use query_memo::QueryMemo;
 pub use shape::{
-    Contour2, MAX_NAME_CHARS, REFERENCE_POINTS, Shape, Surface3, display_name, median_edge_length,
-    uv_sphere,
+    Contour2, MAX_NAME_CHARS, REFERENCE_POINTS, Shape, Surface3, display_name, hidden_char,
+    median_edge_length, uv_sphere,
 };
 pub use similarity::{Similarity, rotation_exp};
 pub use surface_distance::{SurfaceDistances, surface_distances};

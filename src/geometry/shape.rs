@@ -162,17 +162,21 @@ impl<const D: usize> Shape<D> {
 /// The longest shape name kept (characters); a longer one keeps its start and a checksum.
 pub const MAX_NAME_CHARS: usize = 200;
 
+/// Whether `c` must not reach a page or a terminal as it is: a control character, or an
+/// invisible one that reorders or hides text (bidirectional overrides and isolates,
+/// zero-width characters).
+pub fn hidden_char(c: char) -> bool {
+    c.is_control()
+        || matches!(c, '\u{061C}' | '\u{200B}'..='\u{200F}' | '\u{202A}'..='\u{202E}'
+            | '\u{2060}'..='\u{2069}' | '\u{FEFF}')
+}
+
 /// A shape's name as it may be shown (report titles, pages, messages, `report.json`):
 /// control characters and the invisible ones that reorder or hide text (bidirectional
 /// overrides and isolates, zero-width characters: display spoofing) replaced by `�`, and a
 /// name longer than [`MAX_NAME_CHARS`] cut with a checksum of the whole, so that two long
 /// names stay apart.
 pub fn display_name(name: &str) -> String {
-    let hidden = |c: char| {
-        c.is_control()
-            || matches!(c, '\u{061C}' | '\u{200B}'..='\u{200F}' | '\u{202A}'..='\u{202E}'
-                | '\u{2060}'..='\u{2069}' | '\u{FEFF}')
-    };
     let count = name.chars().count();
     let keep = if count > MAX_NAME_CHARS {
         MAX_NAME_CHARS - 9
@@ -182,7 +186,7 @@ pub fn display_name(name: &str) -> String {
     let mut s: String = name
         .chars()
         .take(keep)
-        .map(|c| if hidden(c) { '\u{FFFD}' } else { c })
+        .map(|c| if hidden_char(c) { '\u{FFFD}' } else { c })
         .collect();
     if count > MAX_NAME_CHARS {
         s.push_str(&format!("~{:08x}", crc32fast::hash(name.as_bytes())));

@@ -9,21 +9,20 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-/// `s` as a terminal should show it: control characters (escapes, carriage returns) and
-/// bidirectional overrides as `�`, and every line after the first indented, so that nothing
-/// inside a message (a file name holding a line break and `error: ...`) starts a line of its
-/// own.
+/// `s` as a terminal should show it: the characters a name may not show
+/// ([`atlasmesh::geometry::hidden_char`]: escapes, carriage returns, bidirectional overrides)
+/// as `�`, and every line after the first indented, so that nothing inside a message (a file
+/// name holding a line break and `error: ...`) starts a line of its own.
 pub fn safe(s: &str) -> String {
-    let hidden =
-        |c: char| c.is_control() || matches!(c, '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}');
-    s.trim_end_matches('\n')
-        .chars()
-        .map(|c| match c {
-            '\n' => "\n  ".to_string(),
-            c if hidden(c) => '\u{FFFD}'.to_string(),
-            c => c.to_string(),
-        })
-        .collect()
+    let mut out = String::with_capacity(s.len());
+    for c in s.trim_end_matches('\n').chars() {
+        match c {
+            '\n' => out.push_str("\n  "),
+            c if atlasmesh::geometry::hidden_char(c) => out.push('\u{FFFD}'),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// The [`Progress`] of the command line.

@@ -11,7 +11,7 @@ use super::image_data::ImageFile;
 use crate::error::{Error, Result};
 use crate::image::{Image, LabelTable, VoxelType, WorldConvention};
 use dicom_dictionary_std::tags;
-use dicom_object::{DefaultDicomObject, OpenFileOptions};
+use dicom_object::{DefaultDicomObject, OpenFileOptions, file::ReadPreamble};
 use dicom_pixeldata::PixelDecoder;
 use std::path::{Path, PathBuf};
 
@@ -93,9 +93,25 @@ pub fn read_dicom_series(dir: &Path) -> Result<ImageFile> {
     }
     let mut slices = Vec::new();
     let mut notes = Vec::new();
+    let mut decoded = 0u64;
     for f in &files {
         match slice(f)? {
-            Some(s) => slices.push(s),
+            Some(s) => {
+                // The image the slices make, within the input limit as they are decoded.
+                decoded += s.pixels.len() as u64;
+                if decoded > cap {
+                    return Err(Error::parse(
+                        dir,
+                        0,
+                        format!(
+                            "the slices decode to more than the input limit of {cap} bytes (at \
+                             {}; set ATLASMESH_MAX_INPUT_BYTES to raise it)",
+                            f.display()
+                        ),
+                    ));
+                }
+                slices.push(s)
+            }
             None => notes.push(format!(
                 "{}: a DICOM object without pixel data (a report or a structured document?), \
                  skipped",
@@ -122,8 +138,13 @@ pub fn read_dicom_series(dir: &Path) -> Result<ImageFile> {
 /// document), which a viewer passes over too.
 fn slice(file: &Path) -> Result<Option<Slice>> {
     let bad = |m: String| Error::parse(file, 0, m);
+    // Read once, every declared length checked against the bytes before the parser (which
+    // allocates a length before reading it) sees them.
+    let bytes = super::input::read_input(file)?;
+    super::dicom_lengths::check_declared_lengths(file, &bytes)?;
     let obj: DefaultDicomObject = OpenFileOptions::new()
-        .open_file(file)
+        .read_preamble(ReadPreamble::Always)
+        .from_reader(bytes.as_slice())
         .map_err(|e| bad(format!("not a readable DICOM file: {e}")))?;
     if obj.element(tags::PIXEL_DATA).is_err() {
         return Ok(None);
@@ -182,6 +203,7 @@ fn slice(file: &Path) -> Result<Option<Slice>> {
     if !matches!(bits, 8 | 16 | 32) || rows <= 0 || cols <= 0 {
         return Err(bad(format!("{rows} × {cols} pixels of {bits} bits")));
     }
+    within_budget(rows, cols, bits, bytes.len()).map_err(bad)?;
     let decoded = obj
         .decode_pixel_data()
         .map_err(|e| bad(format!("the pixel data does not decode: {e}")))?;
@@ -207,6 +229,31 @@ fn slice(file: &Path) -> Result<Option<Slice>> {
         bits: bits as u16,
         pixels: pixels[..want].to_vec(),
     }))
+}
+
+/// Checks that a slice of `rows` × `cols` pixels of `bits` bits fits the decoding budget of
+/// its file of `file_bytes` ([`super::input::decode_budget`]) before a codec allocates it (a
+/// JPEG slice may announce 65535 × 65535 pixels); the reason otherwise.
+fn within_budget(
+    rows: i64,
+    cols: i64,
+    bits: i64,
+    file_bytes: usize,
+) -> std::result::Result<(), String> {
+    let want = (rows.max(0) as usize)
+        .saturating_mul(cols.max(0) as usize)
+        .saturating_mul(bits.max(0) as usize / 8);
+    let budget = super::input::decode_budget(file_bytes);
+    if want > budget {
+        return Err(format!(
+            "{rows} × {cols} pixels of {bits} bits are {} MB, more than the {} MB a file of {} kB \
+             may decode to (set ATLASMESH_MAX_DECODED_BYTES to raise it)",
+            want >> 20,
+            budget >> 20,
+            file_bytes >> 10
+        ));
+    }
+    Ok(())
 }
 
 /// The slice's `RescaleSlope` and `RescaleIntercept`: an absent tag takes its default (1, 0);

@@ -20,7 +20,7 @@
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
 //! | `sets_file` | the sets file (TOML) |
 //! | `atlas_file` | the atlas file (safetensors) |
-//! | `image_file`, `image_data`, `nifti`, `nrrd`, `metaimage`, `dicom_series` | images (label maps, CT): the dispatch; what the readers share (decompression within the announced size); NIfTI-1/2, NRRD, MetaImage, DICOM series |
+//! | `image_file`, `image_data`, `nifti`, `nrrd`, `metaimage`, `dicom_series`, `dicom_lengths` | images (label maps, CT): the dispatch; what the readers share (decompression within the announced size); NIfTI-1/2, NRRD, MetaImage, DICOM series; a DICOM file's declared lengths checked before it is parsed |
 //! | `input` | input files: regular files only, of bounded size |
 //! | `atomic` | output folders and atomic writes |
 
@@ -29,6 +29,7 @@ pub mod atlas_file;
 mod atomic;
 pub mod csv_table;
 mod deck;
+mod dicom_lengths;
 pub mod dicom_series;
 pub mod fe_mesh;
 pub mod febio;

@@ -48,6 +48,13 @@ fn run(target: &str, data: &[u8], dir: &Path) {
             let _ = atlasmesh::model::Atlas::<2>::load(&p);
             let _ = atlasmesh::model::Atlas::<3>::load(&p);
         }
+        "dicom" => {
+            // The bytes as the one file of a DICOM folder.
+            let folder = dir.join("dicom");
+            std::fs::create_dir_all(&folder).unwrap();
+            std::fs::write(folder.join("input.dcm"), data).unwrap();
+            let _ = atlasmesh::formats::dicom_series::read_dicom_series(&folder);
+        }
         other => panic!("no reader for fuzz target {other}"),
     }
 }

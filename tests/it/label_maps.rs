@@ -258,6 +258,13 @@ fn gzip(b: &[u8]) -> Vec<u8> {
     e.finish().unwrap()
 }
 
+fn zlib(b: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    let mut e = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(b).unwrap();
+    e.finish().unwrap()
+}
+
 /// An image as another program reads it: its voxels (x fastest) and its affine (NIfTI only).
 type TheirImage = (Vec<f64>, Vec<Vec<f64>>);
 
@@ -437,6 +444,25 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
         (
             "bomb.nii.gz",
             gzip(&nifti1([1024; 3], 2, 8, [1.0; 3], true, &[0u8; 1 << 20])),
+            "decompression bomb",
+        ),
+        // The same through NRRD's gzip and MetaImage's zlib encodings.
+        (
+            "bomb.nrrd",
+            [
+                &b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1024 1024 1024\nencoding: gzip\n\n"[..],
+                &gzip(&[0u8; 1 << 20]),
+            ]
+            .concat(),
+            "decompression bomb",
+        ),
+        (
+            "bomb.mha",
+            [
+                &b"ObjectType = Image\nNDims = 3\nDimSize = 1024 1024 1024\nElementType = MET_UCHAR\nCompressedData = True\nElementDataFile = LOCAL\n"[..],
+                &zlib(&[0u8; 1 << 20]),
+            ]
+            .concat(),
             "decompression bomb",
         ),
     ];
@@ -681,6 +707,57 @@ fn dicom_series_refuse_bad_rescales_and_orientations_and_skip_reports() {
             .unwrap_err()
             .to_string();
         assert!(e.contains(folder) && e.contains(want), "{folder}: {e}");
+    }
+}
+
+/// A DICOM file's declared lengths are checked before it is parsed: a slice whose Pixel Data
+/// declares 1.97 GB in a 640-byte file (the fuzzer's finding; the parser reserved and zeroed
+/// the length before reading), and a slice announcing 65535 × 65535 pixels, are refused with
+/// their cause, by the reader and by `materials` in 1 GiB of address space, nothing written;
+/// the slice they were made from reads.
+#[test]
+fn dicom_lengths_and_sizes_beyond_the_file_are_refused_before_parsing() {
+    let dir = common::temp_dir("dicom-lengths");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let seed = std::fs::read(root.join("fuzz/seeds/dicom/ct_int16.dcm")).unwrap();
+    let declared =
+        std::fs::read(root.join("fuzz/regressions/dicom/oom-declared-length-pixel-data")).unwrap();
+    // Rows and Columns (0028,0010) and (0028,0011), US, set to 65535.
+    let mut huge = seed.clone();
+    for element in [0x10u8, 0x11] {
+        let tag = [0x28, 0x00, element, 0x00, b'U', b'S', 2, 0];
+        let at = huge.windows(8).position(|w| w == tag).unwrap() + 8;
+        huge[at..at + 2].copy_from_slice(&[0xFF, 0xFF]);
+    }
+    let mesh = dir.join("block.vtu");
+    atlasmesh::formats::write_vtu(&mesh, &atlasmesh::mesh::FeMesh::block(2), None).unwrap();
+    for (name, bytes, want) in [
+        ("seed", seed, ""),
+        ("declared", declared, "declares 1968046082 bytes"),
+        ("huge", huge, "65535 × 65535 pixels of 16 bits"),
+    ] {
+        let folder = dir.join(name);
+        std::fs::create_dir_all(&folder).unwrap();
+        std::fs::write(folder.join("slice.dcm"), &bytes).unwrap();
+        let read = atlasmesh::formats::read_image(&folder);
+        if want.is_empty() {
+            assert_eq!(read.unwrap().image.dims[2], 1, "{name}");
+            continue;
+        }
+        let e = read.map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("slice.dcm") && e.contains(want), "{name}: {e}");
+        let out = dir.join(format!("{name}-out"));
+        let o = crate::hostile_outputs::in_1gib(&[
+            "materials",
+            "--mesh",
+            mesh.to_str().unwrap(),
+            "--ct",
+            folder.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        crate::bad_input::fails(&o, 2, &["slice.dcm", want]);
+        assert!(!out.exists(), "{name}: an output folder was left");
     }
 }
 

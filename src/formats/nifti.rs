@@ -26,6 +26,7 @@ pub fn read_nifti(path: &Path) -> Result<ImageFile> {
 struct Header {
     dims: Vec<usize>,
     datatype: i16,
+    bitpix: i16,
     pixdim: [f64; 8],
     vox_offset: usize,
     slope: f64,
@@ -113,10 +114,24 @@ fn parse(path: &Path, bytes: std::borrow::Cow<'_, [u8]>) -> Result<ImageFile> {
         affine: affine(path, &h)?,
         file_convention: WorldConvention::Ras,
     };
+    // The datatype decides the voxels' size; a `bitpix` that disagrees is read past with a
+    // note, as nibabel reads it (its header check fixes bitpix from the datatype).
+    let bits = voxel_type.size() * 8;
+    let notes = if i64::from(h.bitpix) == bits as i64 {
+        Vec::new()
+    } else {
+        vec![format!(
+            "{}: bitpix {} disagrees with datatype {} ({bits} bits); the voxels are read as the \
+             datatype says",
+            crate::geometry::display_name(&path.display().to_string()),
+            h.bitpix,
+            h.datatype
+        )]
+    };
     Ok(ImageFile {
         image,
         labels: LabelTable::default(),
-        notes: Vec::new(),
+        notes,
     })
 }
 
@@ -164,6 +179,7 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
                 .map(|k| axis(path, k, i64::from(r.i16(40 + 2 * k))))
                 .collect::<Result<_>>()?,
             datatype: r.i16(70),
+            bitpix: r.i16(72),
             pixdim: std::array::from_fn(|k| r.f32(76 + 4 * k)),
             vox_offset: nonneg(path, r.f32(108), "vox_offset")?,
             slope: r.f32(112),
@@ -193,6 +209,7 @@ fn header(path: &Path, b: &[u8]) -> Result<Header> {
                 .map(|k| axis(path, k, r.i64(16 + 8 * k)))
                 .collect::<Result<_>>()?,
             datatype: r.i16(12),
+            bitpix: r.i16(14),
             pixdim: std::array::from_fn(|k| r.f64(104 + 8 * k)),
             vox_offset: usize::try_from(r.i64(168))
                 .map_err(|_| Error::parse(path, 0, "vox_offset is negative"))?,

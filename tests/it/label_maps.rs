@@ -300,7 +300,8 @@ print(json.dumps(out))
 /// Voxels come from where the header says they start, and the header's sizes are checked
 /// against the data. Odd but valid files read the voxels nibabel and SimpleITK read: a NIfTI
 /// with a byte after its volume (plain and gzip), one holding a second volume its
-/// `dim[0] = 3` does not describe, an NRRD and a MetaImage with a line end after their
+/// `dim[0] = 3` does not describe, one whose bitpix disagrees with its datatype (read by the
+/// datatype, with a note), an NRRD and a MetaImage with a line end after their
 /// voxels, a detached NRRD whose voxels end its data file (`byte skip: -1`). Refused, naming
 /// the cause: NRRD and MetaImage data a slice or more longer than their sizes (SimpleITK reads
 /// the first slices of it), a `vox_offset` inside the header, a qform quaternion that is not a
@@ -325,6 +326,10 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
         ("trailing.nii", trailing.clone()),
         ("trailing.nii.gz", gzip(&trailing)),
         ("two-volumes.nii", two_volumes),
+        (
+            "bitpix.nii",
+            nifti1([8, 8, 8], 2, 16, [1.0, 1.0, 2.0], true, &block()),
+        ),
         ("newline.nrrd", with(&nrrd("8 8 8", ""), b"\n")),
         ("newline.mhd", with(mhd, b"\n")),
         (
@@ -336,9 +341,14 @@ fn voxels_come_from_where_the_header_says_and_its_sizes_fit_the_data() {
     for (name, bytes) in &valid {
         let path = dir.join(name);
         std::fs::write(&path, bytes).unwrap();
-        let image = atlasmesh::formats::read_image(&path)
-            .unwrap_or_else(|e| panic!("{name}: {e}"))
-            .image;
+        let file = atlasmesh::formats::read_image(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        // A bitpix that disagrees with the datatype is read past with a note naming both.
+        let noted = file
+            .notes
+            .iter()
+            .any(|n| n.contains("bitpix 16 disagrees with datatype 2 (8 bits)"));
+        assert_eq!(noted, *name == "bitpix.nii", "{name}: {:?}", file.notes);
+        let image = file.image;
         assert_eq!(image.dims, [8, 8, 8], "{name}");
         assert!(
             image.data == block(),

@@ -301,6 +301,21 @@ impl<'a> Walk<'a> {
                 }
             ));
         }
+        // The parser reads whole values of a binary VR and moves on by the declared length:
+        // a length that is not a whole number of values leaves it reading the next header
+        // from inside this value (pydicom refuses such a value too).
+        if let Some(size) = h.vr.and_then(value_size)
+            && !(h.len as usize).is_multiple_of(size)
+        {
+            return Err(format!(
+                "the element {} at byte {} declares {} bytes, not a whole number of {:?} values \
+                 of {size} bytes",
+                tag_text(h.tag),
+                self.base + h.at,
+                h.len,
+                h.vr.unwrap_or(VR::UN)
+            ));
+        }
         self.take(h.len as usize)
     }
 
@@ -449,6 +464,16 @@ impl<'a> Walk<'a> {
     }
 }
 
+/// The size of one value of a binary VR (PS3.5 Table 6.2-1); `None` for text and bytes.
+fn value_size(vr: VR) -> Option<usize> {
+    match vr {
+        VR::US | VR::SS | VR::OW => Some(2),
+        VR::UL | VR::SL | VR::FL | VR::AT | VR::OF | VR::OL => Some(4),
+        VR::FD | VR::OD | VR::OV | VR::SV | VR::UV => Some(8),
+        _ => None,
+    }
+}
+
 /// `(gggg,eeee)`.
 fn tag_text(t: Tag) -> String {
     format!("({:04X},{:04X})", t.0, t.1)
@@ -530,6 +555,22 @@ mod tests {
         let n = meta.len();
         meta[n - 22..n - 20].copy_from_slice(&0xFFF0u16.to_le_bytes());
         assert!(check(&meta).is_err());
+    }
+
+    #[test]
+    fn a_binary_value_of_a_broken_length_is_refused() {
+        // SamplesPerPixel as UL of 2 bytes (the fuzzer's finding: the parser read no value,
+        // moved its count on by 2, and took the next bytes for a header declaring 1.3 GB).
+        let mut v = vec![0x28, 0x00, 0x02, 0x00, b'U', b'L', 2, 0, 1, 0];
+        v.extend_from_slice(&[0x28, 0x00, 0x04, 0x00, b'C', b'S', 2, 0, b'M', b'O']);
+        let e = check(&file(EXPLICIT, &v)).unwrap_err();
+        assert!(
+            e.contains("(0028,0002)") && e.contains("whole number of UL"),
+            "{e}"
+        );
+        // As US, 2 bytes are one value.
+        v[4..6].copy_from_slice(b"US");
+        check(&file(EXPLICIT, &v)).unwrap();
     }
 
     #[test]

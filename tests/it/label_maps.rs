@@ -722,7 +722,9 @@ fn dicom_series_refuse_bad_rescales_and_orientations_and_skip_reports() {
 
 /// A DICOM file's declared lengths are checked before it is parsed: a slice whose Pixel Data
 /// declares 1.97 GB in a 640-byte file (the fuzzer's finding; the parser reserved and zeroed
-/// the length before reading), and a slice announcing 65535 × 65535 pixels, are refused with
+/// the length before reading), a value of a binary VR whose length is not a whole number of
+/// values (the parser lost its place and read 1.3 GB from a text value), and a slice
+/// announcing 65535 × 65535 pixels, are refused with
 /// their cause, by the reader and by `materials` in 1 GiB of address space, nothing written;
 /// the slice they were made from reads.
 #[test]
@@ -732,6 +734,12 @@ fn dicom_lengths_and_sizes_beyond_the_file_are_refused_before_parsing() {
     let seed = std::fs::read(root.join("fuzz/seeds/dicom/ct_int16.dcm")).unwrap();
     let declared =
         std::fs::read(root.join("fuzz/regressions/dicom/oom-declared-length-pixel-data")).unwrap();
+    // SamplesPerPixel as UL of 2 bytes: the parser read the next bytes as a header declaring
+    // 1.3 GB.
+    let desync = std::fs::read(
+        root.join("fuzz/regressions/dicom/timeout-desynchronized-binary-value-length"),
+    )
+    .unwrap();
     // Rows and Columns (0028,0010) and (0028,0011), US, set to 65535.
     let mut huge = seed.clone();
     for element in [0x10u8, 0x11] {
@@ -745,6 +753,7 @@ fn dicom_lengths_and_sizes_beyond_the_file_are_refused_before_parsing() {
         ("seed", seed, ""),
         ("declared", declared, "declares 1968046082 bytes"),
         ("huge", huge, "65535 × 65535 pixels of 16 bits"),
+        ("desync", desync, "not a whole number of UL values"),
     ] {
         let folder = dir.join(name);
         std::fs::create_dir_all(&folder).unwrap();

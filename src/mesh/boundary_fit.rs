@@ -29,6 +29,60 @@ pub struct BoundaryFit {
     pub left: usize,
     /// The largest move of a boundary node (mesh units).
     pub largest_move: f64,
+    /// Boundary nodes pulled to a subject point the projection left far behind.
+    pub pulled: usize,
+}
+
+/// Rounds of pulls of the subject's far points.
+const PULL_ROUNDS: usize = 3;
+
+/// A subject point farther than this many median boundary edges from the projected boundary
+/// pulls the boundary node nearest to it.
+const PULL_FROM_EDGES: f64 = 1.0;
+
+/// The pulls of the subject's far points on a boundary (`points`, `facets`, its vertex
+/// `normals`) already projected onto the subject: every subject point farther than
+/// [`PULL_FROM_EDGES`] median edges from it claims the boundary point nearest to it, where
+/// the two face the same way (compatible normals: never a point of the far side of a thin
+/// part); a point claimed several times goes to its farthest claimant (the tip). Returns
+/// (boundary point, subject point) pairs.
+fn far_pulls<const D: usize>(
+    points: &[Point<D>],
+    facets: &[[usize; D]],
+    normals: &[Point<D>],
+    subject: &ClosestPointIndex<D>,
+) -> Vec<(usize, Point<D>)> {
+    let from = PULL_FROM_EDGES * crate::geometry::median_edge_length(points, facets);
+    if from.is_nan() || from <= 0.0 || facets.is_empty() {
+        return Vec::new();
+    }
+    let on_boundary = ClosestPointIndex::new(points, facets);
+    let mut subject_normals = Vec::new();
+    subject.vertex_normals_into(&mut subject_normals);
+    let mut claims: HashMap<usize, (f64, Point<D>)> = HashMap::new();
+    for (q, m) in subject.points().iter().zip(&subject_normals) {
+        let c = on_boundary.closest(q);
+        let d = c.dist2.sqrt();
+        if d.is_nan() || d <= from {
+            continue;
+        }
+        let Some(corners) = on_boundary.facet_vertices(&c) else {
+            continue;
+        };
+        let nearest = (0..D)
+            .max_by(|&a, &b| c.weights[a].total_cmp(&c.weights[b]))
+            .map_or(corners[0], |j| corners[j]);
+        if dot(*m, normals[nearest]) < COMPATIBLE_NORMALS_COS {
+            continue;
+        }
+        let e = claims.entry(nearest).or_insert((0.0, *q));
+        if d > e.0 {
+            *e = (d, *q);
+        }
+    }
+    let mut pulls: Vec<(usize, Point<D>)> = claims.into_iter().map(|(k, (_, q))| (k, q)).collect();
+    pulls.sort_unstable_by_key(|&(k, _)| k);
+    pulls
 }
 
 /// The mesh's boundary as a shape over its corner nodes, and the mesh node of each of its
@@ -94,6 +148,7 @@ pub fn fit_boundary<const D: usize>(
     let nn = mesh.nodes.len();
     let mut disp = vec![[0.0; D]; nn];
     let mut fixed = vec![false; nn];
+    let mut projected = vec![false; nn];
     for (((&n, p), t), normal) in nodes
         .iter()
         .zip(&boundary.points)
@@ -110,10 +165,43 @@ pub fn fit_boundary<const D: usize>(
         let kept = keep.get(n).copied().unwrap_or(false);
         if !kept && d2.sqrt() <= reach && compatible && t.point.iter().all(|v| v.is_finite()) {
             disp[n] = std::array::from_fn(|d| t.point[d] - p[d]);
+            projected[n] = true;
             report.moved += 1;
             report.largest_move = report.largest_move.max(d2.sqrt());
         } else {
             report.left += 1;
+        }
+    }
+    // Subject points the projected boundary leaves far behind (the tips of processes a
+    // smooth morph leaves short): each pulls the boundary node nearest to it, in rounds (a
+    // node pulled to a tip brings the next far points within reach of its neighbours).
+    let mut pulled = vec![false; nn];
+    for _ in 0..PULL_ROUNDS {
+        let moved_to: Vec<Point<D>> = nodes
+            .iter()
+            .zip(&boundary.points)
+            .map(|(&n, p)| std::array::from_fn(|d| p[d] + disp[n][d]))
+            .collect();
+        let mut any = false;
+        for (k, q) in far_pulls(&moved_to, &boundary.facets, &normals, subject) {
+            let n = nodes[k];
+            let p = boundary.points[k];
+            let d = dist2(p, q).sqrt();
+            if pulled[n] || keep.get(n).copied().unwrap_or(false) || d > reach {
+                continue;
+            }
+            if !projected[n] {
+                report.moved += 1;
+                report.left -= 1;
+            }
+            disp[n] = std::array::from_fn(|j| q[j] - p[j]);
+            pulled[n] = true;
+            any = true;
+            report.pulled += 1;
+            report.largest_move = report.largest_move.max(d);
+        }
+        if !any {
+            break;
         }
     }
     // Each node's neighbours along element edges.
@@ -157,6 +245,49 @@ pub fn fit_boundary<const D: usize>(
 mod tests {
     use super::*;
     use crate::mesh::boundary_surface;
+
+    /// A 5 × 5 grid of unit squares at height `z`, split into triangles facing +z (or -z
+    /// when `flip`), with its vertex (2, 2) raised by `spike`.
+    fn grid(spike: f64, flip: bool) -> (Vec<Point<3>>, Vec<[usize; 3]>) {
+        let mut points = Vec::new();
+        for j in 0..5 {
+            for i in 0..5 {
+                let up = if (i, j) == (2, 2) { spike } else { 0.0 };
+                points.push([i as f64, j as f64, up]);
+            }
+        }
+        let mut facets = Vec::new();
+        for j in 0..4 {
+            for i in 0..4 {
+                let v = j * 5 + i;
+                for t in [[v, v + 1, v + 6], [v, v + 6, v + 5]] {
+                    facets.push(if flip { [t[0], t[2], t[1]] } else { t });
+                }
+            }
+        }
+        (points, facets)
+    }
+
+    #[test]
+    fn a_far_subject_point_pulls_the_nearest_boundary_node_unless_it_faces_away() {
+        let (boundary, facets) = grid(0.0, false);
+        let normals = vertex_normals(&boundary, &facets);
+        // The subject: the same grid with a tip 3 edges up at (2, 2): it pulls node 12.
+        let (tip, tip_facets) = grid(3.0, false);
+        let subject = ClosestPointIndex::new(&tip, &tip_facets);
+        assert_eq!(
+            far_pulls(&boundary, &facets, &normals, &subject),
+            vec![(12, [2.0, 2.0, 3.0])]
+        );
+        // A tip 0.5 edges up is within reach of the boundary as it is: no pull.
+        let (low, low_facets) = grid(0.5, false);
+        let subject = ClosestPointIndex::new(&low, &low_facets);
+        assert!(far_pulls(&boundary, &facets, &normals, &subject).is_empty());
+        // The far side of a thin part (its facets face the other way): no pull.
+        let (back, back_facets) = grid(3.0, true);
+        let subject = ClosestPointIndex::new(&back, &back_facets);
+        assert!(far_pulls(&boundary, &facets, &normals, &subject).is_empty());
+    }
 
     #[test]
     fn a_blocks_boundary_is_moved_onto_a_larger_box_and_its_interior_follows() {

@@ -105,6 +105,14 @@ impl ModulusLaw {
             "Morgan, Bayraktar & Keaveny 2003, J Biomech 36:897 (all sites pooled)",
         ),
         (
+            "kopperdahl-2002-vertebra",
+            DensityKind::Qct,
+            &[power(2980.0, 1.05)],
+            "Kopperdahl & Keaveny's law for vertebral trabecular bone, E = 2980 rho_QCT^1.05 \
+             (rho_QCT the K2HPO4-equivalent density of a calibrated QCT), as the spine FE \
+             benchmark of Walle, Matheson & Boyd 2025 (GigaScience) uses it",
+        ),
+        (
             "keller-1994-femur",
             DensityKind::Ash,
             &[power(10500.0, 2.29)],

@@ -8,7 +8,7 @@ use super::density_law::DensityKind;
 use super::element_integral::{
     ElementIntegral, ElementRule, IntegrationScratch, integrate_element,
 };
-use super::recipe::{Calibration, IntegrationMethod, MaterialRecipe, ResolvedRecipe};
+use super::recipe::{Calibration, ImageValues, IntegrationMethod, MaterialRecipe, ResolvedRecipe};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use crate::mesh::FeMesh;
@@ -320,21 +320,23 @@ fn warnings(s: &MaterialSummary, recipe: &ResolvedRecipe) -> Vec<String> {
     let r = &recipe.recipe;
     let mut w = Vec::new();
     let share = |n: usize| 100.0 * n as f64 / s.elements.max(1) as f64;
-    if s.metal_elements > 0 {
+    // An image of density: the checks in HU (metal, rescale, air, soft tissue) do not apply.
+    let hu = recipe.calibration.image == ImageValues::Hu;
+    if hu && s.metal_elements > 0 {
         w.push(format!(
             "metal: {} elements hold values above {} HU (up to {:.0} HU), an implant or its \
              streaks; their E is not bone's",
             s.metal_elements, r.checks.metal_hu, s.hu_max
         ));
     }
-    if s.ct_range[0] >= 0.0 {
+    if hu && s.ct_range[0] >= 0.0 {
         w.push(format!(
             "the CT's values range over [{:.0}, {:.0}] with none below 0: not rescaled to HU \
              (air is -1000 HU)? Check the file's rescale slope and intercept",
             s.ct_range[0], s.ct_range[1]
         ));
     }
-    if s.air_elements > 0 {
+    if hu && s.air_elements > 0 {
         w.push(format!(
             "{} elements ({:.1} %) average below {} HU: air inside the bone's mesh",
             s.air_elements,
@@ -358,7 +360,7 @@ fn warnings(s: &MaterialSummary, recipe: &ResolvedRecipe) -> Vec<String> {
             r.modulus.floor
         ));
     }
-    if s.partial_volume_share > 0.25 {
+    if hu && s.partial_volume_share > 0.25 {
         w.push(format!(
             "{:.0} % of the boundary elements average in soft tissue (more than {:.0} % of \
              their volume below {} HU): partial volume lowers E at the bone's surface",

@@ -36,6 +36,6 @@ pub use material_map::{
     Histogram, MaterialMap, MaterialSummary, OUTSIDE_LIMIT, PARTIAL_VOLUME_SHARE, map_materials,
 };
 pub use recipe::{
-    BinSettings, Calibration, CheckSettings, DensityChain, IntegrationMethod, IntegrationSettings,
-    MaterialRecipe, ModulusSettings, ResolvedRecipe, Rod,
+    BinSettings, Calibration, CheckSettings, DensityChain, DensityUnit, ImageValues,
+    IntegrationMethod, IntegrationSettings, MaterialRecipe, ModulusSettings, ResolvedRecipe, Rod,
 };

@@ -16,6 +16,9 @@ use std::path::Path;
 /// intercept = 0.0
 /// # or fitted from phantom rods (measured HU, known density in g/cm³):
 /// # rods = [{ hu = -3.0, density = 0.0 }, { hu = 245.0, density = 0.2 }]
+/// # or an image calibrated already, its values QCT-equivalent density (e.g. K2HPO4):
+/// # image = "density"
+/// # unit = "mg/cc"       # or "g/cc"
 ///
 /// [density]              # Schileo et al. 2008: rho_ash = 0.877 rho_qct + 0.079,
 /// ash_slope = 0.877      # rho_app = rho_ash / 0.6
@@ -68,7 +71,8 @@ pub struct Rod {
 }
 
 /// HU → QCT-equivalent density (g/cm³): `ρ_QCT = intercept + slope · HU`, given or fitted by
-/// least squares to phantom rods.
+/// least squares to phantom rods; or, for an image of density (`image = "density"`), the
+/// image's values in their `unit` (`ρ_QCT = value · unit`, no line or rods).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Calibration {
@@ -83,6 +87,53 @@ pub struct Calibration {
     /// Phantom rods; when given (two or more), `slope` and `intercept` are fitted to them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub rods: Vec<Rod>,
+    /// What the image's values are: HU (default), or QCT-equivalent density already (an
+    /// image calibrated before, as density-calibrated CT pipelines write them), which takes
+    /// no line or rods.
+    #[serde(default, skip_serializing_if = "ImageValues::is_hu")]
+    pub image: ImageValues,
+    /// The unit of a density image's values (default mg/cm³).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<DensityUnit>,
+}
+
+/// What a CT's voxel values are.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ImageValues {
+    /// Hounsfield units, turned into density by the calibration line.
+    #[default]
+    Hu,
+    /// QCT-equivalent density (K2HPO4 or hydroxyapatite), in the recipe's `unit`.
+    Density,
+}
+
+impl ImageValues {
+    fn is_hu(&self) -> bool {
+        *self == ImageValues::Hu
+    }
+}
+
+/// The unit of a density image's values.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DensityUnit {
+    /// mg/cm³ (mg/cc), as density-calibrated CTs are usually stored.
+    #[default]
+    #[serde(rename = "mg/cc")]
+    MgPerCc,
+    /// g/cm³ (g/cc).
+    #[serde(rename = "g/cc")]
+    GPerCc,
+}
+
+impl DensityUnit {
+    /// g/cm³ per unit.
+    pub fn in_g_per_cc(self) -> f64 {
+        match self {
+            DensityUnit::MgPerCc => 0.001,
+            DensityUnit::GPerCc => 1.0,
+        }
+    }
 }
 
 fn default_slope() -> f64 {
@@ -95,6 +146,8 @@ impl Default for Calibration {
             slope: default_slope(),
             intercept: 0.0,
             rods: Vec::new(),
+            image: ImageValues::Hu,
+            unit: None,
         }
     }
 }
@@ -111,6 +164,34 @@ impl Calibration {
     /// # Errors
     /// [`Error::Parameter`] for one rod, non-finite values, or rods of one HU.
     pub fn fitted(&self) -> Result<(Calibration, f64)> {
+        if self.image == ImageValues::Density {
+            // The image holds density: the line is the unit's, and nothing else is taken.
+            if !self.rods.is_empty() || self.slope != default_slope() || self.intercept != 0.0 {
+                return Err(Error::Parameter(
+                    "calibration: an image of density (image = \"density\") takes no slope, \
+                     intercept or rods; give its unit (unit = \"mg/cc\" or \"g/cc\")"
+                        .into(),
+                ));
+            }
+            let unit = self.unit.unwrap_or_default();
+            return Ok((
+                Calibration {
+                    slope: unit.in_g_per_cc(),
+                    intercept: 0.0,
+                    rods: Vec::new(),
+                    image: ImageValues::Density,
+                    unit: Some(unit),
+                },
+                0.0,
+            ));
+        }
+        if self.unit.is_some() {
+            return Err(Error::Parameter(
+                "calibration: a unit is for an image of density (image = \"density\"); an image \
+                 of HU takes a slope and intercept, or rods"
+                    .into(),
+            ));
+        }
         if self.rods.is_empty() {
             return Ok((self.clone(), 0.0));
         }
@@ -155,6 +236,8 @@ impl Calibration {
                 slope,
                 intercept,
                 rods: self.rods.clone(),
+                image: ImageValues::Hu,
+                unit: None,
             },
             worst,
         ))

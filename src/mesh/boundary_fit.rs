@@ -2,9 +2,11 @@
 //! is a smooth global field and cannot put every boundary node on the subject, so the mesh's
 //! boundary nodes are then projected onto the subject along their normals (the fit's last
 //! step, with its rule of compatible normals: never across a thin part to the other side), the
-//! displacement carried into the interior by harmonic relaxation, and the elements made poor
-//! on the way raised by the repair with the boundary sliding on the subject (after the
-//! mesh-matching of Bucki et al. 2010 and Baldwin et al. 2010).
+//! subject's points still left far behind (the tips of processes, which no node's normal
+//! reaches) pulling their nearest boundary node onto them, the displacement carried into the
+//! interior by harmonic relaxation, and the elements made poor on the way raised by the repair
+//! with the boundary sliding on the subject (after the mesh-matching of Bucki et al. 2010 and
+//! Baldwin et al. 2010).
 //!
 //! Units: the mesh's and the subject's (one frame); reach in those units.
 
@@ -124,7 +126,9 @@ fn boundary_with_nodes<const D: usize>(mesh: &FeMesh<D>) -> (Shape<D>, Vec<usize
 /// Moves the boundary nodes of `mesh` onto the subject (indexed by `subject`) along their
 /// normals, each by at most `reach` (a node with no compatible crossing within it stays:
 /// where the subject is partial, only the part it has is fitted; so does a node `keep`
-/// marks, where an earlier try made the mesh invalid), and carries the moves into
+/// marks, where an earlier try made the mesh invalid), lets the subject's far points pull
+/// their nearest boundary node onto them (`far_pulls`, three rounds, within the same reach),
+/// and carries the moves into
 /// the interior by harmonic relaxation (each interior node moved by the mean of its
 /// neighbours' moves, 40 sweeps: `RELAXATION_SWEEPS`). Linear elements only: a quadratic mesh
 /// is left as it is (its mid-edge nodes follow their corners when it is made quadratic).

@@ -593,6 +593,19 @@ fn cts_paired_with_subjects_by_folder_and_table_and_bad_pairings_refused() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A Python function the block scripts start with: `hex_block(n)`, the integer corners
+/// (x slowest) and the hexahedra (VTK order, x, y, z) of an n × n × n block of unit cubes.
+const HEX_BLOCK: &str = r#"
+import numpy as np
+def hex_block(n):
+    g = np.stack(np.meshgrid(*[np.arange(n + 1)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    idx = lambda x, y, z: (x * (n + 1) + y) * (n + 1) + z
+    cells = [[idx(x, y, z), idx(x + 1, y, z), idx(x + 1, y + 1, z), idx(x, y + 1, z),
+              idx(x, y, z + 1), idx(x + 1, y, z + 1), idx(x + 1, y + 1, z + 1), idx(x, y + 1, z + 1)]
+             for x in range(n) for y in range(n) for z in range(n)]
+    return g, np.array(cells)
+"#;
+
 /// With SimpleITK: the DICOM series read and written as NIfTI, and a block of hexahedra
 /// (meshio) around the centre of the series' extent, in RAS.
 const DICOM_AND_BLOCK: &str = r#"
@@ -605,13 +618,9 @@ size = np.array(img.GetSize())
 c_lps = np.array(img.TransformContinuousIndexToPhysicalPoint(((size - 1) / 2.0).tolist()))
 c = c_lps * np.array([-1, -1, 1])
 n = 6
-g = np.stack(np.meshgrid(*[np.arange(n + 1)] * 3, indexing="ij"), -1).reshape(-1, 3)
-idx = lambda x, y, z: (x * (n + 1) + y) * (n + 1) + z
+g, cells = hex_block(n)
 nodes = c + 3.0 * (g - n / 2)
-cells = [[idx(x, y, z), idx(x + 1, y, z), idx(x + 1, y + 1, z), idx(x, y + 1, z),
-          idx(x, y, z + 1), idx(x + 1, y, z + 1), idx(x + 1, y + 1, z + 1), idx(x, y + 1, z + 1)]
-         for x in range(n) for y in range(n) for z in range(n)]
-meshio.Mesh(nodes, [("hexahedron", np.array(cells))]).write(out + "/block.vtu")
+meshio.Mesh(nodes, [("hexahedron", cells)]).write(out + "/block.vtu")
 "#;
 
 #[test]
@@ -622,7 +631,11 @@ fn a_dicom_series_gives_the_materials_of_its_nifti() {
     let Some(py) = common::python() else { return };
     let dir = common::temp_dir("materials-dicom");
     let series = data.join("totalseg-example-ct-3d/example_ct_dicom");
-    python(&py, DICOM_AND_BLOCK, &[s(&series), s(&dir)]);
+    python(
+        &py,
+        &format!("{HEX_BLOCK}{DICOM_AND_BLOCK}"),
+        &[s(&series), s(&dir)],
+    );
     let map = |ct: &Path, out: &str| -> atlasmesh::study::MaterialsReport {
         run_ok(&args(&[
             "materials",
@@ -665,13 +678,8 @@ image, seg, out = sys.argv[1], sys.argv[2], sys.argv[3]
 im = nib.load(image); v = np.asarray(im.dataobj); s = np.asarray(nib.load(seg).dataobj)
 o = np.argwhere(s == 1).mean(0).round().astype(int) - 2
 n = 4
-g = np.stack(np.meshgrid(*[np.arange(n + 1)] * 3, indexing="ij"), -1).reshape(-1, 3)
-idx = lambda x, y, z: (x * (n + 1) + y) * (n + 1) + z
+g, cells = hex_block(n)
 nodes = (im.affine @ np.c_[o + g, np.ones(len(g))].T).T[:, :3]
-cells = [[idx(x, y, z), idx(x + 1, y, z), idx(x + 1, y + 1, z), idx(x, y + 1, z),
-          idx(x, y, z + 1), idx(x + 1, y, z + 1), idx(x + 1, y + 1, z + 1), idx(x, y + 1, z + 1)]
-         for x in range(n) for y in range(n) for z in range(n)]
-cells = np.array(cells)
 if np.linalg.det(im.affine[:3, :3]) < 0:
     cells = cells[:, [0, 3, 2, 1, 4, 7, 6, 5]]
 if len(sys.argv) > 4:
@@ -703,7 +711,8 @@ fn an_image_of_density_maps_kopperdahls_law_as_nibabel_reads_it() {
     let bench = data.join("spinefe-benchmark-L2");
     let image = bench.join("sub-verse004_0000_vertebra_21_im.nii.gz");
     let seg = bench.join("sub-verse004_0000_vertebra_21_seg.nii.gz");
-    python(&py, DENSITY_BLOCK, &[s(&image), s(&seg), s(&dir)]);
+    let script = format!("{HEX_BLOCK}{DENSITY_BLOCK}");
+    python(&py, &script, &[s(&image), s(&seg), s(&dir)]);
     let recipe = dir.join("density.toml");
     std::fs::write(
         &recipe,
@@ -737,7 +746,7 @@ fn an_image_of_density_maps_kopperdahls_law_as_nibabel_reads_it() {
     );
     let theirs: serde_json::Value = serde_json::from_str(&python(
         &py,
-        DENSITY_BLOCK,
+        &script,
         &[
             s(&image),
             s(&seg),

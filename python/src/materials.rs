@@ -130,7 +130,7 @@ pub fn map_materials<'py>(
         "materials",
         arrays::to_f64(py, map.bins.iter().map(|b| b.modulus), &[map.bins.len()])?,
     )?;
-    out.set_item("poisson", map.poisson)?;
+    out.set_item("poisson", map.summary.recipe.modulus.poisson)?;
     let json = serde_json::to_string(&map.summary)
         .map_err(|e| BadInputError::new_err(format!("summary: {e}")))?;
     out.set_item(

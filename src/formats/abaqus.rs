@@ -504,7 +504,8 @@ pub fn inp<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> String {
     s
 }
 
-/// The mesh ([`inp`]) with one material per bin of `map`: per bin an `*ELSET` `BONE_k`, a
+/// The mesh ([`inp`]) with one material per bin of `map`: per bin an `*ELSET` of its name
+/// (`BONE_k`, or a part's: not written again when the mesh has that set already), a
 /// `*MATERIAL` of the same name with `*ELASTIC` E (MPa), ν, and a `*SOLID SECTION` (plane
 /// stress of unit thickness in 2D). Units: mm, N, MPa.
 pub fn inp_with_materials<const D: usize>(
@@ -513,21 +514,26 @@ pub fn inp_with_materials<const D: usize>(
     map: &crate::materials::MaterialMap,
 ) -> String {
     let mut s = inp(mesh, path);
+    let grouping = match map.summary.bin_width {
+        Some(w) => format!("equal-width bins of density ({w:.6} g/cm³)"),
+        None => format!("a gap of {:.4} MPa", map.summary.gap),
+    };
     let _ = writeln!(
         s,
-        "** Materials from the CT: {} groups of E (MPa) by a gap of {:.4} MPa; per element \
-         values in the .vtu",
+        "** Materials from the CT: {} (groups of E (MPa) by {grouping}, and the recipe's \
+         parts); per element values in the .vtu",
         map.bins.len(),
-        map.summary.gap
     );
-    for (k, bin) in map.bins.iter().enumerate() {
-        let name = crate::materials::MaterialMap::material_name(k);
-        let _ = writeln!(s, "*ELSET, ELSET={name}");
-        id_lines(&mut s, bin.elements.iter().copied(), 16);
+    for bin in &map.bins {
+        let name = &bin.name;
+        if mesh.sets.element_sets.get(name) != Some(&bin.elements) {
+            let _ = writeln!(s, "*ELSET, ELSET={name}");
+            id_lines(&mut s, bin.elements.iter().copied(), 16);
+        }
         let _ = writeln!(
             s,
             "*MATERIAL, NAME={name}\n*ELASTIC\n{:.6e}, {}",
-            bin.modulus, map.poisson
+            bin.modulus, bin.poisson
         );
         let _ = writeln!(s, "*SOLID SECTION, ELSET={name}, MATERIAL={name}");
         if D == 2 {
@@ -535,6 +541,39 @@ pub fn inp_with_materials<const D: usize>(
         }
     }
     s
+}
+
+/// A static step of `load` (appended after the model): its node sets, `*STEP` and
+/// `*STATIC`, `*BOUNDARY` for every displacement (mm), `*CLOAD` for every force (N, the total
+/// shared evenly by the set's nodes), the reaction force totals of every displacement set
+/// asked of the `.dat` file (`*NODE PRINT ... TOTALS=ONLY`) and the displacements and
+/// stresses of the `.frd` file.
+pub fn inp_step(s: &mut String, load: &crate::mesh::AppliedLoadCase) {
+    for (name, members) in &load.node_sets {
+        if load.mesh_sets.contains(name) {
+            continue;
+        }
+        let _ = writeln!(s, "*NSET, NSET={name}");
+        id_lines(s, members.iter().copied(), 16);
+    }
+    s.push_str("*STEP\n*STATIC\n*BOUNDARY\n");
+    for (set, axis, v) in &load.displacements {
+        let _ = writeln!(s, "{set}, {c}, {c}, {v:e}", c = axis + 1);
+    }
+    if !load.forces.is_empty() {
+        s.push_str("*CLOAD\n");
+        for (set, axis, v) in &load.forces {
+            let members = &load.node_sets[set];
+            let each = v / members.len() as f64;
+            for n in members {
+                let _ = writeln!(s, "{}, {}, {each:e}", n + 1, axis + 1);
+            }
+        }
+    }
+    for set in &load.reaction_sets {
+        let _ = writeln!(s, "*NODE PRINT, NSET={set}, TOTALS=ONLY\nRF");
+    }
+    s.push_str("*NODE FILE\nU\n*EL FILE\nS, E\n*END STEP\n");
 }
 
 /// `*NODE`, `*ELEMENT` and the sets (appended to `s`).

@@ -180,6 +180,22 @@ pub fn write_mesh_with_materials<const D: usize>(
     quality: &[ElementQuality],
     materials: Option<&MaterialMap>,
 ) -> Result<()> {
+    write_model(path, mesh, reference, quality, materials, None)
+}
+
+/// [`write_mesh_with_materials`], and in `.inp` the static step of `load`
+/// ([`super::inp_step`]; other formats do not take it).
+///
+/// # Errors
+/// As [`write_mesh_with_materials`].
+pub fn write_model<const D: usize>(
+    path: &Path,
+    mesh: &FeMesh<D>,
+    reference: Option<&FeMesh<D>>,
+    quality: &[ElementQuality],
+    materials: Option<&MaterialMap>,
+    load: Option<&crate::mesh::AppliedLoadCase>,
+) -> Result<()> {
     let format = MeshFormat::from_path(path).ok_or_else(|| {
         Error::Parameter(format!(
             "{}: unknown mesh format; use .vtu, .vtk, .inp, .msh or .feb",
@@ -207,13 +223,16 @@ pub fn write_mesh_with_materials<const D: usize>(
                 mesh.num_elements()
             )));
         }
-        if let Some(n) = (0..m.bins.len())
-            .map(MaterialMap::material_name)
-            .find(|n| mesh.sets.element_sets.contains_key(n))
-        {
+        if let Some(b) = m.bins.iter().find(|b| {
+            mesh.sets
+                .element_sets
+                .get(&b.name)
+                .is_some_and(|set| *set != b.elements)
+        }) {
             return Err(Error::Mesh(format!(
-                "{}: the mesh has an element set {n}, the name of a material; rename the set",
-                path.display()
+                "{}: the mesh has an element set {}, the name of a material; rename the set",
+                path.display(),
+                b.name
             )));
         }
     }
@@ -224,10 +243,16 @@ pub fn write_mesh_with_materials<const D: usize>(
             return super::vtk_xml::write_vtu_with_data(path, mesh, reference, quality, &[], &c);
         }
         MeshFormat::Vtk => vtk(mesh, reference, quality, &cells),
-        MeshFormat::Inp => match materials {
-            Some(m) => inp_with_materials(mesh, path, m),
-            None => inp(mesh, path),
-        },
+        MeshFormat::Inp => {
+            let mut text = match materials {
+                Some(m) => inp_with_materials(mesh, path, m),
+                None => inp(mesh, path),
+            };
+            if let Some(l) = load {
+                super::inp_step(&mut text, l);
+            }
+            text
+        }
         MeshFormat::Msh => msh_with_element_data(mesh, &cells),
         MeshFormat::Feb => feb_with_materials(mesh, path, materials)?,
     };

@@ -54,13 +54,7 @@ pub fn feb_with_materials<const D: usize>(
         Some(m) => m
             .bins
             .iter()
-            .enumerate()
-            .map(|(k, b)| {
-                (
-                    crate::materials::MaterialMap::material_name(k),
-                    b.elements.as_slice(),
-                )
-            })
+            .map(|b| (b.name.clone(), b.elements.as_slice()))
             .collect(),
         None => vec![("Part1".into(), all.as_slice())],
     };
@@ -138,9 +132,9 @@ fn materials(s: &mut String, map: &crate::materials::MaterialMap) {
             "    <material id=\"{}\" name=\"{}\" type=\"isotropic elastic\">\n      \
              <density>1</density>\n      <E>{:.6e}</E>\n      <v>{}</v>\n    </material>",
             k + 1,
-            crate::materials::MaterialMap::material_name(k),
+            bin.name,
             bin.modulus,
-            map.poisson
+            bin.poisson
         );
     }
     s.push_str("  </Material>\n");

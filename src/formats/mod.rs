@@ -19,6 +19,7 @@
 //! | `deck` | solver decks (`.inp`, `.feb`) copied per subject with its nodes |
 //! | `landmarks` | landmark files (JSON, `.pts`, CSV) |
 //! | `sets_file` | the sets file (TOML) |
+//! | `load_case_file` | the load case file (TOML) |
 //! | `atlas_file` | the atlas file (safetensors) |
 //! | `image_file`, `image_data`, `nifti`, `nrrd`, `metaimage`, `dicom_series`, `dicom_lengths` | images (label maps, CT): the dispatch; what the readers share (decompression within the announced size); NIfTI-1/2, NRRD, MetaImage, DICOM series; a DICOM file's declared lengths checked before it is parsed |
 //! | `input` | input files: regular files only, of bounded size |
@@ -41,6 +42,7 @@ mod image_data;
 pub mod image_file;
 pub mod input;
 pub mod landmarks;
+mod load_case_file;
 pub mod metaimage;
 pub mod nifti;
 pub mod nrrd;
@@ -59,7 +61,7 @@ pub mod vtk_legacy;
 pub mod vtk_xml;
 mod vtk_xml_read;
 
-pub use abaqus::{InpDeck, parse_inp, read_inp};
+pub use abaqus::{InpDeck, inp_step, parse_inp, read_inp};
 pub use atlas_file::{ATLAS_FORMAT_VERSION, atlas_dimension};
 pub(crate) use atomic::MAX_COUNT;
 pub use atomic::{create_dir, lock_dir, write_atomic};
@@ -67,7 +69,7 @@ pub use csv_table::CsvColumns;
 pub use deck::{Deck, FebDeck};
 pub use fe_mesh::{
     MeshFormat, check_fe_mesh, parse_fe_mesh_raw, read_fe_mesh, read_fe_mesh_raw, to_dimension,
-    write_mesh, write_mesh_with_materials,
+    write_mesh, write_mesh_with_materials, write_model,
 };
 pub use gmsh::{parse_msh, read_msh};
 pub use image_file::{ImageFile, ImageFormat, is_image_file, read_image};

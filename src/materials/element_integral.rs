@@ -293,7 +293,19 @@ pub fn integrate_element(
             hu_max = hu_max.max(h);
         }
     }
-    let hu = if inside > 0.0 { hu / inside } else { f64::NAN };
+    let mut hu = if inside > 0.0 { hu / inside } else { f64::NAN };
+    if recipe.recipe.integration.method == IntegrationMethod::Centroid {
+        // The CT at the mean of the nodes (a voxel's centre for a voxel's hexahedron).
+        let mut c = [0.0; 3];
+        for n in nodes {
+            for d in 0..3 {
+                c[d] += n[d] / nodes.len() as f64;
+            }
+        }
+        if let Some(h) = ct.sample(&c) {
+            hu = h;
+        }
+    }
     let modulus = if !v3 || inside <= 0.0 {
         recipe.modulus(hu)
     } else {

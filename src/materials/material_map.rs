@@ -2,13 +2,15 @@
 //! (Bonemat's method), the materials of the solver files, and the checks that say when the
 //! map should not be trusted.
 
-use super::binning::{MaterialBin, bin_moduli};
+use super::binning::{MaterialBin, bin_densities, bin_moduli};
 use super::ct_field::CtField;
 use super::density_law::DensityKind;
 use super::element_integral::{
     ElementIntegral, ElementRule, IntegrationScratch, integrate_element,
 };
-use super::recipe::{Calibration, ImageValues, IntegrationMethod, MaterialRecipe, ResolvedRecipe};
+use super::recipe::{
+    Calibration, Grouping, ImageValues, IntegrationMethod, MaterialRecipe, ResolvedRecipe,
+};
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use crate::mesh::FeMesh;
@@ -35,12 +37,10 @@ pub struct MaterialMap {
     pub modulus: Vec<f64>,
     /// Each element's volume (mm³; mm² in 2D).
     pub volume: Vec<f64>,
-    /// The materials of the solver files, by increasing E.
+    /// The materials of the solver files: the CT's by increasing E, then the recipe's parts.
     pub bins: Vec<MaterialBin>,
     /// The material (index into `bins`) of each element.
     pub element_bin: Vec<u32>,
-    /// Poisson's ratio of every material.
-    pub poisson: f64,
     /// The summary and the checks' findings.
     pub summary: MaterialSummary,
 }
@@ -85,10 +85,16 @@ pub struct MaterialSummary {
     pub modulus_median: f64,
     /// See `modulus_min`.
     pub modulus_max: f64,
-    /// Materials written and the gap that made them (MPa).
+    /// Materials written and the gap that made them (MPa; 0 for equal-width bins).
     pub materials: usize,
     /// See `materials`.
     pub gap: f64,
+    /// For equal-width bins: their width in the law's density (g/cm³).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bin_width: Option<f64>,
+    /// The recipe's parts of constant material: their elements and volume.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<PartSummary>,
     /// Largest difference between an element's E and its material's (MPa).
     pub binning_error_max: f64,
     /// Elements at the E floor.
@@ -111,13 +117,33 @@ pub struct MaterialSummary {
     pub warnings: Vec<String>,
 }
 
+/// A part of constant material in a map.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PartSummary {
+    /// The element set's (and material's) name.
+    pub name: String,
+    /// Its elements.
+    pub elements: usize,
+    /// Its volume (mm³; mm² in 2D).
+    pub volume: f64,
+    /// Young's modulus (MPa).
+    pub modulus: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+}
+
 /// Maps a CT onto a mesh (Bonemat; Taddei et al. 2004, 2007): each element's mean HU by
 /// [`integrate_element`], its density by the recipe's calibration and chain, its E by the
-/// law (V3: per point, then averaged; V2: of the mean HU), the elements grouped into
-/// materials ([`bin_moduli`]), and the checks. The mesh is in the CT's world frame (mm,
-/// RAS); a 2D mesh lies in the plane of a one-slice image (`z = 0`).
+/// law (V3: per point, then averaged; V2: of the mean HU; centroid: of the HU at the
+/// element's centroid), the elements grouped into materials ([`bin_moduli`] by a gap in E, or
+/// [`bin_densities`] in equal-width bins of density), and the checks. The elements of the
+/// recipe's parts (element sets of the mesh) take their part's constant material instead,
+/// and are left out of the groups, the summary and the checks. The mesh is in the CT's world
+/// frame (mm, RAS); a 2D mesh lies in the plane of a one-slice image (`z = 0`).
 ///
 /// # Errors
+/// [`Error::Parameter`] for a part that names no element set of the mesh, parts that share
+/// elements, or parts that hold every element.
 /// [`Error::Mesh`] for a connectivity naming nodes that do not exist;
 /// [`Error::Parameter`] for a 2D mesh on a 3D CT, or when an element lies more than
 /// [`OUTSIDE_LIMIT`] outside the CT (the message gives how many and how much of the mesh,
@@ -165,12 +191,22 @@ pub fn map_materials<const D: usize>(
             },
         )
         .collect();
-    check_outside(mesh, ct, &integrals)?;
+    let parts = &recipe.recipe.parts;
+    let part_of = part_elements(mesh, parts)?;
+    let bone: Vec<usize> = (0..ne).filter(|&e| part_of[e].is_none()).collect();
+    if bone.is_empty() && ne > 0 {
+        return Err(Error::Parameter(
+            "material recipe: the parts hold every element of the mesh; none is left for the CT"
+                .into(),
+        ));
+    }
+    let bone_integrals: Vec<ElementIntegral> = bone.iter().map(|&e| integrals[e]).collect();
+    check_outside(mesh, ct, &bone_integrals)?;
     let hu: Vec<f64> = integrals.iter().map(|i| i.hu).collect();
-    let modulus: Vec<f64> = integrals.iter().map(|i| i.modulus).collect();
+    let density: Vec<f64> = hu.iter().map(|&h| recipe.density(h)).collect();
+    let mut modulus: Vec<f64> = integrals.iter().map(|i| i.modulus).collect();
     let volume: Vec<f64> = integrals.iter().map(|i| i.volume).collect();
-    let bin = &recipe.recipe.materials;
-    let (bins, gap) = bin_moduli(&modulus, &volume, bin.gap, bin.max_materials);
+    let (mut bins, gap, bin_width) = group_bone(recipe, &bone, &modulus, &volume, &density);
     let mut element_bin = vec![0u32; ne];
     let mut binning_error_max: f64 = 0.0;
     for (k, b) in bins.iter().enumerate() {
@@ -179,21 +215,118 @@ pub fn map_materials<const D: usize>(
             binning_error_max = binning_error_max.max((modulus[e] - b.modulus).abs());
         }
     }
-    let mut summary = summarize(mesh, ct, recipe, &integrals);
+    let mut part_summaries = Vec::with_capacity(parts.len());
+    for (k, p) in parts.iter().enumerate() {
+        let elements: Vec<usize> = (0..ne).filter(|&e| part_of[e] == Some(k)).collect();
+        for &e in &elements {
+            modulus[e] = p.modulus;
+            element_bin[e] = bins.len() as u32;
+        }
+        part_summaries.push(PartSummary {
+            name: p.name.clone(),
+            elements: elements.len(),
+            volume: elements.iter().map(|&e| volume[e]).sum(),
+            modulus: p.modulus,
+            poisson: p.poisson,
+        });
+        bins.push(MaterialBin {
+            name: p.name.clone(),
+            poisson: p.poisson,
+            modulus: p.modulus,
+            elements,
+        });
+    }
+    let mut summary = summarize(mesh, ct, recipe, &bone, &bone_integrals);
     summary.materials = bins.len();
     summary.gap = gap;
+    summary.bin_width = bin_width;
     summary.binning_error_max = binning_error_max;
+    summary.parts = part_summaries;
     Ok(MaterialMap {
-        density: hu.iter().map(|&h| recipe.density(h)).collect(),
+        density,
         density_kind: recipe.law.density,
         hu,
         modulus,
         volume,
         bins,
         element_bin,
-        poisson: recipe.recipe.modulus.poisson,
         summary,
     })
+}
+
+/// The CT's materials of the elements `bone` (indices into the per-element arrays) by the
+/// recipe's grouping, their elements given as mesh indices; the gap used (MPa) and, for
+/// equal-width bins, their width (g/cm³).
+fn group_bone(
+    recipe: &ResolvedRecipe,
+    bone: &[usize],
+    modulus: &[f64],
+    volume: &[f64],
+    density: &[f64],
+) -> (Vec<MaterialBin>, f64, Option<f64>) {
+    let bin = &recipe.recipe.materials;
+    let pick = |v: &[f64]| bone.iter().map(|&e| v[e]).collect::<Vec<f64>>();
+    let floor = recipe.recipe.modulus.floor;
+    let (mut bins, gap, bin_width) = match bin.grouping {
+        Grouping::Gap => {
+            let (b, gap) = bin_moduli(&pick(modulus), &pick(volume), bin.gap, bin.max_materials);
+            (b, gap, None)
+        }
+        Grouping::EqualWidth => {
+            let (b, w) = bin_densities(&pick(density), bin.bins, |r| {
+                recipe.law.modulus(r).max(floor)
+            });
+            (b, 0.0, Some(w))
+        }
+    };
+    for b in &mut bins {
+        b.poisson = recipe.recipe.modulus.poisson;
+        for e in b.elements.iter_mut() {
+            *e = bone[*e];
+        }
+    }
+    (bins, gap, bin_width)
+}
+
+/// The part (index into `parts`) of each element of `mesh`, `None` for the CT's.
+///
+/// # Errors
+/// [`Error::Parameter`] for a part that is no element set of the mesh, or parts that share
+/// an element.
+fn part_elements<const D: usize>(
+    mesh: &FeMesh<D>,
+    parts: &[super::recipe::PartMaterial],
+) -> Result<Vec<Option<usize>>> {
+    let ne = mesh.num_elements();
+    let mut part_of: Vec<Option<usize>> = vec![None; ne];
+    for (k, p) in parts.iter().enumerate() {
+        let Some(set) = mesh.sets.element_sets.get(&p.name) else {
+            let names: Vec<&str> = mesh.sets.element_sets.keys().map(String::as_str).collect();
+            return Err(Error::Parameter(format!(
+                "material recipe: part {} is not an element set of the mesh (its element sets: \
+                 {})",
+                p.name,
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                }
+            )));
+        };
+        for &e in set.iter().filter(|&&e| e < ne) {
+            if let Some(q) = part_of[e] {
+                return Err(Error::Parameter(format!(
+                    "material recipe: parts {} and {} share element {}; a part's elements \
+                     must be its own",
+                    parts[q].name,
+                    p.name,
+                    e + 1
+                )));
+            }
+            part_of[e] = Some(k);
+        }
+    }
+    Ok(part_of)
 }
 
 /// The error for elements more than [`OUTSIDE_LIMIT`] outside the CT.
@@ -237,11 +370,13 @@ fn check_outside<const D: usize>(
     )))
 }
 
-/// The summary and the checks of a map.
+/// The summary and the checks of a map over the elements `elements` (whose integrals are
+/// `integrals`).
 fn summarize<const D: usize>(
     mesh: &FeMesh<D>,
     ct: &CtField,
     recipe: &ResolvedRecipe,
+    elements: &[usize],
     integrals: &[ElementIntegral],
 ) -> MaterialSummary {
     let r = &recipe.recipe;
@@ -252,10 +387,11 @@ fn summarize<const D: usize>(
     let mut sorted: Vec<f64> = integrals.iter().map(|i| i.modulus).collect();
     sorted.sort_by(f64::total_cmp);
     let floor = r.modulus.floor * (1.0 + 1e-12);
-    let mut boundary = vec![false; integrals.len()];
+    let mut on_boundary = vec![false; mesh.num_elements()];
     for f in crate::mesh::boundary_faces(mesh) {
-        boundary[f.element] = true;
+        on_boundary[f.element] = true;
     }
+    let boundary: Vec<bool> = elements.iter().map(|&e| on_boundary[e]).collect();
     let surface = boundary.iter().filter(|&&b| b).count();
     let soft_surface = integrals
         .iter()
@@ -393,10 +529,5 @@ impl MaterialMap {
                 self.element_bin.iter().map(|&b| f64::from(b + 1)).collect(),
             ),
         ]
-    }
-
-    /// The name of material `k` (0-based) in the solver files: `BONE_1`, `BONE_2`, ...
-    pub fn material_name(k: usize) -> String {
-        format!("BONE_{}", k + 1)
     }
 }

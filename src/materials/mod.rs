@@ -12,7 +12,7 @@
 //! | `ct_field` | [`CtField`]: the CT trilinearly interpolated, world → index |
 //! | `natural_coordinates` | shape functions and composite Gauss rules in natural coordinates |
 //! | `element_integral` | one element's HU and E integrated over its volume |
-//! | `binning` | Bonemat's grouping of elements into materials by a gap in E |
+//! | `binning` | the grouping of elements into materials: Bonemat's gap in E, or equal-width bins of density |
 //! | `material_map` | [`MaterialMap`]: every element's values, the materials, the checks |
 
 mod binning;
@@ -25,7 +25,7 @@ mod recipe;
 #[cfg(test)]
 mod tests;
 
-pub use binning::{MaterialBin, bin_moduli};
+pub use binning::{MaterialBin, bin_densities, bin_moduli, bone_material_name};
 pub use ct_field::CtField;
 pub use density_law::{DensityKind, LawPiece, ModulusLaw};
 pub use element_integral::{
@@ -33,9 +33,11 @@ pub use element_integral::{
     integrate_element,
 };
 pub use material_map::{
-    Histogram, MaterialMap, MaterialSummary, OUTSIDE_LIMIT, PARTIAL_VOLUME_SHARE, map_materials,
+    Histogram, MaterialMap, MaterialSummary, OUTSIDE_LIMIT, PARTIAL_VOLUME_SHARE, PartSummary,
+    map_materials,
 };
 pub use recipe::{
-    BinSettings, Calibration, CheckSettings, DensityChain, DensityUnit, ImageValues,
-    IntegrationMethod, IntegrationSettings, MaterialRecipe, ModulusSettings, ResolvedRecipe, Rod,
+    BinSettings, Calibration, CheckSettings, DensityChain, DensityUnit, Grouping, ImageValues,
+    IntegrationMethod, IntegrationSettings, MaterialRecipe, ModulusSettings, PartMaterial,
+    ResolvedRecipe, Rod,
 };

@@ -24,6 +24,7 @@ use std::path::Path;
 /// ash_slope = 0.877      # rho_app = rho_ash / 0.6
 /// ash_intercept = 0.079
 /// ash_per_apparent = 0.6
+/// # qct_floor = -0.031   # g/cm³: smaller QCT densities are raised to it (none by default)
 ///
 /// [modulus]
 /// law = "morgan-2003-femoral-neck"   # a preset, or "custom" with `density` and `pieces`
@@ -31,11 +32,19 @@ use std::path::Path;
 /// poisson = 0.3
 ///
 /// [integration]
-/// method = "v3"          # "v3": E per point, then averaged; "v2": HU averaged, then E
+/// method = "v3"          # "v3": E per point, then averaged; "v2": HU averaged, then E;
+///                        # "centroid": the CT at the element's centroid (voxel models)
 ///
 /// [materials]
+/// grouping = "gap"       # or "equal-width": `bins` bins of equal width in density
 /// gap = 10.0             # MPa: elements within this gap of E share a material
 /// max_materials = 500
+/// # bins = 128           # for "equal-width"
+///
+/// [[part]]               # elements of the mesh's element set PADS: a constant material
+/// name = "PADS"
+/// modulus = 2500.0       # MPa
+/// poisson = 0.3
 /// ```
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -58,6 +67,24 @@ pub struct MaterialRecipe {
     /// The thresholds of the checks.
     #[serde(default)]
     pub checks: CheckSettings,
+    /// Parts of the mesh that are not bone (pads, implants, cement): each an element set of
+    /// the mesh with a constant material; the CT maps the other elements.
+    #[serde(default, rename = "part", skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<PartMaterial>,
+}
+
+/// A part of the mesh with a constant material: the elements of the mesh's element set
+/// `name` (a voxel mesh's part, or a set of the mesh file).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartMaterial {
+    /// The element set's name; also the material's name in the solver files.
+    pub name: String,
+    /// Young's modulus (MPa).
+    pub modulus: f64,
+    /// Poisson's ratio (default 0.3).
+    #[serde(default = "default_poisson")]
+    pub poisson: f64,
 }
 
 /// One phantom rod: its mean HU in the scan and its known equivalent density (g/cm³).
@@ -127,6 +154,14 @@ pub enum DensityUnit {
 }
 
 impl DensityUnit {
+    /// Its name as the recipe writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            DensityUnit::MgPerCc => "mg/cc",
+            DensityUnit::GPerCc => "g/cc",
+        }
+    }
+
     /// g/cm³ per unit.
     pub fn in_g_per_cc(self) -> f64 {
         match self {
@@ -259,6 +294,11 @@ pub struct DensityChain {
     /// Ash over apparent density (default 0.6).
     #[serde(default = "default_ash_per_apparent")]
     pub ash_per_apparent: f64,
+    /// The smallest QCT density (g/cm³): smaller ones are raised to it before the chain and
+    /// the law (the spine FE benchmark raises densities below -31 mg/cm³ to -31). None by
+    /// default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub qct_floor: Option<f64>,
 }
 
 fn default_ash_slope() -> f64 {
@@ -277,6 +317,7 @@ impl Default for DensityChain {
             ash_slope: default_ash_slope(),
             ash_intercept: default_ash_intercept(),
             ash_per_apparent: default_ash_per_apparent(),
+            qct_floor: None,
         }
     }
 }
@@ -335,6 +376,9 @@ pub enum IntegrationMethod {
     /// E computed at every integration point, then integrated (Bonemat V3; default).
     #[default]
     V3,
+    /// The CT at the element's centroid (the mean of its nodes), then E: for a mesh of one
+    /// hexahedron per voxel, each element takes its voxel's own value, as voxel FE models do.
+    Centroid,
 }
 
 /// How each element's values are integrated.
@@ -366,12 +410,31 @@ impl Default for IntegrationSettings {
     }
 }
 
-/// Bonemat's grouping of elements into materials: sorted by E, a material takes elements
-/// while their E is within `gap` of its first one; its E is the volume-weighted mean of its
-/// elements'. When that makes more than `max_materials`, the gap grows to fit.
+/// How elements are grouped into the materials of the solver files.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Grouping {
+    /// Bonemat's: sorted by E, a material takes elements while their E is within `gap` of its
+    /// first one; its E is the volume-weighted mean of its elements' (default).
+    #[default]
+    Gap,
+    /// Voxel FE pipelines' (the spine FE benchmark's, Ogo's): `bins` bins of equal width in
+    /// the law's density between the smallest and largest element's; a bin's E is the law's
+    /// at the bin's centre (at least the floor).
+    EqualWidth,
+}
+
+/// How elements are grouped into materials: Bonemat's gap in E (default), or equal-width
+/// bins of density.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BinSettings {
+    /// `gap` (default) or `equal-width`.
+    #[serde(default)]
+    pub grouping: Grouping,
+    /// For `equal-width`: the number of bins (default 128, the benchmark's).
+    #[serde(default = "default_bins")]
+    pub bins: usize,
     /// MPa (default 10).
     #[serde(default = "default_gap")]
     pub gap: f64,
@@ -386,10 +449,15 @@ fn default_gap() -> f64 {
 fn default_max_materials() -> usize {
     500
 }
+fn default_bins() -> usize {
+    128
+}
 
 impl Default for BinSettings {
     fn default() -> Self {
         BinSettings {
+            grouping: Grouping::Gap,
+            bins: default_bins(),
             gap: default_gap(),
             max_materials: default_max_materials(),
         }
@@ -516,6 +584,15 @@ impl MaterialRecipe {
                 b.gap, b.max_materials
             ));
         }
+        if !(1..=100_000).contains(&b.bins) {
+            return bad(format!("materials: bins {} must be in 1..=100000", b.bins));
+        }
+        if let Some(f) = d.qct_floor
+            && !f.is_finite()
+        {
+            return bad(format!("density: qct_floor {f} g/cm³ must be finite"));
+        }
+        check_parts(&self.parts)?;
         let k = &self.checks;
         if ![k.metal_hu, k.soft_tissue_hu, k.air_hu]
             .iter()
@@ -530,6 +607,47 @@ impl MaterialRecipe {
             law,
         })
     }
+}
+
+/// Checks the recipe's parts: names, no name twice, moduli, Poisson's ratios.
+fn check_parts(parts: &[PartMaterial]) -> Result<()> {
+    if parts.len() > MAX_ITEMS {
+        return Err(Error::Parameter(format!(
+            "material recipe: at most {MAX_ITEMS} parts"
+        )));
+    }
+    for (i, p) in parts.iter().enumerate() {
+        let name_ok = !p.name.is_empty()
+            && p.name.len() <= 64
+            && p.name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+        if !name_ok {
+            return Err(Error::Parameter(format!(
+                "material recipe: part {:?}: a name of 1 to 64 letters, digits, '_' or '-'",
+                p.name
+            )));
+        }
+        if parts[..i].iter().any(|q| q.name == p.name) {
+            return Err(Error::Parameter(format!(
+                "material recipe: part {} is given twice",
+                p.name
+            )));
+        }
+        if !(p.modulus.is_finite() && p.modulus > 0.0) {
+            return Err(Error::Parameter(format!(
+                "material recipe: part {}: modulus {} MPa must be positive",
+                p.name, p.modulus
+            )));
+        }
+        if !(p.poisson > -1.0 && p.poisson < 0.5) {
+            return Err(Error::Parameter(format!(
+                "material recipe: part {}: Poisson's ratio {} must be in (-1, 0.5)",
+                p.name, p.poisson
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The largest recipe text read, in bytes (a full recipe is about 2 kB).
@@ -553,12 +671,15 @@ pub struct ResolvedRecipe {
 }
 
 impl ResolvedRecipe {
-    /// The density the law takes (g/cm³) at `hu`: HU → ρ_QCT → ρ_ash → ρ_app as the law
-    /// needs (an affine map of HU).
+    /// The density the law takes (g/cm³) at `hu`: HU → ρ_QCT (raised to `qct_floor` when
+    /// given) → ρ_ash → ρ_app as the law needs (an affine map of HU above the floor).
     #[inline]
     pub fn density(&self, hu: f64) -> f64 {
-        let qct = self.calibration.intercept + self.calibration.slope * hu;
+        let mut qct = self.calibration.intercept + self.calibration.slope * hu;
         let d = &self.recipe.density;
+        if let Some(f) = d.qct_floor {
+            qct = qct.max(f);
+        }
         match self.law.density {
             DensityKind::Qct => qct,
             DensityKind::Ash => d.ash_slope * qct + d.ash_intercept,

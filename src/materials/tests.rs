@@ -654,3 +654,90 @@ fn an_image_of_density_takes_its_unit_and_no_hu_checks() {
         as_hu.summary.warnings
     );
 }
+
+/// A voxel mesh of a density image (one hexahedron per voxel, `centroid`): each element takes
+/// its voxel's value, the QCT floor raises the negative ones, equal-width bins take the law
+/// at their centres, and a part keeps its constant material out of the bins and the summary.
+#[test]
+fn voxel_models_take_their_voxels_equal_width_bins_and_parts() {
+    let affine = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    // 4 × 1 × 2 voxels of mg/cc: z = 0 bone -100, 100, 300, 900; z = 1 a pad (0).
+    let values = [-100.0, 100.0, 300.0, 900.0, 0.0, 0.0, 0.0, 0.0];
+    let im = image([4, 1, 2], affine, |p| {
+        values[p[0].round() as usize + 4 * p[2].round() as usize]
+    });
+    let ct = CtField::new(&im).unwrap();
+    let labels = Image {
+        data: vec![1, 1, 1, 1, 2, 2, 2, 2],
+        voxel_type: VoxelType::U8,
+        ..im.clone()
+    };
+    let parts = [
+        crate::mesh::VoxelPart {
+            name: "BONE".into(),
+            labels: vec![1],
+        },
+        crate::mesh::VoxelPart {
+            name: "PADS".into(),
+            labels: vec![2],
+        },
+    ];
+    let mesh = crate::mesh::voxel_mesh(&labels, &parts, "labels").unwrap();
+    let r = recipe(
+        "[calibration]\nimage = \"density\"\n[density]\nqct_floor = -0.031\n[modulus]\nlaw = \
+         \"kopperdahl-2002-vertebra\"\nfloor = 0.0001\n[integration]\nmethod = \"centroid\"\n\
+         [materials]\ngrouping = \"equal-width\"\nbins = 4\n[[part]]\nname = \"PADS\"\nmodulus \
+         = 2500.0\n",
+    );
+    let m = map_materials(&mesh, &ct, &r).unwrap();
+    for (e, v) in [-100.0, 100.0, 300.0, 900.0].iter().enumerate() {
+        assert!((m.hu[e] - v).abs() < 1e-9, "{} {v}", m.hu[e]);
+    }
+    // Densities -0.031 (floored), 0.1, 0.3, 0.9 g/cm³ in 4 bins of (0.931 / 4).
+    assert!((m.density[0] + 0.031).abs() < 1e-12);
+    let w = 0.931 / 4.0;
+    assert!((m.summary.bin_width.unwrap() - w).abs() < 1e-12);
+    let law = |rho: f64| (2980.0 * rho.max(0.0).powf(1.05)).max(0.0001);
+    let bins: Vec<(Vec<usize>, f64)> = m
+        .bins
+        .iter()
+        .map(|b| (b.elements.clone(), b.modulus))
+        .collect();
+    assert_eq!(bins.len(), 4);
+    assert_eq!(bins[0].0, vec![0, 1]);
+    assert!((bins[0].1 - law(-0.031 + 0.5 * w)).abs() < 1e-9);
+    assert_eq!(bins[1].0, vec![2]);
+    assert!((bins[1].1 - law(-0.031 + 1.5 * w)).abs() < 1e-9);
+    assert_eq!(bins[2].0, vec![3]);
+    assert!((bins[2].1 - law(-0.031 + 3.5 * w)).abs() < 1e-9);
+    assert_eq!(
+        (m.bins[3].name.as_str(), m.bins[3].modulus),
+        ("PADS", 2500.0)
+    );
+    assert_eq!(m.bins[3].elements, vec![4, 5, 6, 7]);
+    assert_eq!(m.modulus[5], 2500.0);
+    assert_eq!(m.summary.elements, 4);
+    assert_eq!(m.summary.parts[0].elements, 4);
+    assert!((m.summary.volume - 4.0).abs() < 1e-9);
+    // A part that is no element set, and parts that hold everything.
+    let bad = recipe("[[part]]\nname = \"CEMENT\"\nmodulus = 2500.0\n");
+    let e = map_materials(&mesh, &ct, &bad).unwrap_err().to_string();
+    assert!(e.contains("CEMENT") && e.contains("BONE, PADS"), "{e}");
+    let all = recipe(
+        "[[part]]\nname = \"PADS\"\nmodulus = 2500.0\n[[part]]\nname = \"BONE\"\nmodulus = 1.0\n",
+    );
+    assert!(map_materials(&mesh, &ct, &all).is_err());
+    for text in [
+        "[[part]]\nname = \"A B\"\nmodulus = 1.0\n",
+        "[[part]]\nname = \"A\"\nmodulus = -1.0\n",
+        "[materials]\nbins = 0\n",
+        "[materials]\ngrouping = \"quantile\"\n",
+    ] {
+        let p = MaterialRecipe::parse(std::path::Path::new("r.toml"), text);
+        assert!(p.is_err(), "{text}");
+    }
+}

@@ -14,8 +14,10 @@
 //! | `mean_mesh` | the mesh of the mean shape, by dimension |
 //! | `quality` | corner Jacobians, scaled Jacobians, edge ratios (section 5.3) |
 //! | `sets` | node sets, element sets and surfaces from a TOML description |
+//! | `load_case` | a load case: node sets by geometry, displacements, forces, the rigid-body holds |
 //! | `morph` | [`Morpher`]: the mesh carried by boundary correspondences (eq. 9) |
 //! | `repair` | untangling and improving poor elements |
+//! | `voxel_mesh` | one hexahedron per voxel of a label map's parts (voxel FE models) |
 
 mod boundary;
 mod boundary_fit;
@@ -23,12 +25,14 @@ mod element;
 pub mod element_size;
 mod fe_mesh;
 pub mod hex_mesh;
+mod load_case;
 mod mean_mesh;
 mod morph;
 pub mod quad_mesh;
 pub mod quality;
 pub mod repair;
 pub mod sets;
+mod voxel_mesh;
 
 pub use boundary::{BoundaryFace, FacePair, boundary_faces, boundary_surface, face_pairs};
 pub use boundary_fit::{BoundaryFit, fit_boundary};
@@ -37,6 +41,7 @@ pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};
 pub use fe_mesh::{FeMesh, HexMesh, MAX_SET_NAME, MeshSets, QuadMesh, set_name_problem};
 pub use hex_mesh::{HexMeshParams, hex_mesh};
+pub use load_case::{AXES, AppliedLoadCase, Condition, LoadCase, NodeSelector, PlaneSelector};
 pub use mean_mesh::{
     MEAN_MESH_COVERAGE, MEAN_MESH_EDGE_RATIO_MAX, MEAN_MESH_SCALED_JACOBIAN_MIN,
     MEAN_MESH_SCALED_JACOBIAN_TARGET, mesh_mean_shape,
@@ -46,3 +51,4 @@ pub use quad_mesh::{QuadMeshParams, quad_mesh};
 pub use quality::{ElementQuality, QualityDistribution, QualitySummary, mesh_quality, summarize};
 pub use repair::{RepairParams, RepairReport, repair, repair_with_quality};
 pub use sets::SetsConfig;
+pub use voxel_mesh::{MAX_VOXEL_ELEMENTS, VoxelPart, voxel_mesh};

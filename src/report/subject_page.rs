@@ -342,6 +342,9 @@ fn materials(h: &mut String, m: &crate::materials::MaterialSummary) {
             "integration",
             match m.method {
                 Some(crate::materials::IntegrationMethod::V2) => "V2: HU averaged, then E".into(),
+                Some(crate::materials::IntegrationMethod::Centroid) => {
+                    "the CT at each element's centroid, then E".into()
+                }
                 _ => "V3: E at every point, then averaged".to_string(),
             },
         ),

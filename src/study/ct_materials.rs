@@ -217,35 +217,132 @@ pub struct MaterialsReport {
     pub element_kind: String,
     /// The map.
     pub materials: MaterialSummary,
+    /// The load case applied (as read), when one was given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_case: Option<crate::mesh::LoadCase>,
+    /// The node counts of the load case's sets.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub load_sets: std::collections::BTreeMap<String, usize>,
+    /// The solve, when CalculiX ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solve: Option<super::SolveReport>,
     /// Files written, relative to the output folder.
     pub files: Vec<String>,
+}
+
+/// What `atlasmesh materials` is asked beyond the map: a load case written into the deck,
+/// and whether to solve it.
+#[derive(Clone, Debug, Default)]
+pub struct LoadRequest {
+    /// The load case.
+    pub load_case: Option<crate::mesh::LoadCase>,
+    /// Run CalculiX on the deck (when it is found; else the deck is written and the report
+    /// says how to run it).
+    pub solve: bool,
+    /// Solver threads.
+    pub threads: usize,
 }
 
 /// `atlasmesh materials`: the mesh in `mesh_file` (any FE mesh atlasmesh reads, 2D or 3D)
 /// mapped on the CT `ct` with `recipe`, written into `out` as `NAME_materials.EXT` in every
 /// format of `formats` (with materials), `NAME_E.png` (the histogram of E, with `plots`)
-/// and `report.json`.
+/// and `report.json`. With a load case, the `.inp` deck carries its static step; with
+/// `solve`, CalculiX solves it ([`solve_calculix`](super::solve_calculix)) and the report
+/// holds the reactions and the stiffness.
 ///
 /// # Errors
-/// Those of reading the mesh and of [`map_ct`], and of the writes.
+/// Those of reading the mesh and of [`map_ct`], of applying the load case (3D meshes only)
+/// and solving it, and of the writes.
 pub fn map_mesh_file(
     mesh_file: &Path,
     ct: &Path,
     recipe: &MaterialRecipe,
     formats: &[MeshFormat],
     plots: bool,
+    load: &LoadRequest,
     out: &Path,
 ) -> Result<MaterialsReport> {
     let raw = read_fe_mesh_raw(mesh_file)?;
     let name = super::write_subject::file_name(&super::shape_name(mesh_file));
     let kind = raw.kind;
+    let mut formats = formats.to_vec();
+    if load.load_case.is_some() && !formats.contains(&MeshFormat::Inp) {
+        formats.push(MeshFormat::Inp);
+    }
+    let mut load_sets = std::collections::BTreeMap::new();
+    let mut solve = None;
     let (summary, mut files) = if kind.dimension() == 2 {
+        if load.load_case.is_some() {
+            return Err(Error::Parameter(format!(
+                "{}: a load case is for 3D meshes",
+                mesh_file.display()
+            )));
+        }
         let mesh: FeMesh<2> = to_dimension(mesh_file, raw)?;
-        write_mapped(&mesh, ct, recipe, formats, &name, out)?
+        write_mapped(&mesh, ct, recipe, &formats, &name, None, out)?
     } else {
         let mesh: FeMesh<3> = to_dimension(mesh_file, raw)?;
-        write_mapped(&mesh, ct, recipe, formats, &name, out)?
+        let applied = match &load.load_case {
+            Some(c) => Some(c.apply(&mesh)?),
+            None => None,
+        };
+        let written = write_mapped(&mesh, ct, recipe, &formats, &name, applied.as_ref(), out)?;
+        if let Some(a) = &applied {
+            load_sets = a
+                .node_sets
+                .iter()
+                .map(|(k, v)| (k.clone(), v.len()))
+                .collect();
+            if load.solve {
+                let deck = out.join(format!("{name}_materials.inp"));
+                if super::find_calculix().is_some() {
+                    solve = Some(super::solve_calculix(&deck, a, load.threads)?);
+                } else {
+                    let mut w = written;
+                    w.0.warnings.push(super::how_to_solve(&deck, a));
+                    return finish(mesh_file, kind, w, plots, &name, load, load_sets, None, out);
+                }
+            }
+        }
+        written
     };
+    if solve.is_some() {
+        for f in [
+            format!("{name}_materials.dat"),
+            format!("{name}_materials.frd"),
+            format!("{name}_materials_ccx.log"),
+        ] {
+            if out.join(&f).is_file() {
+                files.push(f);
+            }
+        }
+    }
+    finish(
+        mesh_file,
+        kind,
+        (summary, files),
+        plots,
+        &name,
+        load,
+        load_sets,
+        solve,
+        out,
+    )
+}
+
+/// The histogram and `report.json` of a map written.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    mesh_file: &Path,
+    kind: crate::mesh::ElementKind,
+    (summary, mut files): (MaterialSummary, Vec<String>),
+    plots: bool,
+    name: &str,
+    load: &LoadRequest,
+    load_sets: std::collections::BTreeMap<String, usize>,
+    solve: Option<super::SolveReport>,
+    out: &Path,
+) -> Result<MaterialsReport> {
     if plots {
         let png = format!("{name}_E.png");
         crate::report::plot_modulus_histogram(
@@ -260,6 +357,9 @@ pub fn map_mesh_file(
         mesh: mesh_file.display().to_string(),
         element_kind: kind.name().into(),
         materials: summary,
+        load_case: load.load_case.clone(),
+        load_sets,
+        solve,
         files,
     };
     let json = serde_json::to_vec_pretty(&report)
@@ -268,13 +368,15 @@ pub fn map_mesh_file(
     Ok(report)
 }
 
-/// Maps and writes one mesh; returns the summary and the files written.
+/// Maps and writes one mesh (the `.inp` with the step of `load`, when given); returns the
+/// summary and the files written.
 fn write_mapped<const D: usize>(
     mesh: &FeMesh<D>,
     ct: &Path,
     recipe: &MaterialRecipe,
     formats: &[MeshFormat],
     name: &str,
+    load: Option<&crate::mesh::AppliedLoadCase>,
     out: &Path,
 ) -> Result<(MaterialSummary, Vec<String>)> {
     let map = map_ct(mesh, ct, recipe)?;
@@ -285,12 +387,13 @@ fn write_mapped<const D: usize>(
             continue;
         }
         let file = format!("{name}_materials.{}", f.extension());
-        crate::formats::write_mesh_with_materials(
+        crate::formats::write_model(
             &out.join(&file),
             mesh,
             None,
             &quality,
             Some(&map),
+            load.filter(|_| *f == MeshFormat::Inp),
         )?;
         files.push(file);
     }

@@ -24,6 +24,8 @@
 //! | `leave_one_out` | the leave-one-out experiment |
 //! | `batch` | batches of subjects from files or memory (a job of the engine) |
 //! | `mesh_file` | quality, conversion and repair of mesh files |
+//! | `voxel_model` | a label map's voxel mesh of several parts, written |
+//! | `solve` | a deck solved by CalculiX, its reactions and the stiffness |
 //! | `register_pair` | one registration, written out |
 //! | `demo` | the built-in demo |
 
@@ -45,9 +47,11 @@ mod register_pair;
 mod report_files;
 pub mod run;
 mod sets;
+mod solve;
 mod subject;
 mod subject_file;
 pub mod subject_page;
+mod voxel_model;
 mod write_subject;
 
 pub use baselines::*;
@@ -67,6 +71,8 @@ pub use register_pair::{PairRegistration, register_pair};
 pub use report_files::BatchFacts;
 pub use run::{RunContext, RunPlace, Shard};
 pub use sets::*;
+pub use solve::*;
 pub use subject::*;
 pub use subject_file::*;
+pub use voxel_model::*;
 pub use write_subject::*;

@@ -25,4 +25,5 @@ mod posterior;
 mod register;
 mod repair;
 mod solver;
+mod spine_benchmark;
 mod vertebrae;

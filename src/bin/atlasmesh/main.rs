@@ -18,6 +18,7 @@ mod register;
 mod repair;
 mod summary;
 mod terminal;
+mod voxel_mesh;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -70,6 +71,9 @@ enum Command {
     /// integrated over its volume, its density and Young's modulus by a recipe, written as a
     /// material per group of E (.inp, .feb) and per-element values (.vtu, .vtk, .msh).
     Materials(materials::MaterialsArgs),
+    /// One hexahedron per voxel of a label map's parts (voxel FE models, the direct route),
+    /// each part an element set, parts that touch sharing their nodes.
+    VoxelMesh(voxel_mesh::VoxelMeshArgs),
     /// Run the whole method on built-in synthetic data (no files needed).
     Demo(demo::DemoArgs),
 }
@@ -89,6 +93,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Convert(a) => convert::run(a),
         Command::Repair(a) => repair::run(a, &term),
         Command::Materials(a) => materials::run(a),
+        Command::VoxelMesh(a) => voxel_mesh::run(a),
         Command::Demo(a) => demo::run(a, &term),
     }
 }

@@ -28,6 +28,18 @@ pub struct MaterialsArgs {
         value_name = "FORMATS"
     )]
     format: Vec<String>,
+    /// A load case (TOML; see docs/validation.md): node sets by geometry, displacements and
+    /// forces, written into the .inp deck as a static step.
+    #[arg(long, value_name = "FILE")]
+    load: Option<PathBuf>,
+    /// Solve the deck with CalculiX (ccx on the PATH, or ATLASMESH_CCX) and report the
+    /// reactions and the stiffness; without CalculiX the deck is written and the report says
+    /// how to run it. Needs --load.
+    #[arg(long, requires = "load")]
+    solve: bool,
+    /// Solver threads (default: the cores available).
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
     /// No histogram picture.
     #[arg(long)]
     no_plots: bool,
@@ -53,6 +65,17 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
     };
     // The inputs are read and checked before the output folder is made.
     recipe.law()?;
+    let load = atlasmesh::study::LoadRequest {
+        load_case: a
+            .load
+            .as_ref()
+            .map(|f| atlasmesh::mesh::LoadCase::read(f))
+            .transpose()?,
+        solve: a.solve,
+        threads: a.threads.unwrap_or_else(|| {
+            std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+        }),
+    };
     if !a.ct.exists() {
         return Err(atlasmesh::Error::io(&a.ct, std::io::ErrorKind::NotFound.into()).into());
     }
@@ -60,12 +83,30 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
     // leaves nothing behind (a folder that was there stays).
     let made = !a.out.exists();
     std::fs::create_dir_all(&a.out).map_err(|e| atlasmesh::Error::io(&a.out, e))?;
-    let r = atlasmesh::study::map_mesh_file(&a.mesh, &a.ct, &recipe, &formats, !a.no_plots, &a.out)
-        .inspect_err(|_| {
-            if made {
-                let _ = std::fs::remove_dir_all(&a.out);
-            }
-        })?;
+    let r = atlasmesh::study::map_mesh_file(
+        &a.mesh,
+        &a.ct,
+        &recipe,
+        &formats,
+        !a.no_plots,
+        &load,
+        &a.out,
+    )
+    .inspect_err(|_| {
+        if made {
+            let _ = std::fs::remove_dir_all(&a.out);
+        }
+    })?;
+    print_summary(&a, &r);
+    println!(
+        "{}",
+        safe(&format!("report: {}", a.out.join("report.json").display()))
+    );
+    Ok(())
+}
+
+/// The warnings, the summary line and the stiffness of a run.
+fn print_summary(a: &MaterialsArgs, r: &atlasmesh::study::MaterialsReport) {
     let m = &r.materials;
     for w in &m.warnings {
         eprintln!("warning: {}", safe(w));
@@ -78,14 +119,30 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
     } else {
         String::new()
     };
+    // An image of density holds its unit, not HU.
+    let value = match m.calibration.unit {
+        Some(u) if m.calibration.image == atlasmesh::materials::ImageValues::Density => {
+            format!("mean density {:.1} {}", m.mean_hu, u.name())
+        }
+        _ => format!("mean HU {:.1}", m.mean_hu),
+    };
+    let parts: String = m
+        .parts
+        .iter()
+        .map(|p| {
+            format!(
+                " and {} {} elements of {}",
+                p.elements, r.element_kind, p.name
+            )
+        })
+        .collect();
     let line = format!(
-        "{}: {} {} elements mapped on {}; mean HU {:.1} (volume-weighted); E {:.0} to {:.0} MPa \
+        "{}: {} {} elements mapped on {}{parts}; {value} (volume-weighted); E {:.0} to {:.0} MPa \
          (median {:.0}) in {} materials{metal}; {} warnings",
         a.mesh.display(),
         m.elements,
         r.element_kind,
         a.ct.display(),
-        m.mean_hu,
         m.modulus_min,
         m.modulus_max,
         m.modulus_median,
@@ -93,9 +150,20 @@ pub fn run(a: MaterialsArgs) -> anyhow::Result<()> {
         m.warnings.len()
     );
     println!("{}", safe(&line));
-    println!(
-        "{}",
-        safe(&format!("report: {}", a.out.join("report.json").display()))
-    );
-    Ok(())
+    if let Some(s) = &r.solve {
+        println!(
+            "{}",
+            safe(&format!(
+                "stiffness: {:.0} N/mm (reaction {:.1} N on {} at {} mm along {}; CalculiX {:.1} \
+                 s, {:.0} MB)",
+                s.stiffness_n_per_mm,
+                s.reaction_n,
+                s.loaded_set,
+                s.displacement_mm,
+                s.axis,
+                s.seconds,
+                s.peak_memory_mb
+            ))
+        );
+    }
 }

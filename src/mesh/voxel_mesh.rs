@@ -7,6 +7,18 @@ use super::{ElementKind, FeMesh, MeshSets, set_name_problem};
 use crate::error::{Error, Result};
 use crate::image::Image;
 
+/// The corners of [`ElementKind::Hex8`] in its natural coordinates.
+const HEX8_CORNERS: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+
 /// A part of a voxel mesh: its name (its element set's) and the label values of its voxels.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VoxelPart {
@@ -94,11 +106,10 @@ pub fn voxel_mesh(image: &Image, parts: &[VoxelPart], source: &str) -> Result<Fe
     let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
         - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
         + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-    let signs = crate::materials::natural_coordinates::corner_signs(ElementKind::Hex8);
     let mirror = det < 0.0;
     let mut connectivity = Vec::with_capacity(voxels.len() * 8);
     for v in &voxels {
-        for s in signs {
+        for s in HEX8_CORNERS {
             // Corner offsets 0 or 1 from the voxel's lower corner; i mirrored for a
             // left-handed affine, which keeps the element's orientation positive in world.
             let sx = if mirror { -s[0] } else { s[0] };

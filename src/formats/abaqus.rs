@@ -543,7 +543,8 @@ pub fn inp_with_materials<const D: usize>(
     s
 }
 
-/// A static step of `load` (appended after the model): its node sets, `*STEP` and
+/// A static step of `load` (appended after the model): its node sets, its ties (`*TIE` of
+/// a node surface to an element surface, nodes not moved onto it), `*STEP` and
 /// `*STATIC`, `*BOUNDARY` for every displacement (mm), `*CLOAD` for every force (N, the total
 /// shared evenly by the set's nodes), the reaction force totals of every displacement set
 /// asked of the `.dat` file (`*NODE PRINT ... TOTALS=ONLY`) and the displacements and
@@ -555,6 +556,14 @@ pub fn inp_step(s: &mut String, load: &crate::mesh::AppliedLoadCase) {
         }
         let _ = writeln!(s, "*NSET, NSET={name}");
         id_lines(s, members.iter().copied(), 16);
+    }
+    for (k, (nodes, surface, tolerance)) in load.ties.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "*SURFACE, NAME=TIE_{n}_NODES, TYPE=NODE\n{nodes}\n*TIE, NAME=TIE_{n}, POSITION \
+             TOLERANCE={tolerance:e}, ADJUST=NO\nTIE_{n}_NODES, {surface}",
+            n = k + 1
+        );
     }
     s.push_str("*STEP\n*STATIC\n*BOUNDARY\n");
     for (set, axis, v) in &load.displacements {

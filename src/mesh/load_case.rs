@@ -60,6 +60,9 @@ pub struct LoadCase {
     /// `[[force]]`: forces (N, each the total over its set).
     #[serde(default)]
     pub force: Vec<Condition>,
+    /// `[[tie]]`: node sets tied to surfaces (non-matching meshes of one model).
+    #[serde(default)]
+    pub tie: Vec<Tie>,
     /// Hold the free rigid-body motion at a few nodes (default true).
     #[serde(default = "yes")]
     pub rigid_body: bool,
@@ -105,6 +108,24 @@ pub struct PlaneSelector {
     pub distance: f64,
 }
 
+/// A tie: the nodes of a set held to a surface of the mesh where they lie within a
+/// tolerance of it (CalculiX `*TIE`, its slave side the nodes, its master the surface).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tie {
+    /// The node set (a `[[nodes]]` name or a node set of the mesh).
+    pub nodes: String,
+    /// A surface of the mesh (element faces).
+    pub surface: String,
+    /// mm: nodes farther from the surface are not tied (default 1).
+    #[serde(default = "default_tie_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_tie_tolerance() -> f64 {
+    1.0
+}
+
 /// Components applied to a node set: a displacement (mm) or a force (N).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -146,6 +167,8 @@ pub struct AppliedLoadCase {
     pub forces: Vec<(String, usize, f64)>,
     /// The sets whose reaction forces are asked for (every displacement set).
     pub reaction_sets: Vec<String>,
+    /// Ties: `(node set, surface, tolerance mm)`.
+    pub ties: Vec<(String, String, f64)>,
     /// The set, axis and value of the first non-zero displacement: the stiffness is its
     /// reaction over it.
     pub loaded: Option<(String, usize, f64)>,
@@ -225,6 +248,11 @@ impl LoadCase {
                         n.name
                     ));
                 }
+            }
+        }
+        for t in &self.tie {
+            if !(t.tolerance.is_finite() && t.tolerance > 0.0) {
+                return Err(format!("tie of {}: tolerance {} mm", t.nodes, t.tolerance));
             }
         }
         for (kind, list) in [("displacement", &self.displacement), ("force", &self.force)] {
@@ -348,6 +376,16 @@ impl LoadCase {
                 applied.forces.push((c.nodes.clone(), axis, v));
             }
             sets.entry(c.nodes.clone()).or_insert(members);
+        }
+        for t in &self.tie {
+            let members = find(&sets, &mut applied.mesh_sets, &t.nodes)?;
+            if !mesh.sets.surfaces.contains_key(&t.surface) {
+                return Err(bad(no_surface(mesh, t)));
+            }
+            applied
+                .ties
+                .push((t.nodes.clone(), t.surface.clone(), t.tolerance));
+            sets.entry(t.nodes.clone()).or_insert(members);
         }
         if self.rigid_body {
             let anchor_set = self
@@ -481,6 +519,21 @@ fn rigid_body_holds(
     holds
 }
 
+/// The problem of a tie whose surface is not in `mesh`, naming the surfaces it has.
+fn no_surface(mesh: &FeMesh<3>, t: &Tie) -> String {
+    let names: Vec<&str> = mesh.sets.surfaces.keys().map(String::as_str).collect();
+    format!(
+        "tie of {}: no surface {} in the mesh (its surfaces: {})",
+        t.nodes,
+        t.surface,
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -605,5 +658,18 @@ z = 0.0
                 .to_string()
                 .contains("sets overlap")
         );
+        let tie = |extra: &str| {
+            format!(
+                "[[nodes]]\nname = \"A\"\nface = [0.0, 0.0, 1.0]\n[[displacement]]\nnodes = \"A\"\nz = 0.0\n[[tie]]\nnodes = \"A\"\nsurface = \"S\"\n{extra}"
+            )
+        };
+        let e = LoadCase::parse(Path::new("c.toml"), &tie("tolerance = -1.0\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("tolerance -1"), "{e}");
+        let c = LoadCase::parse(Path::new("c.toml"), &tie("")).unwrap();
+        assert_eq!(c.tie[0].tolerance, 1.0);
+        let e = c.apply(&m).unwrap_err().to_string();
+        assert!(e.contains("no surface S") && e.contains("none"), "{e}");
     }
 }

@@ -17,6 +17,7 @@
 //! | `load_case` | a load case: node sets by geometry, displacements, forces, the rigid-body holds |
 //! | `morph` | [`Morpher`]: the mesh carried by boundary correspondences (eq. 9) |
 //! | `repair` | untangling and improving poor elements |
+//! | `join` | a voxel mesh's parts joined to a mesh by a tie (a surface and the nodes near it) |
 //! | `voxel_mesh` | one hexahedron per voxel of a label map's parts (voxel FE models) |
 
 mod boundary;
@@ -25,6 +26,7 @@ mod element;
 pub mod element_size;
 mod fe_mesh;
 pub mod hex_mesh;
+mod join;
 mod load_case;
 mod mean_mesh;
 mod morph;
@@ -41,6 +43,7 @@ pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};
 pub use fe_mesh::{FeMesh, HexMesh, MAX_SET_NAME, MeshSets, QuadMesh, set_name_problem};
 pub use hex_mesh::{HexMeshParams, hex_mesh};
+pub use join::{TiedMesh, join_tied};
 pub use load_case::{AXES, AppliedLoadCase, Condition, LoadCase, NodeSelector, PlaneSelector};
 pub use mean_mesh::{
     MEAN_MESH_COVERAGE, MEAN_MESH_EDGE_RATIO_MAX, MEAN_MESH_SCALED_JACOBIAN_MIN,

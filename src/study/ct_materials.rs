@@ -271,7 +271,7 @@ pub fn map_mesh_file(
     }
     let mut load_sets = std::collections::BTreeMap::new();
     let mut solve = None;
-    let (summary, mut files) = if kind.dimension() == 2 {
+    let (mut summary, mut files) = if kind.dimension() == 2 {
         if load.load_case.is_some() {
             return Err(Error::Parameter(format!(
                 "{}: a load case is for 3D meshes",
@@ -306,11 +306,19 @@ pub fn map_mesh_file(
         }
         written
     };
-    if solve.is_some() {
+    if let Some(s) = &solve {
+        if s.untied_nodes > 0 {
+            summary.warnings.push(format!(
+                "CalculiX found no face to tie {} of the tie's nodes to (listed in \
+                 {name}_materials_WarnNodeMissTiedContact.nam): they are free",
+                s.untied_nodes
+            ));
+        }
         for f in [
             format!("{name}_materials.dat"),
             format!("{name}_materials.frd"),
             format!("{name}_materials_ccx.log"),
+            format!("{name}_materials_WarnNodeMissTiedContact.nam"),
         ] {
             if out.join(&f).is_file() {
                 files.push(f);

@@ -32,6 +32,10 @@ pub struct SolveReport {
     pub reaction_n: f64,
     /// The stiffness: `|reaction / displacement|` (N/mm).
     pub stiffness_n_per_mm: f64,
+    /// The nodes of the load case's ties that CalculiX found no face for (they stay free),
+    /// as it lists them in `NAME_WarnNodeMissTiedContact.nam`.
+    #[serde(default)]
+    pub untied_nodes: usize,
 }
 
 /// The longest a solve may run (s), unless `ATLASMESH_SOLVER_TIMEOUT` says otherwise.
@@ -86,6 +90,11 @@ pub fn solve_calculix(deck: &Path, load: &AppliedLoadCase, threads: usize) -> Re
         .ok()
         .and_then(|v| v.parse::<u64>().ok())
         .unwrap_or(SOLVER_TIMEOUT_S);
+    // CalculiX writes this list only when a tie misses nodes: one from an earlier run goes.
+    let untied_path = dir.join(format!("{stem}_WarnNodeMissTiedContact.nam"));
+    if untied_path.is_file() {
+        std::fs::remove_file(&untied_path).map_err(|e| Error::io(&untied_path, e))?;
+    }
     let start = Instant::now();
     let mut child = std::process::Command::new(&ccx)
         .arg("-i")
@@ -117,18 +126,11 @@ pub fn solve_calculix(deck: &Path, load: &AppliedLoadCase, threads: usize) -> Re
     let log_text = std::fs::read_to_string(&log_path).unwrap_or_default();
     let dat_path = dir.join(format!("{stem}.dat"));
     if !status.success() || log_text.contains("*ERROR") || !dat_path.is_file() {
-        let tail: Vec<&str> = log_text
-            .lines()
-            .filter(|l| !l.trim().is_empty())
-            .rev()
-            .take(6)
-            .collect();
-        let tail: Vec<&str> = tail.into_iter().rev().collect();
         return Err(Error::Parameter(format!(
             "CalculiX failed on {} ({status}); its log {} ends: {}",
             deck.display(),
             log_path.display(),
-            tail.join(" / ")
+            log_tail(&log_text)
         )));
     }
     let dat = std::fs::read_to_string(&dat_path).map_err(|e| Error::io(&dat_path, e))?;
@@ -151,6 +153,14 @@ pub fn solve_calculix(deck: &Path, load: &AppliedLoadCase, threads: usize) -> Re
         ))
     })?;
     let reaction = reactions[&loaded_set][axis];
+    // CalculiX lists the tie's nodes it could not tie, one number per line after the header.
+    let untied_nodes = std::fs::read_to_string(&untied_path)
+        .map(|t| {
+            t.lines()
+                .filter(|l| l.trim().parse::<usize>().is_ok())
+                .count()
+        })
+        .unwrap_or(0);
     Ok(SolveReport {
         solver: ccx.display().to_string(),
         deck: deck
@@ -165,7 +175,19 @@ pub fn solve_calculix(deck: &Path, load: &AppliedLoadCase, threads: usize) -> Re
         displacement_mm: u,
         reaction_n: reaction,
         stiffness_n_per_mm: (reaction / u).abs(),
+        untied_nodes,
     })
+}
+
+/// The last six non-empty lines of a solver's log, joined by ` / `.
+fn log_tail(log: &str) -> String {
+    let tail: Vec<&str> = log
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .rev()
+        .take(6)
+        .collect();
+    tail.into_iter().rev().collect::<Vec<_>>().join(" / ")
 }
 
 /// The reaction force totals of a CalculiX `.dat` file by set (upper case, as CalculiX

@@ -584,3 +584,55 @@ fn a_bad_parameter() {
         &["variance"],
     );
 }
+
+/// `voxel-mesh --join`: a mesh that is not there, a tolerance that is no distance, a set name
+/// a solver file cannot hold: each refused before anything is written, the output folder not
+/// made.
+#[test]
+fn voxel_mesh_join_refuses_what_it_cannot_tie() {
+    let d = common::temp_dir("bad-join");
+    let labels = d.join("seg.nii.gz");
+    std::fs::write(&labels, b"not read: the arguments are checked first").unwrap();
+    let bone = d.join("bone.inp");
+    std::fs::write(&bone, b"*NODE\n").unwrap();
+    let out = d.join("out");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "voxel-mesh".to_string(),
+            s(&labels),
+            "--part".into(),
+            "PADS=5,6".into(),
+            "--out".into(),
+            s(&out),
+        ];
+        args.extend(extra.iter().map(|a| a.to_string()));
+        atlasmesh(&args)
+    };
+    let missing = s(&d.join("missing.inp"));
+    fails(&run(&["--join", &missing]), 3, &["missing.inp"]);
+    fails(
+        &run(&["--join", &s(&bone), "--tie-tolerance", "NaN"]),
+        2,
+        &["--tie-tolerance NaN"],
+    );
+    fails(
+        &run(&["--join", &s(&bone), "--tie-tolerance=-1"]),
+        2,
+        &["--tie-tolerance -1"],
+    );
+    fails(
+        &run(&["--join", &s(&bone), "--join-name", "A B"]),
+        2,
+        &["--join-name A B", "not allowed"],
+    );
+    assert!(!out.exists());
+    // --join-name and --tie-tolerance mean nothing without --join.
+    let o = run(&["--tie-tolerance", "2"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!out.exists());
+}

@@ -21,7 +21,19 @@ pub struct VoxelMeshArgs {
         value_name = "FORMATS"
     )]
     format: Vec<String>,
-    /// Output folder: NAME_voxels.EXT.
+    /// Join the parts to this mesh (a fitted bone: .inp, .vtu, .vtk, .msh, in the label
+    /// map's world frame) by a tie instead of writing them alone: NAME_joined.EXT, the mesh's
+    /// elements the set --join-name, its boundary faces the surface NAME_SURFACE, the parts'
+    /// nodes near it the node set NAME_TIED (tie them with a load case's [[tie]]).
+    #[arg(long, value_name = "MESH")]
+    join: Option<PathBuf>,
+    /// The element set of the joined mesh's elements.
+    #[arg(long, default_value = "BONE", value_name = "NAME", requires = "join")]
+    join_name: String,
+    /// mm: the parts' nodes within this distance of the joined mesh's surface are tied.
+    #[arg(long, default_value_t = 1.0, value_name = "MM", requires = "join")]
+    tie_tolerance: f64,
+    /// Output folder: NAME_voxels.EXT (NAME_joined.EXT with --join).
     #[arg(long)]
     out: PathBuf,
 }
@@ -61,18 +73,44 @@ pub fn run(a: VoxelMeshArgs) -> anyhow::Result<()> {
         .iter()
         .map(|p| part(p))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    if !a.labels.is_file() {
-        return Err(atlasmesh::Error::io(&a.labels, std::io::ErrorKind::NotFound.into()).into());
+    for f in std::iter::once(&a.labels).chain(&a.join) {
+        if !f.is_file() {
+            return Err(atlasmesh::Error::io(f, std::io::ErrorKind::NotFound.into()).into());
+        }
     }
+    if !(a.tie_tolerance.is_finite() && a.tie_tolerance > 0.0) {
+        return Err(atlasmesh::Error::Parameter(format!(
+            "--tie-tolerance {}: give a distance in mm above zero",
+            a.tie_tolerance
+        ))
+        .into());
+    }
+    if let Some(p) = atlasmesh::mesh::set_name_problem(&a.join_name) {
+        return Err(
+            atlasmesh::Error::Parameter(format!("--join-name {}: {p}", a.join_name)).into(),
+        );
+    }
+    let join = a.join.as_deref().map(|mesh| atlasmesh::study::JoinRequest {
+        mesh,
+        name: &a.join_name,
+        tolerance: a.tie_tolerance,
+    });
     let made = !a.out.exists();
     std::fs::create_dir_all(&a.out).map_err(|e| atlasmesh::Error::io(&a.out, e))?;
-    let (_, r) = atlasmesh::study::write_voxel_mesh(&a.labels, &parts, &formats, &a.out)
-        .inspect_err(|_| {
-            if made {
-                let _ = std::fs::remove_dir_all(&a.out);
-            }
-        })?;
-    let parts: Vec<String> = r.parts.iter().map(|(n, _, e)| format!("{n} {e}")).collect();
+    let (_, r) =
+        atlasmesh::study::write_voxel_mesh(&a.labels, &parts, &formats, join.as_ref(), &a.out)
+            .inspect_err(|_| {
+                if made {
+                    let _ = std::fs::remove_dir_all(&a.out);
+                }
+            })?;
+    let mut parts: Vec<String> = r.parts.iter().map(|(n, _, e)| format!("{n} {e}")).collect();
+    if let Some(j) = &r.joined {
+        parts.push(format!(
+            "joined to {} as {}, {} nodes tied to {} as {}",
+            j.mesh, j.name, j.tied_nodes, j.surface, j.tied
+        ));
+    }
     println!(
         "{}",
         safe(&format!(

@@ -14,6 +14,7 @@
 //! | `fe_mesh` | FE meshes: the format by extension ([`MeshFormat`]) |
 //! | `helpers` | what the readers and writers share: text, numbers, coordinates, mesh checks |
 //! | `abaqus` | Abaqus/CalculiX `.inp` meshes and decks |
+//! | `calculix_frd` | CalculiX's results (`.frd`): the nodal displacements of a solve |
 //! | `gmsh`, `gmsh_binary`, `gmsh_parsed` | Gmsh `.msh`: ASCII and the mesh's assembly; binary files; what both fill |
 //! | `febio` | FEBio `.feb` |
 //! | `deck` | solver decks (`.inp`, `.feb`) copied per subject with its nodes |
@@ -28,6 +29,7 @@
 pub mod abaqus;
 pub mod atlas_file;
 mod atomic;
+pub mod calculix_frd;
 pub mod csv_table;
 mod deck;
 mod dicom_lengths;
@@ -65,6 +67,7 @@ pub use abaqus::{InpDeck, inp_step, parse_inp, read_inp};
 pub use atlas_file::{ATLAS_FORMAT_VERSION, atlas_dimension};
 pub(crate) use atomic::MAX_COUNT;
 pub use atomic::{create_dir, lock_dir, write_atomic};
+pub use calculix_frd::{parse_frd_displacements, read_frd_displacements};
 pub use csv_table::CsvColumns;
 pub use deck::{Deck, FebDeck};
 pub use fe_mesh::{

@@ -6,6 +6,7 @@
 //! | `schema` | [`Report`], [`SubjectReport`], [`Summary`]: the `report.json` schema |
 //! | `plots` | PNG plots: variance, `E_d`, measures, modes, Jacobians, subjects |
 //! | `render` | a small rasterizer for 3D surfaces and meshes |
+//! | `solve_picture` | a solved model's boundary coloured by its displacement |
 //! | `html` | `report.html` |
 //! | `subject_page` | a subject's page `NAME.html` |
 //! | `model_page` | the model's page `model.html` |
@@ -21,6 +22,7 @@ mod plots;
 mod posterior;
 pub mod render;
 mod schema;
+mod solve_picture;
 pub mod subject_page;
 pub mod viewer;
 pub mod viewer_scene;
@@ -30,3 +32,4 @@ pub use plots::*;
 pub use posterior::*;
 pub use render::font_available;
 pub use schema::*;
+pub use solve_picture::displacement_picture;

@@ -73,14 +73,40 @@ impl View {
     /// tilted by 20° about the horizontal so the relief shows.
     pub fn fitting(points: &[Point<3>]) -> Self {
         let axes = crate::geometry::principal_axes_of(points);
-        let c = crate::geometry::centroid(points);
         let tilt = 20f64.to_radians();
         let (s, co) = tilt.sin_cos();
         // right = axis 0; up = axis 1 tilted towards axis 2; out = axis 2 tilted back.
         let up: [f64; 3] = std::array::from_fn(|d| co * axes[1][d] + s * axes[2][d]);
         let out: [f64; 3] = std::array::from_fn(|d| -s * axes[1][d] + co * axes[2][d]);
-        let rotation = [axes[0], up, out];
         // The window: the points' extent across and up, centred on them.
+        Self::framing(points, [axes[0], up, out])
+    }
+
+    /// The side view of `points` with the world direction `up` vertical (a load's axis),
+    /// seen across their largest horizontal extent: the window fitted as [`View::fitting`]'s.
+    pub fn upright(points: &[Point<3>], up: [f64; 3]) -> Self {
+        let norm = |v: [f64; 3]| {
+            let l = dot(&v, &v).sqrt();
+            (l > 1e-12).then(|| v.map(|x| x / l))
+        };
+        let up = norm(up).unwrap_or([0.0, 0.0, 1.0]);
+        let axes = crate::geometry::principal_axes_of(points);
+        let right = axes
+            .iter()
+            .find_map(|a| norm(std::array::from_fn(|d| a[d] - dot(a, &up) * up[d])))
+            .unwrap_or([1.0, 0.0, 0.0]);
+        let out = [
+            right[1] * up[2] - right[2] * up[1],
+            right[2] * up[0] - right[0] * up[2],
+            right[0] * up[1] - right[1] * up[0],
+        ];
+        Self::framing(points, [right, up, out])
+    }
+
+    /// The view by `rotation` (rows: right, up, towards the viewer) whose window holds
+    /// `points`, centred on them.
+    fn framing(points: &[Point<3>], rotation: [[f64; 3]; 3]) -> Self {
+        let c = crate::geometry::centroid(points);
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in points {
             let q = sub(*p, c);

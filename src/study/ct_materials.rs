@@ -271,6 +271,7 @@ pub fn map_mesh_file(
     }
     let mut load_sets = std::collections::BTreeMap::new();
     let mut solve = None;
+    let mut pictures = Vec::new();
     let (mut summary, mut files) = if kind.dimension() == 2 {
         if load.load_case.is_some() {
             return Err(Error::Parameter(format!(
@@ -296,7 +297,26 @@ pub fn map_mesh_file(
             if load.solve {
                 let deck = out.join(format!("{name}_materials.inp"));
                 if super::find_calculix().is_some() {
-                    solve = Some(super::solve_calculix(&deck, a, load.threads)?);
+                    let mut solved = super::solve_calculix(&deck, a, load.threads)?;
+                    let frd = out.join(format!("{name}_materials.frd"));
+                    let u = crate::formats::read_frd_displacements(&frd, mesh.nodes.len())?;
+                    solved.largest_displacement_mm = u
+                        .iter()
+                        .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+                        .filter(|m| m.is_finite())
+                        .reduce(f64::max);
+                    if plots {
+                        let png = format!("{name}_displacement.png");
+                        let title = format!(
+                            "{name}: displacement, {:.0} N/mm (front, back)",
+                            solved.stiffness_n_per_mm
+                        );
+                        let axis = a.loaded.as_ref().map_or(2, |l| l.1);
+                        let picture = crate::report::displacement_picture(&mesh, &u, axis, &title)?;
+                        write_atomic(&out.join(&png), &picture)?;
+                        pictures.push(png);
+                    }
+                    solve = Some(solved);
                 } else {
                     let mut w = written;
                     w.0.warnings.push(super::how_to_solve(&deck, a));
@@ -324,6 +344,7 @@ pub fn map_mesh_file(
                 files.push(f);
             }
         }
+        files.extend(pictures);
     }
     finish(
         mesh_file,

@@ -36,6 +36,9 @@ pub struct SolveReport {
     /// as it lists them in `NAME_WarnNodeMissTiedContact.nam`.
     #[serde(default)]
     pub untied_nodes: usize,
+    /// The largest nodal displacement's magnitude (mm), from the `.frd` results.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub largest_displacement_mm: Option<f64>,
 }
 
 /// The longest a solve may run (s), unless `ATLASMESH_SOLVER_TIMEOUT` says otherwise.
@@ -176,6 +179,7 @@ pub fn solve_calculix(deck: &Path, load: &AppliedLoadCase, threads: usize) -> Re
         reaction_n: reaction,
         stiffness_n_per_mm: (reaction / u).abs(),
         untied_nodes,
+        largest_displacement_mm: None,
     })
 }
 

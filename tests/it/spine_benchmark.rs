@@ -335,7 +335,6 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
         "--load".into(),
         s(&example.join("atlas_load.toml")),
         "--solve".into(),
-        "--no-plots".into(),
         "--out".into(),
         s(&mat),
     ]);
@@ -360,6 +359,16 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
         (top[2] + bottom[2]).abs() < 1e-6 * top[2].abs(),
         "{top:?} {bottom:?}"
     );
+    // The displacements CalculiX wrote: the top face's 0.2 mm at least, nothing flying off;
+    // their picture written.
+    let largest = solve.largest_displacement_mm.unwrap();
+    assert!((0.2..1.0).contains(&largest), "{largest} mm");
+    let picture = r
+        .files
+        .iter()
+        .find(|f| f.ends_with("_displacement.png"))
+        .expect("the displacement's picture");
+    assert!(std::fs::metadata(mat.join(picture)).unwrap().len() > 10_000);
 
     // The deck as meshio reads it: bone and pads, the tie's node set, the tie in the step.
     let deck = mat.join(&solve.deck);

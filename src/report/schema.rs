@@ -140,8 +140,80 @@ pub struct SubjectReport {
     /// eq. 4): the subject's coordinates in the shape space.
     #[serde(default)]
     pub sd: Vec<f64>,
+    /// The fit's pose (eq. 5): the atlas's reference frame to the subject's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pose: Option<Pose>,
     /// Output files of this subject, relative to the report.
     pub files: Vec<String>,
+}
+
+/// A fit's pose `t_{R,T,s}` (eq. 5): `x_subject = s R x + T` takes a point `x` of the atlas's
+/// reference frame (the mean shape's coordinates) to the subject's frame and unit (its file's:
+/// mm, world RAS for a label map). Instances of the model's shape space are posed by it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// `s` (subject unit per reference unit).
+    pub scale: f64,
+    /// `R`, row-major, D × D, `det R = +1`.
+    pub rotation: Vec<Vec<f64>>,
+    /// `T` (subject unit).
+    pub translation: Vec<f64>,
+    /// The homogeneous (D + 1) × (D + 1) matrix `[[s R, T], [0, 1]]`, row-major, as VTK,
+    /// PyVista and ITK apply transforms.
+    pub matrix: Vec<Vec<f64>>,
+}
+
+impl Pose {
+    /// The pose of the similarity `t` (reference frame to subject frame).
+    pub fn of<const D: usize>(t: &crate::geometry::Similarity<D>) -> Self {
+        let rotation: Vec<Vec<f64>> = t.r.iter().map(|row| row.to_vec()).collect();
+        let mut matrix: Vec<Vec<f64>> =
+            t.r.iter()
+                .zip(&t.t)
+                .map(|(row, ti)| row.iter().map(|v| t.s * v).chain([*ti]).collect())
+                .collect();
+        matrix.push((0..=D).map(|k| if k == D { 1.0 } else { 0.0 }).collect());
+        Pose {
+            scale: t.s,
+            rotation,
+            translation: t.t.to_vec(),
+            matrix,
+        }
+    }
+}
+
+/// The fitted subjects' shape scores as CSV: a header `name,mode_1,...,mode_M`, then one
+/// row per subject with its weights in standard deviations ([`SubjectReport::sd`]); `M` is
+/// the most modes any subject has, a subject with fewer leaves the rest empty. Names are
+/// quoted when they hold a comma, a quote or a line break (RFC 4180).
+pub fn scores_csv(subjects: &[SubjectReport]) -> String {
+    scores_table(subjects.iter().map(|s| (s.name.as_str(), s.sd.as_slice())))
+}
+
+/// [`scores_csv`] of `(name, scores)` rows.
+fn scores_table<'a>(rows: impl Iterator<Item = (&'a str, &'a [f64])> + Clone) -> String {
+    use std::fmt::Write as _;
+    let m = rows.clone().map(|(_, sd)| sd.len()).max().unwrap_or(0);
+    let mut out = String::from("name");
+    for k in 1..=m {
+        let _ = write!(out, ",mode_{k}");
+    }
+    out.push('\n');
+    for (name, sd) in rows {
+        if name.contains([',', '"', '\n', '\r']) {
+            let _ = write!(out, "\"{}\"", name.replace('"', "\"\""));
+        } else {
+            out.push_str(name);
+        }
+        for k in 0..m {
+            out.push(',');
+            if let Some(v) = sd.get(k) {
+                let _ = write!(out, "{v}");
+            }
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// Figures over all subjects.
@@ -407,5 +479,45 @@ impl ShapeModelMeasures {
         let bytes = serde_json::to_vec_pretty(self)
             .map_err(|e| crate::error::Error::io(path, std::io::Error::other(e.to_string())))?;
         crate::formats::write_atomic(path, &bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scores_quote_names_and_leave_missing_modes_empty() {
+        let rows = [("a", &[0.5, -1.0][..]), ("b, \"c\"", &[2.0][..])];
+        assert_eq!(
+            scores_table(rows.iter().copied()),
+            "name,mode_1,mode_2\na,0.5,-1\n\"b, \"\"c\"\"\",2,\n"
+        );
+    }
+
+    #[test]
+    fn a_pose_matrix_applies_the_similarity() {
+        let t = crate::geometry::Similarity::<2> {
+            s: 2.0,
+            r: [[0.0, -1.0], [1.0, 0.0]],
+            t: [3.0, 4.0],
+        };
+        let p = Pose::of(&t);
+        assert_eq!(
+            p.matrix,
+            vec![
+                vec![0.0, -2.0, 3.0],
+                vec![2.0, 0.0, 4.0],
+                vec![0.0, 0.0, 1.0]
+            ]
+        );
+        let x = [1.0, 2.0];
+        let y = t.apply(&x);
+        for r in 0..2 {
+            assert_eq!(
+                p.matrix[r][0] * x[0] + p.matrix[r][1] * x[1] + p.matrix[r][2],
+                y[r]
+            );
+        }
     }
 }

@@ -91,6 +91,10 @@ pub(crate) fn finish_report<const D: usize>(
         atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
     };
     report.write(&out.join("report.json"))?;
+    crate::formats::write_atomic(
+        &out.join("scores.csv"),
+        crate::report::scores_csv(&report.subjects).as_bytes(),
+    )?;
     if params.plots {
         let mut pictures = crate::report::html::Pictures::default();
         if let Some(m) = &measures {

@@ -125,7 +125,70 @@ fn build_then_fit_through_the_cli() {
     let r: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.join("fit/report.json")).unwrap()).unwrap();
     assert_eq!(r["subjects"][0]["inverted_elements"], 0);
+    let rms = r["subjects"][0]["rms_distance"].as_f64().unwrap();
     assert!(r["subjects"][0]["rms_distance_relative"].as_f64().unwrap() < 0.01);
+
+    // The scores and the pose rebuild the fitted instance on the subject: the atlas's
+    // S_bar + Psi w (w = sd · sqrt(lambda)) through the pose's 3 × 3 matrix lies on the
+    // subject's outline (10 times the population's size, shifted by 3), the bare instance
+    // far from it.
+    let model = atlasmesh::model::Atlas::<2>::load(Path::new(&atlas)).unwrap();
+    let sd: Vec<f64> = r["subjects"][0]["sd"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let w: Vec<f64> = sd
+        .iter()
+        .zip(&model.eigenvalues)
+        .map(|(z, l)| z * l.sqrt())
+        .collect();
+    let m: Vec<Vec<f64>> =
+        serde_json::from_value(r["subjects"][0]["pose"]["matrix"].clone()).unwrap();
+    assert_eq!(m[2], vec![0.0, 0.0, 1.0]);
+    let outline: Vec<[f64; 2]> = subj
+        .lines()
+        .map(|l| {
+            let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1]]
+        })
+        .collect();
+    let to_outline = |p: [f64; 2]| -> f64 {
+        (0..outline.len())
+            .map(|i| {
+                let (a, b) = (outline[i], outline[(i + 1) % outline.len()]);
+                let ab = [b[0] - a[0], b[1] - a[1]];
+                let t = (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1])
+                    / (ab[0] * ab[0] + ab[1] * ab[1]))
+                    .clamp(0.0, 1.0);
+                (p[0] - a[0] - t * ab[0]).hypot(p[1] - a[1] - t * ab[1])
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let rms_of = |points: &[[f64; 2]]| -> f64 {
+        (points.iter().map(|p| to_outline(*p).powi(2)).sum::<f64>() / points.len() as f64).sqrt()
+    };
+    let instance = model.instance(&w);
+    let posed: Vec<[f64; 2]> = instance
+        .iter()
+        .map(|p| std::array::from_fn(|r| m[r][0] * p[0] + m[r][1] * p[1] + m[r][2]))
+        .collect();
+    let (on, bare) = (rms_of(&posed), rms_of(&instance));
+    assert!(
+        on < 2.0 * rms + 1e-3,
+        "posed instance {on} from the outline (fit {rms})"
+    );
+    assert!(bare > 20.0 * on, "the bare instance {bare}");
+    // scores.csv: the same scores, one row per subject.
+    let scores = std::fs::read_to_string(d.join("fit/scores.csv")).unwrap();
+    let mut lines = scores.lines();
+    assert_eq!(lines.next(), Some("name,mode_1,mode_2,mode_3"));
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(row[0], "subject");
+    for (cell, z) in row[1..].iter().zip(&sd) {
+        assert_eq!(cell.parse::<f64>().unwrap(), *z);
+    }
     std::fs::remove_dir_all(&d).ok();
 }
 
@@ -662,4 +725,43 @@ fn options_a_landmarks_only_fit_does_not_use_are_refused() {
         "o",
     ]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// `build` fits nobody: the options of a subject's fit, morph and outputs are refused by
+/// name (exit 2, no atlas written) instead of being ignored; the ones it uses (`--sets`,
+/// `--no-plots`) and a fit option given as its default are not.
+#[test]
+fn build_refuses_the_options_of_a_fit() {
+    let d = common::temp_dir("build-fit-options");
+    let shapes: Vec<String> = [(2.0, 1.0), (2.2, 1.0), (1.8, 1.1), (2.0, 0.9)]
+        .iter()
+        .enumerate()
+        .map(|(k, (a, b))| {
+            let text: String = (0..40)
+                .map(|i| {
+                    let t = f64::from(i) / 40.0 * std::f64::consts::TAU;
+                    format!("{} {}\n", a * t.cos(), b * t.sin())
+                })
+                .collect();
+            write(&d, &format!("s{k}.txt"), &text)
+        })
+        .collect();
+    let out = d.join("atlas.safetensors");
+    let build = |extra: &[&str]| {
+        let mut args = vec!["build", "--closed", "--shapes"];
+        args.extend(shapes.iter().map(String::as_str));
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        atlasmesh(&args)
+    };
+    let o = build(&["--format", "inp", "--partial", "--alpha", "7"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    for flag in ["--format", "--partial", "--alpha", "atlasmesh convert"] {
+        assert!(err.contains(flag), "{flag}: {err}");
+    }
+    assert!(!out.exists());
+    let o = build(&["--no-plots", "--alpha", "50"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.is_file());
 }

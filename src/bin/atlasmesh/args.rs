@@ -156,6 +156,38 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
+    /// The options of a subject's fit, morph and outputs given other than as their defaults,
+    /// by their flags: what `build`, which fits nobody, refuses.
+    pub fn fit_options_given(&self) -> Vec<&'static str> {
+        #[derive(clap::Parser)]
+        struct Defaults {
+            #[command(flatten)]
+            run: RunArgs,
+        }
+        let Ok(d) = <Defaults as clap::Parser>::try_parse_from(["atlasmesh"]) else {
+            return Vec::new();
+        };
+        let d = d.run;
+        [
+            ("--grid", self.grid != d.grid),
+            ("--alpha", self.alpha != d.alpha),
+            ("--one-way", self.one_way != d.one_way),
+            ("--starts", self.starts != d.starts),
+            ("--partial", self.partial != d.partial),
+            ("--baselines", self.baselines != d.baselines),
+            ("--format", self.format != d.format),
+            ("--surface-format", self.surface_format != d.surface_format),
+            ("--repair", self.repair != d.repair),
+            ("--repair-bound", self.repair_bound != d.repair_bound),
+            ("--boundary-fit", self.boundary_fit != d.boundary_fit),
+            ("--deck", self.deck != d.deck),
+            ("--max-misfit", self.max_misfit != d.max_misfit),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect()
+    }
+
     /// The run's parameters for shapes of dimension `dim`, checked
     /// ([`RunParams::validate`]).
     pub fn params_for(&self, dim: usize) -> anyhow::Result<RunParams> {

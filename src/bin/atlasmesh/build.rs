@@ -30,6 +30,21 @@ pub struct BuildArgs {
 
 /// Runs `atlasmesh build`.
 pub fn run(mut a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
+    let unused = a.run.fit_options_given();
+    if !unused.is_empty() {
+        return Err(atlasmesh::Error::Parameter(format!(
+            "build does not use {}: {} of a subject's fit (`atlasmesh fit`, `loo`); \
+             build writes the mean mesh as ATLAS_mean_mesh.vtu, and `atlasmesh convert ATLAS \
+             mean.inp` writes it in another format",
+            unused.join(", "),
+            if unused.len() == 1 {
+                "an option"
+            } else {
+                "options"
+            }
+        ))
+        .into());
+    }
     a.pop.expand()?;
     if study::inputs_are_surfaces(&a.pop.shapes)? {
         build(

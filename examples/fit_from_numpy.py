@@ -1,6 +1,7 @@
 """From NumPy arrays to a solver-ready mesh, as in a notebook.
 
-    pip install .                      # from the repository (needs cargo)
+    pip install . meshio               # the package from the repository (needs cargo), and
+                                       # meshio, which reads the written mesh back
     ATLASMESH_DATA=../shared/data python examples/fit_from_numpy.py
 
 Builds an atlas of 29 distal femurs, fits a 30th given as arrays, writes its hexahedral mesh
@@ -15,6 +16,11 @@ import tempfile
 import numpy as np
 
 import atlasmesh
+
+try:
+    import meshio
+except ImportError:
+    raise SystemExit("this example reads the written mesh back with meshio: pip install meshio")
 
 data = os.environ.get("ATLASMESH_DATA")
 if data:
@@ -48,8 +54,6 @@ assert result.success and mesh.scaled_jacobian.min() > 0
 with tempfile.TemporaryDirectory() as d:
     path = pathlib.Path(d) / "subject_mesh.inp"
     mesh.write(path)
-    import meshio
-
     back = meshio.read(path)
     assert len(back.points) == len(mesh.nodes)
     print("written and read back:", path.name, len(back.points), "nodes")

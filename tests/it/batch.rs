@@ -269,7 +269,10 @@ fn cluster(test: &str) -> Option<(PathBuf, std::fs::File)> {
     let required = std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_some();
     let skip = |why: String| {
         assert!(!required, "{test}: a Slurm cluster is required: {why}");
-        eprintln!("{test}: skipped ({why}; scripts/slurm-single-node.sh start starts one)");
+        common::skipped(
+            test,
+            &format!("{why}; scripts/slurm-single-node.sh start starts one"),
+        );
         None
     };
     let Some(conf) = std::env::var_os("SLURM_CONF").map(PathBuf::from) else {

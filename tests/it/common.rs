@@ -4,12 +4,20 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-/// The data folder named by `ATLASMESH_DATA`, or `None` (the test prints that it was skipped).
-/// When the variable is set, a missing folder is a failure.
+/// Says that `what` was skipped and why, on the terminal: written to the standard error
+/// itself, not through `eprintln!`, which the test harness keeps to itself for tests that
+/// pass, so that a run without data or tools shows what it did not check among its `ok`s.
+pub fn skipped(what: &str, why: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "skipped: {what} ({why})");
+}
+
+/// The data folder named by `ATLASMESH_DATA`, or `None` (the test says it was skipped:
+/// [`skipped`]). When the variable is set, a missing folder is a failure.
 pub fn data_dir(test: &str) -> Option<PathBuf> {
     match std::env::var_os("ATLASMESH_DATA") {
         None => {
-            eprintln!("{test}: skipped (ATLASMESH_DATA is not set)");
+            skipped(test, "ATLASMESH_DATA is not set");
             None
         }
         Some(d) => {
@@ -251,7 +259,7 @@ pub fn tool(program: &str, what: &str) -> bool {
             std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
             "{program} is required ({what}) but not found"
         );
-        eprintln!("{what}: skipped ({program} not found)");
+        skipped(what, &format!("{program} not found"));
     }
     ok
 }
@@ -463,7 +471,7 @@ pub fn python() -> Option<PathBuf> {
                 std::env::var_os("ATLASMESH_REQUIRE_TOOLS").is_none(),
                 "ATLASMESH_PYTHON (a Python with meshio) is required"
             );
-            eprintln!("meshio checks: skipped (ATLASMESH_PYTHON is not set)");
+            skipped("meshio checks", "ATLASMESH_PYTHON is not set");
             None
         }
     }

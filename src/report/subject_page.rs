@@ -35,29 +35,14 @@ pub struct SubjectPage<'a> {
     pub index_href: &'a str,
 }
 
-/// Writes the page of `page` to `path`.
-pub fn write_subject_page(path: &Path, page: &SubjectPage) -> Result<()> {
-    let r = page.report;
-    let mut h = String::with_capacity(1 << 16);
-    let title = format!("atlasmesh: subject {}", r.name);
-    let _ = writeln!(
-        h,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>{STYLE}{VIEWER_STYLE}</style></head>\n<body>\n<p class=\"meta\"><a href=\"{}\">← the run's report</a></p>\n<h1>{}</h1>",
-        escape(&title),
-        escape(page.index_href),
-        escape(&title)
-    );
-    // The verdict, and what the user should know.
-    let _ = writeln!(
-        h,
-        "<p class=\"verdict {}\">{}</p>",
-        if r.success { "ok" } else { "bad" },
-        if r.success {
-            "Every check passed: the mesh is within its distance bound of the subject and of valid quality.".to_string()
-        } else {
-            format!("Checks failed: {}.", escape(&r.failed_checks.join(", ")))
-        }
-    );
+/// The edge ratio above which a subject's page flags its mesh: mesh checks commonly flag
+/// elements whose aspect ratio exceeds 10.
+const EDGE_RATIO_FLAG: f64 = 10.0;
+
+/// What the user should know of a subject beside its verdict: its warnings, a stiffened
+/// morph, a repair, elements under the usual bound, a large edge ratio, an unconverged fit
+/// (HTML, escaped).
+fn notes(r: &SubjectReport) -> Vec<String> {
     let mut notes: Vec<String> = r.warnings.iter().map(|w| escape(w)).collect();
     if r.morph_escalated {
         notes.push(format!(
@@ -77,13 +62,54 @@ pub fn write_subject_page(path: &Path, page: &SubjectPage) -> Result<()> {
     }
     if r.elements_below_bound > 0 {
         notes.push(format!(
-            "{} elements are below the usual acceptance bound of their kind.",
+            "{} elements are below the usual acceptance bound of their kind (scaled Jacobian \
+             0.5 for hexahedra, 0.3 for quadrilaterals, 0.2 for simplices), which the checks \
+             above do not require; the view outlines the worst of them.",
             r.elements_below_bound
+        ));
+    }
+    if r.edge_ratio_max > EDGE_RATIO_FLAG {
+        notes.push(format!(
+            "The largest edge ratio (longest edge over shortest of one element) is {}: above \
+             {EDGE_RATIO_FLAG}, where mesh checks usually flag an element.",
+            num(r.edge_ratio_max, 1)
         ));
     }
     if !r.converged {
         notes.push("The last inner loop of Algorithm 1 did not meet its tolerance.".into());
     }
+    notes
+}
+
+/// Writes the page of `page` to `path`.
+pub fn write_subject_page(path: &Path, page: &SubjectPage) -> Result<()> {
+    let r = page.report;
+    let mut h = String::with_capacity(1 << 16);
+    let title = format!("atlasmesh: subject {}", r.name);
+    let _ = writeln!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>{STYLE}{VIEWER_STYLE}</style></head>\n<body>\n<p class=\"meta\"><a href=\"{}\">← the run's report</a></p>\n<h1>{}</h1>",
+        escape(&title),
+        escape(page.index_href),
+        escape(&title)
+    );
+    // The verdict, and what the user should know.
+    let _ = writeln!(
+        h,
+        "<p class=\"verdict {}\">{}</p>",
+        if r.success { "ok" } else { "bad" },
+        if r.success {
+            format!(
+                "Every check passed: the mesh is within its distance bound of the subject, no \
+                 element is inverted and every element's scaled Jacobian is at or above the \
+                 repair bound {}.",
+                num(r.repair_bound, 2)
+            )
+        } else {
+            format!("Checks failed: {}.", escape(&r.failed_checks.join(", ")))
+        }
+    );
+    let notes = notes(r);
     if !notes.is_empty() {
         h.push_str("<ul class=\"warnings\">");
         for n in &notes {

@@ -133,23 +133,23 @@ pub fn join_tied(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{ElementKind, MeshSets};
 
-    fn cube(o: [f64; 3], set: &str) -> FeMesh<3> {
-        let mut nodes = Vec::new();
-        for z in [0.0, 1.0] {
-            for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
-                nodes.push([o[0] + x, o[1] + y, o[2] + z]);
+    /// `HexMesh::block(n)` moved by `o`, its elements the set `set`.
+    fn block(n: usize, o: [f64; 3], set: &str) -> FeMesh<3> {
+        let mut m = crate::mesh::HexMesh::block(n);
+        for p in &mut m.nodes {
+            for d in 0..3 {
+                p[d] += o[d];
             }
         }
-        let mut sets = MeshSets::default();
-        sets.element_sets.insert(set.into(), vec![0]);
-        FeMesh {
-            nodes,
-            kind: ElementKind::Hex8,
-            connectivity: (0..8).collect(),
-            sets,
-        }
+        m.sets
+            .element_sets
+            .insert(set.into(), (0..m.num_elements()).collect());
+        m
+    }
+
+    fn cube(o: [f64; 3], set: &str) -> FeMesh<3> {
+        block(1, o, set)
     }
 
     #[test]
@@ -174,42 +174,7 @@ mod tests {
     #[test]
     fn nodes_inside_a_part_are_never_tied() {
         // A 3 x 3 x 3 block of unit cubes above the bone: 64 nodes, 8 inside.
-        let id = |i: usize, j: usize, k: usize| i + 4 * j + 16 * k;
-        let mut nodes = Vec::new();
-        for k in 0..4 {
-            for j in 0..4 {
-                for i in 0..4 {
-                    nodes.push([i as f64, j as f64, k as f64 + 1.0]);
-                }
-            }
-        }
-        let mut connectivity = Vec::new();
-        for k in 0..3 {
-            for j in 0..3 {
-                for i in 0..3 {
-                    for (di, dj, dk) in [
-                        (0, 0, 0),
-                        (1, 0, 0),
-                        (1, 1, 0),
-                        (0, 1, 0),
-                        (0, 0, 1),
-                        (1, 0, 1),
-                        (1, 1, 1),
-                        (0, 1, 1),
-                    ] {
-                        connectivity.push(id(i + di, j + dj, k + dk));
-                    }
-                }
-            }
-        }
-        let mut sets = MeshSets::default();
-        sets.element_sets.insert("PADS".into(), (0..27).collect());
-        let block = FeMesh {
-            nodes,
-            kind: ElementKind::Hex8,
-            connectivity,
-            sets,
-        };
+        let block = block(3, [0.0, 0.0, 1.0], "PADS");
         let bone = cube([0.0, 0.0, 0.0], "B");
         let j = join_tied(&bone, "BONE", &block, 100.0).unwrap();
         assert_eq!(j.tied_nodes, 56);

@@ -60,28 +60,12 @@ pub fn displacement_picture(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{ElementKind, MeshSets};
 
     /// A unit cube compressed along z: the top's nodes move, the picture shows the top red
     /// and the bottom blue, seen with z up.
     #[test]
     fn the_moving_face_is_red_and_up() {
-        let nodes = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 1.0],
-            [1.0, 1.0, 1.0],
-            [0.0, 1.0, 1.0],
-        ];
-        let mesh = FeMesh {
-            nodes,
-            kind: ElementKind::Hex8,
-            connectivity: (0..8).collect(),
-            sets: MeshSets::default(),
-        };
+        let mesh = crate::mesh::HexMesh::block(1);
         let u: Vec<[f64; 3]> = (0..8)
             .map(|n| [0.0, 0.0, if n >= 4 { -0.2 } else { 0.0 }])
             .collect();

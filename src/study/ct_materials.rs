@@ -302,7 +302,7 @@ pub fn map_mesh_file(
                     let u = crate::formats::read_frd_displacements(&frd, mesh.nodes.len())?;
                     solved.largest_displacement_mm = u
                         .iter()
-                        .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+                        .map(|v| crate::geometry::norm(*v))
                         .filter(|m| m.is_finite())
                         .reduce(f64::max);
                     if plots {

@@ -573,58 +573,29 @@ fn quadratic_hex20_and_tet10_meshes_morphed_and_solved() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A block of `n` hexahedra along each axis spanning `lo`..`hi` (mm), its elements the set
-/// `name`.
-fn block(lo: [f64; 3], hi: [f64; 3], n: [usize; 3], name: &str) -> FeMesh<3> {
-    let id = |i: usize, j: usize, k: usize| (k * (n[1] + 1) + j) * (n[0] + 1) + i;
-    let mut nodes = Vec::new();
-    for k in 0..=n[2] {
-        for j in 0..=n[1] {
-            for i in 0..=n[0] {
-                let t = [i, j, k];
-                nodes.push(std::array::from_fn(|d| {
-                    lo[d] + (hi[d] - lo[d]) * t[d] as f64 / n[d] as f64
-                }));
-            }
+/// `HexMesh::block(n)` stretched to span `lo`..`hi` (mm), its elements the set `name`.
+fn block(lo: [f64; 3], hi: [f64; 3], n: usize, name: &str) -> FeMesh<3> {
+    let mut m = atlasmesh::mesh::HexMesh::block(n);
+    for p in &mut m.nodes {
+        for d in 0..3 {
+            p[d] = lo[d] + (hi[d] - lo[d]) * p[d] / n as f64;
         }
     }
-    let mut connectivity = Vec::new();
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            for i in 0..n[0] {
-                connectivity.extend([
-                    id(i, j, k),
-                    id(i + 1, j, k),
-                    id(i + 1, j + 1, k),
-                    id(i, j + 1, k),
-                    id(i, j, k + 1),
-                    id(i + 1, j, k + 1),
-                    id(i + 1, j + 1, k + 1),
-                    id(i, j + 1, k + 1),
-                ]);
-            }
-        }
-    }
-    let mut sets = MeshSets::default();
-    sets.element_sets
-        .insert(name.into(), (0..n.iter().product()).collect());
-    FeMesh {
-        nodes,
-        kind: atlasmesh::mesh::ElementKind::Hex8,
-        connectivity,
-        sets,
-    }
+    m.sets
+        .element_sets
+        .insert(name.into(), (0..m.num_elements()).collect());
+    m
 }
 
 /// Joins a pad of `n` hexahedra per axis (10 × 10 × 2 mm) to a bone block of 1 mm ones
 /// (10 mm cube) by a tie, compresses the pad's top 0.1 mm with the bone's bottom held, and
 /// returns CalculiX's stiffness (N/mm): bone 1000 MPa, pad 2500 MPa, ν = 0.
-fn tied_stiffness(dir: &Path, n: [usize; 3]) -> f64 {
-    let bone = block([0.0; 3], [10.0; 3], [10, 10, 10], "CORE");
+fn tied_stiffness(dir: &Path, n: usize) -> f64 {
+    let bone = block([0.0; 3], [10.0; 3], 10, "CORE");
     let pad = block([0.0, 0.0, 10.0], [10.0, 10.0, 12.0], n, "PADS");
     let joined = atlasmesh::mesh::join_tied(&bone, "BONE", &pad, 0.01).unwrap();
     // The pad's lower face, nothing else within 0.01 mm of the bone.
-    assert_eq!(joined.tied_nodes, (n[0] + 1) * (n[1] + 1));
+    assert_eq!(joined.tied_nodes, (n + 1) * (n + 1));
     let case = atlasmesh::mesh::LoadCase::parse(
         Path::new("case.toml"),
         r#"
@@ -654,7 +625,7 @@ tolerance = 0.01
         applied.ties,
         vec![("BONE_TIED".into(), "BONE_SURFACE".into(), 0.01)]
     );
-    let deck = dir.join(format!("tied_{}.inp", n[0]));
+    let deck = dir.join(format!("tied_{n}.inp"));
     let quality = atlasmesh::mesh::mesh_quality(&joined.mesh);
     atlasmesh::formats::write_mesh(&deck, &joined.mesh, None, &quality).unwrap();
     let mut text = std::fs::read_to_string(&deck).unwrap();
@@ -682,12 +653,12 @@ fn a_pad_tied_to_a_bone_carries_the_load_in_series() {
     let dir = common::temp_dir("tie");
     // 100 mm² through 10 mm of 1000 MPa and 2 mm of 2500 MPa.
     let series = 100.0 / (10.0 / 1000.0 + 2.0 / 2500.0);
-    let matching = tied_stiffness(&dir, [10, 10, 2]);
+    let matching = tied_stiffness(&dir, 10);
     assert!(
         (matching / series - 1.0).abs() < 1e-6,
         "{matching} N/mm against {series} N/mm"
     );
-    let other = tied_stiffness(&dir, [7, 7, 3]);
+    let other = tied_stiffness(&dir, 7);
     assert!(
         (other / series - 1.0).abs() < 0.01,
         "{other} N/mm against {series} N/mm"

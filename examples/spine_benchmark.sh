@@ -33,7 +33,7 @@ subject=sub-verse004_0000_vertebra_21_seg
 "$bin" materials --mesh "$out/joined/${subject}_joined.inp" \
   --ct "$bench/sub-verse004_0000_vertebra_21_im.nii.gz" \
   --recipe "$here/spine_benchmark/atlas_recipe.toml" --load "$here/spine_benchmark/atlas_load.toml" \
-  --solve --out "$out/atlas-route"
+  --solve --format inp,vtu,feb --out "$out/atlas-route"
 
 python3 - "$out/direct/report.json" "$out/atlas-route/report.json" <<'PY'
 import json, sys

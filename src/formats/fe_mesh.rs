@@ -183,8 +183,8 @@ pub fn write_mesh_with_materials<const D: usize>(
     write_model(path, mesh, reference, quality, materials, None)
 }
 
-/// [`write_mesh_with_materials`], and in `.inp` the static step of `load`
-/// ([`super::inp_step`]; other formats do not take it).
+/// [`write_mesh_with_materials`], and in `.inp` and `.feb` the static step of `load`
+/// ([`super::inp_step`], [`super::febio::feb_with_materials`]; other formats do not take it).
 ///
 /// # Errors
 /// As [`write_mesh_with_materials`].
@@ -254,7 +254,7 @@ pub fn write_model<const D: usize>(
             text
         }
         MeshFormat::Msh => msh_with_element_data(mesh, &cells),
-        MeshFormat::Feb => feb_with_materials(mesh, path, materials)?,
+        MeshFormat::Feb => feb_with_materials(mesh, path, materials, load)?,
     };
     crate::formats::write_atomic(path, text.as_bytes())
 }

@@ -169,6 +169,10 @@ pub struct AppliedLoadCase {
     pub reaction_sets: Vec<String>,
     /// Ties: `(node set, surface, tolerance mm)`.
     pub ties: Vec<(String, String, f64)>,
+    /// For every tie (same order), the boundary faces `(element, local face)` whose corners
+    /// are all of its node set: the tied side as faces, for solvers that tie a surface to a
+    /// surface (FEBio's tied contact).
+    pub tie_faces: Vec<Vec<(usize, u8)>>,
     /// The set, axis and value of the first non-zero displacement: the stiffness is its
     /// reaction over it.
     pub loaded: Option<(String, usize, f64)>,
@@ -385,6 +389,7 @@ impl LoadCase {
             applied
                 .ties
                 .push((t.nodes.clone(), t.surface.clone(), t.tolerance));
+            applied.tie_faces.push(faces_of(mesh, &members));
             sets.entry(t.nodes.clone()).or_insert(members);
         }
         if self.rigid_body {
@@ -409,6 +414,21 @@ impl LoadCase {
         applied.node_sets = sets;
         Ok(applied)
     }
+}
+
+/// The boundary faces of `mesh` whose corners are all among `nodes`.
+fn faces_of(mesh: &FeMesh<3>, nodes: &[usize]) -> Vec<(usize, u8)> {
+    let mut member = vec![false; mesh.nodes.len()];
+    for &n in nodes {
+        if let Some(m) = member.get_mut(n) {
+            *m = true;
+        }
+    }
+    super::boundary_faces(mesh)
+        .into_iter()
+        .filter(|f| f.nodes.iter().all(|&n| member[n]))
+        .map(|f| (f.element, f.face))
+        .collect()
 }
 
 /// Axis names.

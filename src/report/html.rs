@@ -52,7 +52,7 @@ pub(crate) fn escape(s: &str) -> String {
 
 /// `<img>` of a PNG file in `dir`, linked (relative to the page); empty when the file is not
 /// there.
-fn linked_img(dir: &Path, file: &str, alt: &str, class: &str) -> String {
+pub(crate) fn linked_img(dir: &Path, file: &str, alt: &str, class: &str) -> String {
     if dir.join(file).is_file() {
         format!(
             "<img class=\"{class}\" alt=\"{}\" src=\"{}\">",

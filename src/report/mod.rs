@@ -7,6 +7,8 @@
 //! | `plots` | PNG plots: variance, `E_d`, measures, modes, Jacobians, subjects |
 //! | `render` | a small rasterizer for 3D surfaces and meshes |
 //! | `solve_picture` | a solved model's boundary coloured by its displacement |
+//! | `materials_report` | [`MaterialsReport`], [`SolveReport`]: the `report.json` schema of `materials` |
+//! | `materials_page` | the page of `materials`, its `report.html` |
 //! | `html` | `report.html` |
 //! | `subject_page` | a subject's page `NAME.html` |
 //! | `model_page` | the model's page `model.html` |
@@ -17,6 +19,8 @@
 
 pub mod html;
 mod instances;
+mod materials_page;
+mod materials_report;
 pub mod model_page;
 mod plots;
 mod posterior;
@@ -28,6 +32,8 @@ pub mod viewer;
 pub mod viewer_scene;
 
 pub use instances::*;
+pub use materials_page::write_materials_page;
+pub use materials_report::*;
 pub use plots::*;
 pub use posterior::*;
 pub use render::font_available;

@@ -349,7 +349,7 @@ pub fn e_d_svg(history: &[f64], width: f64, height: f64) -> String {
 }
 
 /// The materials' table: the CT, the recipe's law, and the figures of the map.
-fn materials(h: &mut String, m: &crate::materials::MaterialSummary) {
+pub(crate) fn materials(h: &mut String, m: &crate::materials::MaterialSummary) {
     let rows: Vec<(&str, String)> = vec![
         ("CT", escape(&m.ct)),
         (

@@ -5,7 +5,8 @@ use crate::error::{Error, Result};
 use crate::formats::{MeshFormat, read_fe_mesh_raw, read_image, to_dimension, write_atomic};
 use crate::materials::{CtField, MaterialMap, MaterialRecipe, MaterialSummary, map_materials};
 use crate::mesh::FeMesh;
-use serde::{Deserialize, Serialize};
+pub use crate::report::MaterialsReport;
+use crate::report::SolveReport;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -206,30 +207,6 @@ pub fn map_ct<const D: usize>(
     Ok(map)
 }
 
-/// What `atlasmesh materials` wrote: the map's summary and the files.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct MaterialsReport {
-    /// atlasmesh's version.
-    pub version: String,
-    /// The mesh file mapped.
-    pub mesh: String,
-    /// Its element kind and count.
-    pub element_kind: String,
-    /// The map.
-    pub materials: MaterialSummary,
-    /// The load case applied (as read), when one was given.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub load_case: Option<crate::mesh::LoadCase>,
-    /// The node counts of the load case's sets.
-    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
-    pub load_sets: std::collections::BTreeMap<String, usize>,
-    /// The solve, when CalculiX ran.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub solve: Option<super::SolveReport>,
-    /// Files written, relative to the output folder.
-    pub files: Vec<String>,
-}
-
 /// What `atlasmesh materials` is asked beyond the map: a load case written into the deck,
 /// and whether to solve it.
 #[derive(Clone, Debug, Default)]
@@ -246,7 +223,7 @@ pub struct LoadRequest {
 /// `atlasmesh materials`: the mesh in `mesh_file` (any FE mesh atlasmesh reads, 2D or 3D)
 /// mapped on the CT `ct` with `recipe`, written into `out` as `NAME_materials.EXT` in every
 /// format of `formats` (with materials), `NAME_E.png` (the histogram of E, with `plots`)
-/// and `report.json`. With a load case, the `.inp` deck carries its static step; with
+/// and `report.json`. With a load case, the `.inp` deck (and the `.feb` file) carries its static step; with
 /// `solve`, CalculiX solves it ([`solve_calculix`](super::solve_calculix)) and the report
 /// holds the reactions and the stiffness.
 ///
@@ -359,7 +336,7 @@ pub fn map_mesh_file(
     )
 }
 
-/// The histogram and `report.json` of a map written.
+/// The histogram, `report.json` and `report.html` of a map written.
 #[allow(clippy::too_many_arguments)]
 fn finish(
     mesh_file: &Path,
@@ -369,7 +346,7 @@ fn finish(
     name: &str,
     load: &LoadRequest,
     load_sets: std::collections::BTreeMap<String, usize>,
-    solve: Option<super::SolveReport>,
+    solve: Option<SolveReport>,
     out: &Path,
 ) -> Result<MaterialsReport> {
     if plots {
@@ -394,10 +371,11 @@ fn finish(
     let json = serde_json::to_vec_pretty(&report)
         .map_err(|e| Error::Parameter(format!("report.json: {e}")))?;
     write_atomic(&out.join("report.json"), &json)?;
+    crate::report::write_materials_page(&out.join("report.html"), &report, out)?;
     Ok(report)
 }
 
-/// Maps and writes one mesh (the `.inp` with the step of `load`, when given); returns the
+/// Maps and writes one mesh (the `.inp` and `.feb` with the step of `load`, when given); returns the
 /// summary and the files written.
 fn write_mapped<const D: usize>(
     mesh: &FeMesh<D>,
@@ -422,7 +400,7 @@ fn write_mapped<const D: usize>(
             None,
             &quality,
             Some(&map),
-            load.filter(|_| *f == MeshFormat::Inp),
+            load.filter(|_| matches!(f, MeshFormat::Inp | MeshFormat::Feb)),
         )?;
         files.push(file);
     }

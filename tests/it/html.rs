@@ -77,7 +77,7 @@ fn tags<'a>(dom: &'a str, start: &str) -> Vec<&'a str> {
 
 /// What a page looks like once loaded: its DOM, checked for images, script errors, console
 /// errors and links (every one resolving to a file beside it).
-fn open(page: &Path, least_images: usize, least_links: usize) -> String {
+pub fn open(page: &Path, least_images: usize, least_links: usize) -> String {
     assert!(page.is_file(), "{}", page.display());
     let o = chromium(&["--enable-logging=stderr", "--v=0", "--dump-dom"], page);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

@@ -351,6 +351,16 @@ fn any_mesh_mapped_by_the_materials_command_metal_flagged_lps_the_same() {
     let (nifti, _) = map(&ct, "nifti");
     assert_eq!(nifti.materials.metal_elements, 0);
     assert!(dir.join("nifti/example_seg_mesh_E.png").is_file());
+    // Its page: the map's figures and the histogram, loaded in Chromium with every link a file.
+    let page = std::fs::read_to_string(dir.join("nifti/report.html")).unwrap();
+    assert!(page.contains("Materials from the CT") && page.contains("example_seg_mesh_E.png"));
+    assert!(page.contains(&format!(
+        "<td>elements</td><td>{}</td>",
+        nifti.materials.elements
+    )));
+    if common::tool("chromium", "the materials page in a browser") {
+        crate::html::open(&dir.join("nifti/report.html"), 1, nifti.files.len() + 1);
+    }
     // The same CT as NRRD in LPS: the same values.
     let (nrrd, _) = map(&dir.join("ct.nrrd"), "nrrd");
     let e = |d: &str| -> Vec<f64> {

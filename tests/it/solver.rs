@@ -587,10 +587,10 @@ fn block(lo: [f64; 3], hi: [f64; 3], n: usize, name: &str) -> FeMesh<3> {
     m
 }
 
-/// Joins a pad of `n` hexahedra per axis (10 × 10 × 2 mm) to a bone block of 1 mm ones
-/// (10 mm cube) by a tie, compresses the pad's top 0.1 mm with the bone's bottom held, and
-/// returns CalculiX's stiffness (N/mm): bone 1000 MPa, pad 2500 MPa, ν = 0.
-fn tied_stiffness(dir: &Path, n: usize) -> f64 {
+/// A pad of `n` hexahedra per axis (10 × 10 × 2 mm) joined to a bone block of 1 mm ones (10
+/// mm cube) by a tie, and the load case that compresses the pad's top 0.1 mm with the bone's
+/// bottom held.
+fn tied_case(n: usize) -> (FeMesh<3>, atlasmesh::mesh::AppliedLoadCase) {
     let bone = block([0.0; 3], [10.0; 3], 10, "CORE");
     let pad = block([0.0, 0.0, 10.0], [10.0, 10.0, 12.0], n, "PADS");
     let joined = atlasmesh::mesh::join_tied(&bone, "BONE", &pad, 0.01).unwrap();
@@ -625,9 +625,18 @@ tolerance = 0.01
         applied.ties,
         vec![("BONE_TIED".into(), "BONE_SURFACE".into(), 0.01)]
     );
+    // The tied side as faces: the pad's lower face, n × n quadrilaterals.
+    assert_eq!(applied.tie_faces.len(), 1);
+    assert_eq!(applied.tie_faces[0].len(), n * n);
+    (joined.mesh, applied)
+}
+
+/// [`tied_case`] solved by CalculiX: its stiffness (N/mm), bone 1000 MPa, pad 2500 MPa, ν = 0.
+fn tied_stiffness(dir: &Path, n: usize) -> f64 {
+    let (mesh, applied) = tied_case(n);
     let deck = dir.join(format!("tied_{n}.inp"));
-    let quality = atlasmesh::mesh::mesh_quality(&joined.mesh);
-    atlasmesh::formats::write_mesh(&deck, &joined.mesh, None, &quality).unwrap();
+    let quality = atlasmesh::mesh::mesh_quality(&mesh);
+    atlasmesh::formats::write_mesh(&deck, &mesh, None, &quality).unwrap();
     let mut text = std::fs::read_to_string(&deck).unwrap();
     text.push_str(
         "*MATERIAL, NAME=BONEM\n*ELASTIC\n1000., 0.\n*SOLID SECTION, ELSET=BONE, MATERIAL=BONEM\n\
@@ -639,6 +648,96 @@ tolerance = 0.01
     let r = atlasmesh::study::solve_calculix(&deck, &applied, 1).unwrap();
     assert_eq!(r.untied_nodes, 0);
     r.stiffness_n_per_mm
+}
+
+/// The FEBio file of a tied load case as febio-python (node sets, load curves) and an XML
+/// parser (the conditions: febio-python 0.2.1 fails on a `prescribed displacement`) read it: the held
+/// and the displaced sets with their components and values, the ramp, the tie's side
+/// (faces whose every node is tied, on the bone's top) paired with the bone's surface in a
+/// tied contact, the reaction forces of every displacement set in the log.
+const FEB_STEP: &str = r#"
+import sys, json, numpy as np, xml.etree.ElementTree as ET
+from febio_python.feb import Feb
+path = sys.argv[1]
+feb = Feb(filepath=path)
+names = sorted(s.name for s in feb.get_nodesets())
+curves = feb.get_loadcurves()
+root = ET.parse(path).getroot()
+sets = {s.get("name"): set(int(i) for i in s.text.split(",")) for s in root.iter("NodeSet")}
+assert names == sorted(sets), (names, sorted(sets))
+bcs = list(root.iter("bc"))
+zero = [b for b in bcs if b.get("type") == "zero displacement"]
+other = [b for b in bcs if b.get("type") == "prescribed displacement"]
+assert len(zero) + len(other) == len(bcs)
+nodes = {int(n.get("id")): [float(x) for x in n.text.split(",")] for n in root.iter("node")}
+pair = root.find("Mesh/SurfacePair")
+contact = root.find("Contact/contact")
+side = root.find("Mesh/Surface[@name='TIE_1_NODES']")
+faces = [[int(i) for i in f.text.split(",")] for f in side]
+tied = set(i for f in faces for i in f)
+print(json.dumps({
+  "zero": sorted([b.get("node_set")] + [b.findtext(a) for a in ["x_dof", "y_dof", "z_dof"]] for b in zero),
+  "prescribed": [[b.get("node_set"), b.findtext("dof"), float(b.findtext("value"))] for b in other],
+  "curve": np.asarray(curves[0].data).tolist(),
+  "pair": [pair.findtext("primary"), pair.findtext("secondary")],
+  "contact": [contact.get("type"), float(contact.findtext("max_distance")), float(contact.findtext("penalty"))],
+  "faces": len(faces),
+  "tied_in_set": tied <= sets["BONE_TIED"],
+  "tied_z": sorted(set(round(nodes[i][2], 9) for i in tied)),
+  "logged": sorted(n.get("name") for n in root.iter("node_data")),
+  "sets": sorted(sets),
+  "analysis": root.findtext("Control/analysis"),
+}))
+"#;
+
+#[test]
+fn a_tied_load_case_written_for_febio_reads_back() {
+    let Some(py) = common::python() else {
+        return;
+    };
+    let dir = common::temp_dir("tie-feb");
+    let (mesh, applied) = tied_case(7);
+    let path = dir.join("tied.feb");
+    let quality = atlasmesh::mesh::mesh_quality(&mesh);
+    atlasmesh::formats::write_model(&path, &mesh, None, &quality, None, Some(&applied)).unwrap();
+    let o = common::run(
+        Command::new(&py).arg("-c").arg(FEB_STEP).arg(&path),
+        std::time::Duration::from_secs(120),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    eprintln!("{r}");
+    let zero = r["zero"].as_array().unwrap();
+    assert!(
+        zero.contains(&serde_json::json!(["BOTTOM", "0", "0", "1"])),
+        "{zero:?}"
+    );
+    // The rigid-body holds: x and y held somewhere, z only at BOTTOM.
+    assert!(zero.iter().any(|z| z[1] == "1") && zero.iter().any(|z| z[2] == "1"));
+    assert_eq!(r["prescribed"], serde_json::json!([["TOP", "z", -0.1]]));
+    assert_eq!(r["curve"], serde_json::json!([[0.0, 0.0], [1.0, 1.0]]));
+    assert_eq!(
+        r["pair"],
+        serde_json::json!(["TIE_1_NODES", "BONE_SURFACE"])
+    );
+    assert_eq!(r["contact"][0], "tied-node-on-facet");
+    assert_eq!(r["contact"][1], 0.01);
+    assert!(r["contact"][2].as_f64().unwrap() > 0.0);
+    assert_eq!(r["faces"], 49);
+    assert_eq!(r["tied_in_set"], true);
+    assert_eq!(r["tied_z"], serde_json::json!([10.0]));
+    let logged: Vec<String> = applied
+        .reaction_sets
+        .iter()
+        .map(|s| format!("RF_{s}"))
+        .collect();
+    let mut logged = logged;
+    logged.sort();
+    assert_eq!(r["logged"], serde_json::json!(logged));
+    for s in ["TOP", "BOTTOM", "BONE_TIED"] {
+        assert!(r["sets"].as_array().unwrap().iter().any(|x| x == s), "{s}");
+    }
+    assert_eq!(r["analysis"], "STATIC");
 }
 
 /// A pad tied to a bone (`join_tied`, the load case's `[[tie]]`, CalculiX's `*TIE`) carries

@@ -255,7 +255,9 @@ fn run_ok(args: &[String]) -> String {
 /// same compression test with the tie (`materials --load --solve`). The stiffness within 10 %
 /// of the recipe's 10 442 N/mm (a smooth boundary instead of voxel steps, its own element
 /// size: not the same model, the same bone); the deck as meshio reads it: the bone's elements
-/// those of the fitted mesh, the pads' those of the label map, the tie's nodes a set.
+/// those of the fitted mesh, the pads' those of the label map, the tie's nodes a set; the
+/// `.feb` model with the same step; the page in Chromium; the same vertebra stored S, R, A as
+/// stiff within 1 %.
 #[test]
 fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
     let Some(data) = common::data_dir("spine FE benchmark, atlas route") else {
@@ -349,6 +351,8 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
         "--load".into(),
         s(&example.join("atlas_load.toml")),
         "--solve".into(),
+        "--format".into(),
+        "inp,vtu,feb".into(),
         "--out".into(),
         s(&mat),
     ]);
@@ -371,6 +375,19 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
         .find(|f| f.ends_with("_displacement.png"))
         .expect("the displacement's picture");
     assert!(std::fs::metadata(mat.join(picture)).unwrap().len() > 10_000);
+    // The page: the stiffness, the pictures (the displacement, the histogram of E) loaded in
+    // Chromium, every file linked.
+    let page = std::fs::read_to_string(mat.join("report.html")).unwrap();
+    assert!(
+        page.contains(&format!(
+            "Stiffness <b>{:.0} N/mm</b>",
+            solve.stiffness_n_per_mm
+        )),
+        "the stiffness on the page"
+    );
+    if common::tool("chromium", "the materials page in a browser") {
+        crate::html::open(&mat.join("report.html"), 2, r.files.len() + 1);
+    }
 
     // The deck as meshio reads it: bone and pads, the tie's node set, the tie in the step.
     let deck = mat.join(&solve.deck);
@@ -396,4 +413,121 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
     );
     let text = std::fs::read_to_string(&deck).unwrap();
     assert!(text.contains("*TIE, NAME=TIE_1") && text.contains("TIE_1_NODES, BONE_SURFACE"));
+    // The same model and step for FEBio: every element in a domain with its material, the
+    // tie's side made of tied nodes only, paired with the bone's surface.
+    let feb = python_json(&py, FEB_READ_BACK, &[s(&deck.with_extension("feb"))]);
+    assert_eq!(
+        feb["elements"].as_u64().unwrap() as usize,
+        bone_elements + pads
+    );
+    assert_eq!(feb["domains"], feb["materials"]);
+    assert_eq!(feb["side_nodes_tied"], true);
+    assert!(feb["side_faces"].as_u64().unwrap() > 500, "{feb}");
+    assert_eq!(feb["contact"], "tied-node-on-facet");
+    assert_eq!(feb["prescribed"], serde_json::json!([["TOP", "z", -0.2]]));
+
+    // The same vertebra stored S, R, A (nibabel): the same fitted bone (95 % of its nodes
+    // within a quarter of an element) and the same stiffness within 1 %.
+    let counts = python_json(&py, REORIENT, &[s(&im), s(&seg), s(&dir)]);
+    assert_eq!(counts["axcodes"], "SRA");
+    let fit2 = dir.join("fit-SRA");
+    run_ok(&[
+        "fit".into(),
+        "--atlas".into(),
+        s(&atlas),
+        "--subjects".into(),
+        s(&dir.join("seg_SRA.nii.gz")),
+        "--label".into(),
+        "1,2,3,4".into(),
+        "--format".into(),
+        "inp".into(),
+        "--no-plots".into(),
+        "--out".into(),
+        s(&fit2),
+    ]);
+    let fitted2 = find(&fit2.join("seg_SRA"), "_mesh.inp");
+    let a = atlasmesh::formats::read_fe_mesh::<3>(&fitted).unwrap();
+    let b = atlasmesh::formats::read_fe_mesh::<3>(&fitted2).unwrap();
+    assert_eq!(a.nodes.len(), b.nodes.len());
+    let mut apart: Vec<f64> = a
+        .nodes
+        .iter()
+        .zip(&b.nodes)
+        .map(|(p, q)| atlasmesh::geometry::dist2(*p, *q).sqrt() / subject.element_size)
+        .collect();
+    apart.sort_by(f64::total_cmp);
+    let at = |q: f64| apart[(q * (apart.len() - 1) as f64).round() as usize];
+    let joined2 = dir.join("joined-SRA");
+    run_ok(&[
+        "voxel-mesh".into(),
+        s(&dir.join("seg_SRA.nii.gz")),
+        "--part".into(),
+        "PADS=5,6".into(),
+        "--join".into(),
+        s(&fitted2),
+        "--format".into(),
+        "inp".into(),
+        "--out".into(),
+        s(&joined2),
+    ]);
+    let mat2 = dir.join("materials-SRA");
+    run_ok(&[
+        "materials".into(),
+        "--mesh".into(),
+        s(&find(&joined2, "_joined.inp")),
+        "--ct".into(),
+        s(&dir.join("im_SRA.nii.gz")),
+        "--recipe".into(),
+        s(&example.join("atlas_recipe.toml")),
+        "--load".into(),
+        s(&example.join("atlas_load.toml")),
+        "--solve".into(),
+        "--format".into(),
+        "inp".into(),
+        "--no-plots".into(),
+        "--out".into(),
+        s(&mat2),
+    ]);
+    let r2: atlasmesh::study::MaterialsReport =
+        serde_json::from_slice(&std::fs::read(mat2.join("report.json")).unwrap()).unwrap();
+    let k2 = r2.solve.as_ref().expect("CalculiX ran").stiffness_n_per_mm;
+    eprintln!(
+        "atlas route stored S,R,A: {k2:.0} N/mm; nodes apart by a median {:.4}, 95th percentile \
+         {:.4}, largest {:.3} elements; mean E {:.1} against {:.1} MPa",
+        at(0.5),
+        at(0.95),
+        at(1.0),
+        r2.materials.modulus_mean,
+        r.materials.modulus_mean
+    );
+    assert!(
+        at(0.95) <= 0.25,
+        "95 % of the nodes within {} elements",
+        at(0.95)
+    );
+    assert_eq!(r2.materials.parts[0].elements, pads);
+    assert!(
+        (k2 / solve.stiffness_n_per_mm - 1.0).abs() <= 0.01,
+        "{k2:.0} against {:.0} N/mm",
+        solve.stiffness_n_per_mm
+    );
 }
+
+/// A `.feb` model with a tied step as an XML parser reads it.
+const FEB_READ_BACK: &str = r#"
+import sys, json, xml.etree.ElementTree as ET
+root = ET.parse(sys.argv[1]).getroot()
+sets = {s.get("name"): set(int(i) for i in s.text.split(",")) for s in root.iter("NodeSet")}
+side = root.find("Mesh/Surface[@name='TIE_1_NODES']")
+nodes = set(int(i) for f in side for i in f.text.split(","))
+print(json.dumps({
+  "elements": sum(len(e) for e in root.iter("Elements")),
+  "materials": len(root.findall("Material/material")),
+  "domains": len(root.findall("MeshDomains/SolidDomain")),
+  "side_faces": len(side),
+  "side_nodes_tied": nodes <= sets["BONE_TIED"],
+  "contact": root.find("Contact/contact").get("type"),
+  "prescribed": [[b.get("node_set"), b.findtext("dof"), float(b.findtext("value"))]
+                 for b in root.iter("bc") if b.get("type") == "prescribed displacement"],
+}))
+"#;

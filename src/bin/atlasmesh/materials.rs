@@ -29,7 +29,7 @@ pub struct MaterialsArgs {
     )]
     format: Vec<String>,
     /// A load case (TOML; see docs/validation.md): node sets by geometry, displacements and
-    /// forces, written into the .inp deck as a static step.
+    /// forces, written into the .inp deck (and the .feb file) as a static step.
     #[arg(long, value_name = "FILE")]
     load: Option<PathBuf>,
     /// Solve the deck with CalculiX (ccx on the PATH, or ATLASMESH_CCX) and report the

@@ -27,17 +27,19 @@ ShapeLike = Union[str, PathLike, LabelMap, Tuple[npt.ArrayLike, npt.ArrayLike]]
 class Error(Exception):
     """Any atlasmesh error; the message names the file and the problem."""
 
-class BadInputError(Error):
-    """Malformed, degenerate or inconsistent input, or a parameter out of range (exit code 2)."""
+class BadInputError(Error, ValueError):
+    """Malformed, degenerate or inconsistent input, or a parameter out of range (exit code 2);
+    also a ValueError."""
 
-class IoError(Error):
-    """A file could not be read or written (exit code 3)."""
+class IoError(Error, OSError):
+    """A file could not be read or written (exit code 3); also an OSError."""
 
-class InvalidMeshError(Error):
-    """A mesh that no solver could use (exit code 4)."""
+class InvalidMeshError(Error, ValueError):
+    """A mesh that no solver could use (exit code 4); also a ValueError."""
 
-class NotConvergedError(Error):
-    """A fit that did not converge, or a numerical failure (exit code 5)."""
+class NotConvergedError(Error, RuntimeError):
+    """A fit that did not converge, or a numerical failure on degenerate data (exit code 5);
+    also a RuntimeError."""
 
 class Mesh:
     """An FE mesh in the data's frame and unit."""

@@ -1,6 +1,7 @@
 """atlasmesh from Python as its users run it: arrays in, arrays and files out, the same
 figures as the Rust tests, the meshes read back by meshio (and PyVista when installed)."""
 
+import pickle
 import time
 
 import numpy as np
@@ -72,6 +73,21 @@ def test_errors_are_one_family_with_the_message():
     with pytest.raises(atlasmesh.BadInputError, match="NaN"):
         atlas.fit(bad, shapes[0][1])
     assert issubclass(atlasmesh.InvalidMeshError, atlasmesh.Error)
+    # Each is also the built-in exception of its kind, caught as Python users catch it.
+    for cls, builtin in [
+        (atlasmesh.BadInputError, ValueError),
+        (atlasmesh.IoError, OSError),
+        (atlasmesh.InvalidMeshError, ValueError),
+        (atlasmesh.NotConvergedError, RuntimeError),
+    ]:
+        assert issubclass(cls, atlasmesh.Error) and issubclass(cls, builtin), cls
+        assert cls.__module__ == "atlasmesh" and cls.__doc__
+        again = pickle.loads(pickle.dumps(cls("the message")))
+        assert type(again) is cls and str(again) == "the message"
+    with pytest.raises(OSError, match="no-such-file"):
+        atlasmesh.Atlas.load("no-such-file.safetensors")
+    with pytest.raises(ValueError, match="NaN"):
+        atlas.fit(bad, shapes[0][1])
     # fit_many: a failing subject is its exception, the others their results.
     results = atlas.fit_many([shapes[1], (bad, shapes[0][1]), shapes[2]])
     assert isinstance(results[0], atlasmesh.FitResult)

@@ -15,7 +15,7 @@ pub fn feb<const D: usize>(mesh: &FeMesh<D>, path: &Path) -> Result<String> {
 
 /// [`feb`], and with `map` one isotropic elastic material per bin (E in MPa, ν): the
 /// elements in one part per material (`BONE_k`, keeping their ids) and a `SolidDomain`
-/// tying each part to its material; with `load`, its static step ([`feb_step`]). Units:
+/// tying each part to its material; with `load`, its static step (the sections after `MeshDomains`). Units:
 /// mm, N, MPa.
 pub fn feb_with_materials<const D: usize>(
     mesh: &FeMesh<D>,

@@ -110,7 +110,7 @@ pub(crate) fn num(x: f64, digits: usize) -> String {
 /// folder).
 pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> Result<()> {
     let mut h = String::with_capacity(1 << 20);
-    let title = format!("atlasmesh report: {}", report.dataset);
+    let title = title(report);
     let _ = writeln!(
         h,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>{STYLE}</style></head>\n<body>\n<h1>{}</h1>",
@@ -125,10 +125,37 @@ pub fn write(path: &Path, report: &Report, dir: &Path, pictures: &Pictures) -> R
     crate::formats::write_atomic(path, h.as_bytes())
 }
 
-/// The run's facts: dimension, modes, version, the summary table, the mean mesh, the
-/// parameters.
+/// The page's title: what the run did, to how many subjects, with which atlas (its file's
+/// name; the paths are in the page).
+fn title(report: &Report) -> String {
+    let n = report.summary.subjects + report.summary.failed;
+    let of = |what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+    match &report.atlas {
+        Some(a) => format!(
+            "atlasmesh fit: {} with the atlas {}",
+            of("subject"),
+            Path::new(&a.file)
+                .file_name()
+                .map_or_else(|| a.file.clone(), |f| f.to_string_lossy().into_owned())
+        ),
+        None => format!("atlasmesh leave-one-out: {}", of("shape")),
+    }
+}
+
+/// The run's facts: data, atlas, dimension, modes, version, the summary table, the mean mesh,
+/// the parameters.
 fn summary(h: &mut String, report: &Report) {
     let s = &report.summary;
+    let _ = writeln!(
+        h,
+        "<p class=\"meta\">Data: {}{}</p>",
+        escape(&report.dataset),
+        report.atlas.as_ref().map_or(String::new(), |a| format!(
+            " · atlas: {} (CRC-32 {})",
+            escape(&a.file),
+            escape(&a.checksum_crc32)
+        ))
+    );
     let _ = writeln!(
         h,
         "<p class=\"meta\">{}D, {} modes (variance explained {}), atlasmesh {}{}</p>",
@@ -146,7 +173,7 @@ fn summary(h: &mut String, report: &Report) {
     );
     let _ = writeln!(
         h,
-        "<table class=\"summary\"><tr><th>subjects</th><th>succeeded</th><th>meshes valid</th><th>failed</th><th>fit too far</th><th>mesh too far</th><th>mesh quality</th><th>needed repair</th><th>below the repair bound</th><th>morphs stiffened</th><th>fits not converged</th><th>median fit</th><th>median mesh RMS distance</th><th>median mesh 95th percentile</th><th>median relative RMS distance of the fit</th><th>median normal correlation</th></tr>\n<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} ms</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
+        "<table class=\"summary\"><tr><th>subjects</th><th>succeeded</th><th>meshes valid</th><th>failed</th><th>fit too far</th><th>mesh too far</th><th>mesh quality</th><th>needed repair</th><th>below the repair bound</th><th>morphs stiffened</th><th>fits not converged</th><th>median fit time</th><th>median mesh RMS distance (data units)</th><th>median mesh 95th percentile (data units)</th><th>median RMS distance of the fit (share of the diagonal)</th><th>median normal correlation (−1 to 1)</th></tr>\n<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} ms</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
         s.subjects,
         s.succeeded,
         s.meshes_valid,
@@ -177,7 +204,12 @@ fn summary(h: &mut String, report: &Report) {
     let params = serde_json::to_string_pretty(&report.parameters).unwrap_or_default();
     let _ = writeln!(
         h,
-        "<details><summary>Parameters (everything needed to repeat the run)</summary><pre>{}</pre></details>",
+        "<details><summary>Parameters (everything needed to repeat the run{})</summary><pre>{}</pre></details>",
+        if report.atlas.is_some() {
+            ", with the atlas named above"
+        } else {
+            ""
+        },
         escape(&params)
     );
 }
@@ -281,16 +313,17 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
         .subjects
         .iter()
         .any(|s| s.normal_correlation_icp.is_some());
-    h.push_str("<h2>Subjects</h2>\n<p class=\"hint\">Click a column's title to sort.</p>\n<table id=\"subjects\" class=\"sortable\"><thead><tr>");
+    h.push_str("<h2>Subjects</h2>\n<p class=\"hint\">Click a column's title to sort.</p>\n<div class=\"wide\"><table id=\"subjects\" class=\"sortable\"><thead><tr>");
     let mut cols = vec![
         "subject",
+        "picture",
         "success",
         "checks failed, warnings",
-        "mesh RMS distance",
-        "mesh 95th percentile",
+        "mesh RMS distance (data units)",
+        "mesh 95th percentile (data units)",
         "iterations",
         "fit (ms)",
-        "relative RMS distance of the fit",
+        "RMS distance of the fit (share of the diagonal)",
         "normal correlation",
     ];
     if baselines {
@@ -302,7 +335,6 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
         "inverted",
         "E_d per iteration",
         "files",
-        "picture",
     ]);
     for c in &cols {
         let _ = write!(h, "<th>{}</th>", escape(c));
@@ -311,7 +343,7 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
     for s in &report.subjects {
         subject_row(h, s, dir, baselines);
     }
-    h.push_str("</tbody></table>\n");
+    h.push_str("</tbody></table></div>\n");
 }
 
 fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
@@ -326,7 +358,8 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
     };
     let _ = write!(
         h,
-        "<tr><td>{name}</td><td data-v=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        "<tr><td>{name}</td>{}<td data-v=\"{}\">{}</td><td class=\"notes\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        thumbnail_cell(s, dir, page),
         u8::from(s.success),
         if s.success { "yes" } else { "<b>no</b>" },
         escape(
@@ -366,7 +399,12 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
         let short = f.rsplit('/').next().unwrap_or(f);
         let _ = write!(h, "<a href=\"{}\">{}</a> ", escape(f), escape(short));
     }
-    h.push_str("</td><td class=\"pics\">");
+    h.push_str("</td></tr>\n");
+}
+
+/// The thumbnail cell of a subject's row: its picture, linked to its page.
+fn thumbnail_cell(s: &SubjectReport, dir: &Path, page: Option<&String>) -> String {
+    let mut h = String::from("<td class=\"pics\">");
     if let Some(f) = s.files.iter().find(|f| f.ends_with("_thumb.png")) {
         let what = if s.files.iter().any(|f| f.ends_with("_quality.png")) {
             "morphed mesh, scaled Jacobian (red 0, yellow 0.5, green 1)"
@@ -388,7 +426,8 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
             }
         }
     }
-    h.push_str("</td></tr>\n");
+    h.push_str("</td>");
+    h
 }
 
 pub(crate) const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:1.5em;color:#222}\
@@ -397,7 +436,8 @@ table{border-collapse:collapse;font-size:0.9em}th,td{border:1px solid #ccc;paddi
 th{background:#f0f0f0;cursor:pointer}td:first-child{text-align:left}\
 .figs{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figcaption{font-size:0.85em;color:#555;max-width:640px}\
 img.fig{max-width:640px;border:1px solid #ddd}img.thumb{height:120px;margin:1px;border:1px solid #ddd}\
-td.pics{white-space:nowrap}.meta,.hint{color:#555}pre{font-size:0.8em}\
+td.pics{white-space:nowrap}.wide{overflow-x:auto;max-width:100%}\
+td.notes{text-align:left;min-width:12em;max-width:28em}td.files{text-align:left;min-width:14em}.meta,.hint{color:#555}pre{font-size:0.8em}\
 .verdict.ok{color:#1a7f37}.verdict.bad{color:#b42318;font-weight:bold}tr[data-focus]{cursor:pointer}\
 tr[data-focus]:hover{background:#f6f0ff}table.measures td{text-align:left}";
 

@@ -356,6 +356,19 @@ pub struct Report {
     pub shard: Option<String>,
     /// The atlasmesh version that wrote the report.
     pub atlasmesh_version: String,
+    /// The atlas file a fit used (a leave-one-out builds its own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atlas: Option<AtlasSource>,
+}
+
+/// An atlas file as a run used it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AtlasSource {
+    /// The file, as given.
+    pub file: String,
+    /// The CRC-32 of the file's bytes (8 hexadecimal digits, as `crc32 FILE` or Python's
+    /// `zlib.crc32` give it): the run's atlas, whatever its name.
+    pub checksum_crc32: String,
 }
 
 /// JSON has no NaN: serde_json writes it as `null`; read `null` back as NaN (a median of no

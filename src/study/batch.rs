@@ -337,6 +337,10 @@ fn finish_fit<const D: usize>(
             failed: outcome.failed,
             shard: ctx.place.shard.map(|s| s.label()),
             resumed: outcome.resumed,
+            atlas: (!ctx.atlas_file.is_empty()).then(|| crate::report::AtlasSource {
+                file: ctx.atlas_file.clone(),
+                checksum_crc32: format!("{:08x}", ctx.atlas_crc),
+            }),
             ..Default::default()
         },
     )

@@ -30,6 +30,8 @@ pub struct BatchFacts {
     pub inputs: Vec<crate::report::InputReport>,
     /// The registration's template (leave-one-out with registration).
     pub template: Option<String>,
+    /// The atlas file of a fit.
+    pub atlas: Option<crate::report::AtlasSource>,
 }
 
 /// Writes the population-level plots and the report; with plots, the model's page too (by
@@ -51,6 +53,7 @@ pub(crate) fn finish_report<const D: usize>(
         measures,
         inputs,
         template,
+        atlas,
     } = batch;
     let m = atlas_for_variance.num_modes();
     if params.plots {
@@ -89,6 +92,7 @@ pub(crate) fn finish_report<const D: usize>(
         shard,
         subjects,
         atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
+        atlas,
     };
     report.write(&out.join("report.json"))?;
     crate::formats::write_atomic(

@@ -196,10 +196,25 @@ fn shards_cover_the_batch_and_merge() {
         let out = d.join(format!("shard{i}"));
         let mut args = fit_args(&atlas, &list, &out);
         args.extend(["--shard".into(), format!("{i}/3")]);
+        // With the pages (the shards' parameters must match to merge).
+        args.retain(|a| a != "--no-plots");
         let o = atlasmesh(&args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let r = report(&out);
         assert_eq!(r.shard.as_deref(), Some(format!("{i}/3").as_str()));
+        // The atlas named with its checksum, in the report and on its page's title.
+        let a = r.atlas.as_ref().expect("the atlas in report.json");
+        assert_eq!(a.file, s(&atlas));
+        let crc = crc32fast::hash(&std::fs::read(&atlas).unwrap());
+        assert_eq!(a.checksum_crc32, format!("{crc:08x}"));
+        if i == 0 {
+            let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+            let name = atlas.file_name().unwrap().to_string_lossy().to_string();
+            let n = r.subjects.len();
+            let title = format!("<h1>atlasmesh fit: {n} subjects with the atlas {name}</h1>");
+            assert!(page.contains(&title), "{title}");
+            assert!(page.contains(&format!("(CRC-32 {})", a.checksum_crc32)));
+        }
         names.extend(r.subjects.iter().map(|s| s.name.clone()));
         reports.push(s(&out.join("report.json")));
     }
@@ -217,6 +232,7 @@ fn shards_cover_the_batch_and_merge() {
     let m: atlasmesh::report::Report =
         serde_json::from_slice(&std::fs::read(&merged).unwrap()).unwrap();
     assert_eq!(m.summary.subjects, 7);
+    assert_eq!(m.atlas, report(&d.join("shard0")).atlas);
     assert_eq!(
         m.subjects
             .iter()

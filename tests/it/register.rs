@@ -56,46 +56,20 @@ fn raw_hands(landmarks: &[Shape<2>], seed: u64) -> Vec<Shape<2>> {
         .collect()
 }
 
+/// The hands resampled without correspondence (three seeds of uneven resampling: the
+/// outlier hand among them each time), registered and fitted leave-one-out: 40/40 every
+/// time, every delivered mesh read back, the normal correlation as good as with the given
+/// correspondence.
 #[test]
 fn hands_without_correspondence_register_and_fit() {
     let Some(data) = common::data_dir("hands_without_correspondence_register_and_fit") else {
         return;
     };
     let landmarks = common::hands(&data, None);
-    let raw = raw_hands(&landmarks, 2026);
-    assert!(raw.iter().any(|s| s.points.len() != raw[0].points.len()));
-    let reg = register_population(
-        &raw,
-        Template::Nearest,
-        &RegisterParams::default(),
-        0,
-        &atlasmesh::study::Silent,
-    )
-    .unwrap();
-    let (corresponded, template) = (reg.shapes, reg.template_index.unwrap());
-    eprintln!(
-        "template: {} ({} points)",
-        raw[template].name,
-        raw[template].points.len()
-    );
     let mut params = RunParams::default();
     params.atlas.modes = ModeSelection::Count(11);
     params.plots = false;
     let out = common::temp_dir("hands-raw");
-    let r = leave_one_out_of(
-        atlasmesh::study::Folds {
-            corresponded: &corresponded,
-            subjects: &raw,
-            meshes: None,
-            population: &Default::default(),
-        },
-        "raw hands",
-        &params,
-        &out,
-        0,
-        &atlasmesh::study::Silent,
-    )
-    .unwrap();
     // The same hands with the given correspondence (the issue-2 run).
     let given = common::hands(&data, Some(2001));
     let g = leave_one_out(
@@ -107,23 +81,67 @@ fn hands_without_correspondence_register_and_fit() {
         &atlasmesh::study::Silent,
     )
     .unwrap();
-    eprintln!(
-        "raw: {}/40 succeeded, {} valid, median normal correlation {:.3}; given correspondence: {:.3}",
-        r.summary.succeeded,
-        r.summary.meshes_valid,
-        r.summary.median_normal_correlation,
-        g.summary.median_normal_correlation
-    );
-    assert_eq!(r.summary.succeeded, 40);
-    assert_eq!(r.summary.meshes_valid, 40);
-    assert_eq!(common::assert_delivered(&r, &out, &raw), 40);
-    common::assert_repaired("raw hands", &r);
-    assert!(
-        r.summary.median_normal_correlation >= g.summary.median_normal_correlation - 0.02,
-        "normal correlation {} vs {}",
-        r.summary.median_normal_correlation,
-        g.summary.median_normal_correlation
-    );
+    for seed in [2026, 7, 977] {
+        let raw = raw_hands(&landmarks, seed);
+        assert!(raw.iter().any(|s| s.points.len() != raw[0].points.len()));
+        let reg = register_population(
+            &raw,
+            Template::Nearest,
+            &RegisterParams::default(),
+            0,
+            &atlasmesh::study::Silent,
+        )
+        .unwrap();
+        let (corresponded, template) = (reg.shapes, reg.template_index.unwrap());
+        eprintln!(
+            "seed {seed}: template {} ({} points)",
+            raw[template].name,
+            raw[template].points.len()
+        );
+        let dir = out.join(format!("seed-{seed}"));
+        let r = leave_one_out_of(
+            atlasmesh::study::Folds {
+                corresponded: &corresponded,
+                subjects: &raw,
+                meshes: None,
+                population: &Default::default(),
+            },
+            "raw hands",
+            &params,
+            &dir,
+            0,
+            &atlasmesh::study::Silent,
+        )
+        .unwrap();
+        for s in r.subjects.iter().filter(|s| !s.success) {
+            eprintln!(
+                "  {}: {:?}, fit {:.4} and mesh {:.4} of the diagonal, min SJ {:.3}",
+                s.name,
+                s.failed_checks,
+                s.rms_distance_relative,
+                s.mesh_rms_distance_relative,
+                s.scaled_jacobian_min
+            );
+        }
+        eprintln!(
+            "seed {seed}: {}/40 succeeded, {} valid, median normal correlation {:.3}; given \
+             correspondence: {:.3}",
+            r.summary.succeeded,
+            r.summary.meshes_valid,
+            r.summary.median_normal_correlation,
+            g.summary.median_normal_correlation
+        );
+        assert_eq!(r.summary.succeeded, 40, "seed {seed}: {:?}", r.failed);
+        assert_eq!(r.summary.meshes_valid, 40, "seed {seed}");
+        assert_eq!(common::assert_delivered(&r, &dir, &raw), 40, "seed {seed}");
+        common::assert_repaired("raw hands", &r);
+        assert!(
+            r.summary.median_normal_correlation >= g.summary.median_normal_correlation - 0.02,
+            "seed {seed}: normal correlation {} vs {}",
+            r.summary.median_normal_correlation,
+            g.summary.median_normal_correlation
+        );
+    }
     std::fs::remove_dir_all(&out).ok();
 }
 

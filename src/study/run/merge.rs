@@ -57,7 +57,11 @@ pub fn merge<R: RunReport>(paths: &[std::path::PathBuf]) -> Result<R> {
 impl RunReport for Report {
     const WHAT: &'static str = "report";
     fn same_run(&self, o: &Self) -> bool {
-        self.dimension == o.dimension && self.modes == o.modes && self.parameters == o.parameters
+        let crc = |r: &Self| r.atlas.as_ref().map(|a| a.checksum_crc32.clone());
+        self.dimension == o.dimension
+            && self.modes == o.modes
+            && self.parameters == o.parameters
+            && crc(self) == crc(o)
     }
     fn join(&mut self, o: Self) {
         self.subjects.extend(o.subjects);

@@ -436,7 +436,7 @@ table{border-collapse:collapse;font-size:0.9em}th,td{border:1px solid #ccc;paddi
 th{background:#f0f0f0;cursor:pointer}td:first-child{text-align:left}\
 .figs{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figcaption{font-size:0.85em;color:#555;max-width:640px}\
 img.fig{max-width:640px;border:1px solid #ddd}img.thumb{height:120px;margin:1px;border:1px solid #ddd}\
-td.pics{white-space:nowrap}.wide{overflow-x:auto;max-width:100%}\
+td.pics{white-space:nowrap;text-align:left}.wide{overflow-x:auto;max-width:100%}\
 td.notes{text-align:left;min-width:12em;max-width:28em}td.files{text-align:left;min-width:14em}.meta,.hint{color:#555}pre{font-size:0.8em}\
 .verdict.ok{color:#1a7f37}.verdict.bad{color:#b42318;font-weight:bold}tr[data-focus]{cursor:pointer}\
 tr[data-focus]:hover{background:#f6f0ff}table.measures td{text-align:left}";

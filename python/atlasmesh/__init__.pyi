@@ -69,8 +69,8 @@ class Mesh:
 class FitResult:
     """A subject fitted (Algorithm 1, eq. 5-8) with its morphed mesh (eq. 9) and measures.
 
-    The measures of report.json are attributes too (rms_distance, success,
-    scaled_jacobian_min, inverted_elements, ...). For a fit made with mesh=False,
+    The measures of report.json are attributes too: the main ones typed below, every other
+    by name (dir() lists them). For a fit made with mesh=False, success is None and
     rms_distance and rms_distance_relative (the two-way RMS distance, which needs an index
     of the instance) are computed when first read."""
 
@@ -88,8 +88,38 @@ class FitResult:
     @property
     def mesh(self) -> Optional[Mesh]: ...
     @property
-    def measures(self) -> Dict[str, Any]: ...
-    def __getattr__(self, name: str) -> Any: ...
+    def measures(self) -> Dict[str, Any]:
+        """Every measure of report.json for this subject, as a dict (a copy)."""
+    @property
+    def success(self) -> Optional[bool]:
+        """Whether every check passed (failed_checks empty); None for a fit made with
+        mesh=False, which has no mesh to check."""
+    @property
+    def warnings(self) -> List[str]:
+        """What a user should know about this subject, one sentence each (empty when nothing)."""
+    @property
+    def failed_checks(self) -> List[str]:
+        """The checks of success that failed: fit, mesh_distance, mesh_quality."""
+    @property
+    def rms_distance(self) -> float:
+        """The instance's two-way RMS distance to the subject (eq. 6 both ways; its unit)."""
+    @property
+    def rms_distance_relative(self) -> float:
+        """rms_distance over the subject's bounding-box diagonal."""
+    @property
+    def scaled_jacobian_min(self) -> float:
+        """The mesh's smallest corner scaled Jacobian (NaN without a mesh)."""
+    @property
+    def mesh_rms_distance(self) -> float:
+        """The delivered mesh's two-way RMS distance to the subject (NaN without a mesh)."""
+    @property
+    def mesh_p95_distance(self) -> float:
+        """The delivered mesh's 95th-percentile distance to the subject (NaN without a mesh)."""
+    @property
+    def element_size(self) -> float:
+        """The delivered mesh's median boundary edge (NaN without a mesh)."""
+    def __getattr__(self, name: str) -> Any:
+        """Any other measure of report.json by name (iterations, e_d, inverted_elements, ...)."""
 
 class Atlas:
     """A statistical atlas: shape model (eq. 3-4) and FE mesh of the mean, in the data's unit."""

@@ -182,6 +182,24 @@ pub struct FitResult {
 pub(crate) type Pending = Box<dyn FnOnce() -> Vec<(&'static str, f64)> + Send>;
 
 impl FitResult {
+    /// The measure `name` of the dict, None when the fit has none.
+    fn measure<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let dict = self.measures_dict(py)?;
+        Ok(dict.get_item(name).ok().filter(|v| !v.is_none()))
+    }
+
+    /// The number `name` of the measures, NaN when the fit has none (or JSON's null).
+    fn number(&self, py: Python<'_>, name: &str) -> PyResult<f64> {
+        self.measure(py, name)?
+            .map_or(Ok(f64::NAN), |v| v.extract())
+    }
+
+    /// The list of strings `name` of the measures, empty when the fit has none.
+    fn list(&self, py: Python<'_>, name: &str) -> PyResult<Vec<String>> {
+        self.measure(py, name)?
+            .map_or(Ok(Vec::new()), |v| v.extract())
+    }
+
     /// The measures dict, with the pending measures computed into it (once, the GIL released).
     fn measures_dict<'py>(&self, py: Python<'py>) -> PyResult<&Bound<'py, PyAny>> {
         let job = self
@@ -256,6 +274,83 @@ impl FitResult {
     #[getter]
     fn measures<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         self.measures_dict(py)?.call_method0("copy")
+    }
+
+    /// Every measure's name beside the result's own attributes (`dir(r)`, completion).
+    fn __dir__(slf: &Bound<'_, Self>) -> PyResult<Vec<String>> {
+        let mut names: Vec<String> = slf.get_type().dir()?.extract()?;
+        let py = slf.py();
+        let keys = slf.get().measures_dict(py)?.call_method0("keys")?;
+        for k in keys.try_iter()? {
+            names.push(k?.extract()?);
+        }
+        names.sort();
+        names.dedup();
+        Ok(names)
+    }
+
+    /// Whether every check passed (`failed_checks` empty); None for a fit made with
+    /// `mesh=False`, which has no mesh to check.
+    #[getter]
+    fn success(&self, py: Python<'_>) -> PyResult<Option<bool>> {
+        if self.mesh.is_none() {
+            return Ok(None);
+        }
+        self.measure(py, "success")?
+            .map(|v| v.extract())
+            .transpose()
+    }
+
+    /// What a user should know about this subject, one sentence each (empty when nothing).
+    #[getter]
+    fn warnings(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        self.list(py, "warnings")
+    }
+
+    /// The checks of `success` that failed (`fit`, `mesh_distance`, `mesh_quality`; empty
+    /// when all passed or without a mesh).
+    #[getter]
+    fn failed_checks(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        self.list(py, "failed_checks")
+    }
+
+    /// The fitted instance's two-way RMS distance to the subject (eq. 6 both ways; the
+    /// subject's unit).
+    #[getter]
+    fn rms_distance(&self, py: Python<'_>) -> PyResult<f64> {
+        self.number(py, "rms_distance")
+    }
+
+    /// `rms_distance` over the subject's bounding-box diagonal.
+    #[getter]
+    fn rms_distance_relative(&self, py: Python<'_>) -> PyResult<f64> {
+        self.number(py, "rms_distance_relative")
+    }
+
+    /// The smallest corner scaled Jacobian of the mesh (NaN without a mesh).
+    #[getter]
+    fn scaled_jacobian_min(&self, py: Python<'_>) -> PyResult<f64> {
+        self.number(py, "scaled_jacobian_min")
+    }
+
+    /// The delivered mesh's two-way RMS distance to the subject (the subject's unit; NaN
+    /// without a mesh).
+    #[getter]
+    fn mesh_rms_distance(&self, py: Python<'_>) -> PyResult<f64> {
+        self.number(py, "mesh_rms_distance")
+    }
+
+    /// The delivered mesh's 95th-percentile distance to the subject (NaN without a mesh).
+    #[getter]
+    fn mesh_p95_distance(&self, py: Python<'_>) -> PyResult<f64> {
+        self.number(py, "mesh_p95_distance")
+    }
+
+    /// The delivered mesh's element size: the median edge of its boundary (NaN without a
+    /// mesh).
+    #[getter]
+    fn element_size(&self, py: Python<'_>) -> PyResult<f64> {
+        self.number(py, "element_size")
     }
 
     /// A measure of `report.json` by name (`rms_distance`, `success`, `scaled_jacobian_min`,

@@ -54,6 +54,16 @@ def test_a_2d_atlas_from_arrays_samples_projects_and_fits():
     assert mesh.nodes.shape[1] == 2 and mesh.elements.shape[1] == 4
     assert mesh.scaled_jacobian.min() > 0.3
     assert r.success and r.rms_distance < 0.01 * extent
+    # The measures: typed attributes, every one in dir(), the lists empty when nothing.
+    assert r.success is True and r.failed_checks == [] and isinstance(r.warnings, list)
+    assert r.element_size > 0 and r.mesh_rms_distance <= r.mesh_p95_distance
+    assert r.scaled_jacobian_min == pytest.approx(mesh.scaled_jacobian.min())
+    names = dir(r)
+    for k in ["success", "warnings", "rms_distance", "iterations", "e_d", "weights", "mesh"]:
+        assert k in names, k
+    assert r.iterations == r.measures["iterations"]
+    with pytest.raises(AttributeError):
+        r.no_such_measure
     assert r.weights.shape == (3,)
     assert r.pose["rotation"].shape == (2, 2)
     assert r.surface.shape == (120, 2)
@@ -235,6 +245,9 @@ def test_a_femur_mesh_read_back_by_pyvista(data, femur_atlas, tmp_path):
     assert np.allclose(grid.cell_data["scaled_jacobian_min"], r.mesh.scaled_jacobian)
     alone = femur_atlas.fit(points, facets, mesh=False)
     assert alone.mesh is None
+    # Without a mesh there is nothing to check: success is None, the mesh's measures NaN.
+    assert alone.success is None and alone.failed_checks == []
+    assert np.isnan(alone.scaled_jacobian_min) and np.isnan(alone.mesh_rms_distance)
     assert np.allclose(alone.surface, r.surface, atol=1e-9)
     assert abs(alone.rms_distance - r.rms_distance) < 1e-9
 

@@ -56,6 +56,39 @@ fn raw_hands(landmarks: &[Shape<2>], seed: u64) -> Vec<Shape<2>> {
         .collect()
 }
 
+/// `raw` registered (the nearest template, default parameters), then fitted leave-one-out
+/// (`params`, outputs in `out`, named `name`): the report and the template's index.
+fn registered_leave_one_out(
+    raw: &[Shape<2>],
+    name: &str,
+    params: &RunParams,
+    out: &std::path::Path,
+) -> (atlasmesh::report::Report, usize) {
+    let reg = register_population(
+        raw,
+        Template::Nearest,
+        &RegisterParams::default(),
+        0,
+        &atlasmesh::study::Silent,
+    )
+    .unwrap();
+    let r = leave_one_out_of(
+        atlasmesh::study::Folds {
+            corresponded: &reg.shapes,
+            subjects: raw,
+            meshes: None,
+            population: &Default::default(),
+        },
+        name,
+        params,
+        out,
+        0,
+        &atlasmesh::study::Silent,
+    )
+    .unwrap();
+    (r, reg.template_index.unwrap())
+}
+
 /// The hands resampled without correspondence (three seeds of uneven resampling: the
 /// outlier hand among them each time), registered and fitted leave-one-out: 40/40 every
 /// time, every delivered mesh read back, the normal correlation as good as with the given
@@ -84,35 +117,13 @@ fn hands_without_correspondence_register_and_fit() {
     for seed in [2026, 7, 977] {
         let raw = raw_hands(&landmarks, seed);
         assert!(raw.iter().any(|s| s.points.len() != raw[0].points.len()));
-        let reg = register_population(
-            &raw,
-            Template::Nearest,
-            &RegisterParams::default(),
-            0,
-            &atlasmesh::study::Silent,
-        )
-        .unwrap();
-        let (corresponded, template) = (reg.shapes, reg.template_index.unwrap());
+        let dir = out.join(format!("seed-{seed}"));
+        let (r, template) = registered_leave_one_out(&raw, "raw hands", &params, &dir);
         eprintln!(
             "seed {seed}: template {} ({} points)",
             raw[template].name,
             raw[template].points.len()
         );
-        let dir = out.join(format!("seed-{seed}"));
-        let r = leave_one_out_of(
-            atlasmesh::study::Folds {
-                corresponded: &corresponded,
-                subjects: &raw,
-                meshes: None,
-                population: &Default::default(),
-            },
-            "raw hands",
-            &params,
-            &dir,
-            0,
-            &atlasmesh::study::Silent,
-        )
-        .unwrap();
         for s in r.subjects.iter().filter(|s| !s.success) {
             eprintln!(
                 "  {}: {:?}, fit {:.4} and mesh {:.4} of the diagonal, min SJ {:.3}",
@@ -168,34 +179,12 @@ fn dense_hands_from_raw_outlines_and_json_landmarks() {
     let mut raw = atlasmesh::study::load_outlines_raw(&meshes, &opts).unwrap();
     atlasmesh::study::attach_landmarks(&mut raw, &lms).unwrap();
     assert!(raw.iter().all(|s| !s.landmarks.is_empty()));
-    let reg = register_population(
-        &raw,
-        Template::Nearest,
-        &RegisterParams::default(),
-        0,
-        &atlasmesh::study::Silent,
-    )
-    .unwrap();
-    let (corresponded, _) = (reg.shapes, reg.template_index.unwrap());
     let params = RunParams {
         plots: false,
         ..RunParams::default()
     };
     let out = common::temp_dir("dense-hands");
-    let r = leave_one_out_of(
-        atlasmesh::study::Folds {
-            corresponded: &corresponded,
-            subjects: &raw,
-            meshes: None,
-            population: &Default::default(),
-        },
-        "dense hands",
-        &params,
-        &out,
-        0,
-        &atlasmesh::study::Silent,
-    )
-    .unwrap();
+    let (r, _) = registered_leave_one_out(&raw, "dense hands", &params, &out);
     assert_eq!(r.summary.succeeded, 12);
     assert_eq!(common::assert_delivered(&r, &out, &raw), 12);
     assert_eq!(r.summary.meshes_valid, 12);

@@ -228,6 +228,71 @@ fn the_benchmark_vertebra_by_the_direct_route_has_the_recipes_stiffness() {
     );
 }
 
+/// `fit` of the bone's labels (1-4) of the label map `seg` with `atlas`, `.inp` into `out`,
+/// with `extra` options.
+fn fit_bone(atlas: &Path, seg: &Path, out: &Path, extra: &[&str]) {
+    let mut args: Vec<String> = vec![
+        "fit".into(),
+        "--atlas".into(),
+        s(atlas),
+        "--subjects".into(),
+        s(seg),
+        "--label".into(),
+        "1,2,3,4".into(),
+        "--format".into(),
+        "inp".into(),
+        "--out".into(),
+        s(out),
+    ];
+    args.extend(extra.iter().map(|a| a.to_string()));
+    run_ok(&args);
+}
+
+/// `voxel-mesh` of the pads (labels 5, 6) of `seg` tied to the fitted bone `fitted`, `.inp`
+/// into `out`; what it said.
+fn join_pads(seg: &Path, fitted: &Path, out: &Path) -> String {
+    run_ok(&[
+        "voxel-mesh".into(),
+        s(seg),
+        "--part".into(),
+        "PADS=5,6".into(),
+        "--join".into(),
+        s(fitted),
+        "--format".into(),
+        "inp".into(),
+        "--out".into(),
+        s(out),
+    ])
+}
+
+/// `materials` of the joined mesh in `joined` on the CT `ct` with the atlas route's recipe
+/// and load case, solved by CalculiX, into `out` (with `extra` options); its report.
+fn atlas_materials(
+    joined: &Path,
+    ct: &Path,
+    out: &Path,
+    extra: &[&str],
+) -> atlasmesh::study::MaterialsReport {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/spine_benchmark");
+    let mut args: Vec<String> = vec![
+        "materials".into(),
+        "--mesh".into(),
+        s(&find(joined, "_joined.inp")),
+        "--ct".into(),
+        s(ct),
+        "--recipe".into(),
+        s(&example.join("atlas_recipe.toml")),
+        "--load".into(),
+        s(&example.join("atlas_load.toml")),
+        "--solve".into(),
+        "--out".into(),
+        s(out),
+    ];
+    args.extend(extra.iter().map(|a| a.to_string()));
+    run_ok(&args);
+    serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap()
+}
+
 /// The path in `dir` whose name ends with `suffix`.
 fn find(dir: &Path, suffix: &str) -> std::path::PathBuf {
     std::fs::read_dir(dir)
@@ -268,7 +333,6 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
         return;
     }
     let dir = common::temp_dir("spine-atlas-route");
-    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/spine_benchmark");
     let bench = data.join("spinefe-benchmark-L2");
     let im = bench.join("sub-verse004_0000_vertebra_21_im.nii.gz");
     let seg = bench.join("sub-verse004_0000_vertebra_21_seg.nii.gz");
@@ -282,19 +346,7 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
         s(&atlas),
     ]);
     let fit = dir.join("fit");
-    run_ok(&[
-        "fit".into(),
-        "--atlas".into(),
-        s(&atlas),
-        "--subjects".into(),
-        s(&seg),
-        "--label".into(),
-        "1,2,3,4".into(),
-        "--format".into(),
-        "inp".into(),
-        "--out".into(),
-        s(&fit),
-    ]);
+    fit_bone(&atlas, &seg, &fit, &[]);
     let report: atlasmesh::report::Report =
         serde_json::from_slice(&std::fs::read(fit.join("report.json")).unwrap()).unwrap();
     let subject = &report.subjects[0];
@@ -326,38 +378,10 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
         .unwrap()
         .num_elements();
     let joined = dir.join("joined");
-    let said = run_ok(&[
-        "voxel-mesh".into(),
-        s(&seg),
-        "--part".into(),
-        "PADS=5,6".into(),
-        "--join".into(),
-        s(&fitted),
-        "--format".into(),
-        "inp".into(),
-        "--out".into(),
-        s(&joined),
-    ]);
+    let said = join_pads(&seg, &fitted, &joined);
     assert!(said.contains("BONE_TIED"), "{said}");
     let mat = dir.join("materials");
-    run_ok(&[
-        "materials".into(),
-        "--mesh".into(),
-        s(&find(&joined, "_joined.inp")),
-        "--ct".into(),
-        s(&im),
-        "--recipe".into(),
-        s(&example.join("atlas_recipe.toml")),
-        "--load".into(),
-        s(&example.join("atlas_load.toml")),
-        "--solve".into(),
-        "--format".into(),
-        "inp,vtu,feb".into(),
-        "--out".into(),
-        s(&mat),
-    ]);
-    let r: atlasmesh::study::MaterialsReport =
-        serde_json::from_slice(&std::fs::read(mat.join("report.json")).unwrap()).unwrap();
+    let r = atlas_materials(&joined, &im, &mat, &["--format", "inp,vtu,feb"]);
     let solve = r.solve.as_ref().expect("CalculiX ran");
     eprintln!(
         "atlas route: {:.0} N/mm, {bone_elements} bone elements (min scaled Jacobian {:.2}), \
@@ -431,20 +455,8 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
     let counts = python_json(&py, REORIENT, &[s(&im), s(&seg), s(&dir)]);
     assert_eq!(counts["axcodes"], "SRA");
     let fit2 = dir.join("fit-SRA");
-    run_ok(&[
-        "fit".into(),
-        "--atlas".into(),
-        s(&atlas),
-        "--subjects".into(),
-        s(&dir.join("seg_SRA.nii.gz")),
-        "--label".into(),
-        "1,2,3,4".into(),
-        "--format".into(),
-        "inp".into(),
-        "--no-plots".into(),
-        "--out".into(),
-        s(&fit2),
-    ]);
+    let seg2 = dir.join("seg_SRA.nii.gz");
+    fit_bone(&atlas, &seg2, &fit2, &["--no-plots"]);
     let fitted2 = find(&fit2.join("seg_SRA"), "_mesh.inp");
     let a = atlasmesh::formats::read_fe_mesh::<3>(&fitted).unwrap();
     let b = atlasmesh::formats::read_fe_mesh::<3>(&fitted2).unwrap();
@@ -458,38 +470,14 @@ fn the_benchmark_vertebra_by_the_atlas_route_is_as_stiff_within_ten_percent() {
     apart.sort_by(f64::total_cmp);
     let at = |q: f64| apart[(q * (apart.len() - 1) as f64).round() as usize];
     let joined2 = dir.join("joined-SRA");
-    run_ok(&[
-        "voxel-mesh".into(),
-        s(&dir.join("seg_SRA.nii.gz")),
-        "--part".into(),
-        "PADS=5,6".into(),
-        "--join".into(),
-        s(&fitted2),
-        "--format".into(),
-        "inp".into(),
-        "--out".into(),
-        s(&joined2),
-    ]);
+    join_pads(&seg2, &fitted2, &joined2);
     let mat2 = dir.join("materials-SRA");
-    run_ok(&[
-        "materials".into(),
-        "--mesh".into(),
-        s(&find(&joined2, "_joined.inp")),
-        "--ct".into(),
-        s(&dir.join("im_SRA.nii.gz")),
-        "--recipe".into(),
-        s(&example.join("atlas_recipe.toml")),
-        "--load".into(),
-        s(&example.join("atlas_load.toml")),
-        "--solve".into(),
-        "--format".into(),
-        "inp".into(),
-        "--no-plots".into(),
-        "--out".into(),
-        s(&mat2),
-    ]);
-    let r2: atlasmesh::study::MaterialsReport =
-        serde_json::from_slice(&std::fs::read(mat2.join("report.json")).unwrap()).unwrap();
+    let r2 = atlas_materials(
+        &joined2,
+        &dir.join("im_SRA.nii.gz"),
+        &mat2,
+        &["--format", "inp", "--no-plots"],
+    );
     let k2 = r2.solve.as_ref().expect("CalculiX ran").stiffness_n_per_mm;
     eprintln!(
         "atlas route stored S,R,A: {k2:.0} N/mm; nodes apart by a median {:.4}, 95th percentile \

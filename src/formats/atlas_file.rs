@@ -253,6 +253,12 @@ impl<const D: usize> Atlas<D> {
         if !self.has_mesh() {
             meta.insert("mesh".to_string(), "none".to_string());
         }
+        if !self.cut_facets.is_empty() {
+            meta.insert(
+                "cut_facets".to_string(),
+                serde_json::to_string(&self.cut_facets).unwrap_or_default(),
+            );
+        }
         if !self.landmark_ids.is_empty() {
             meta.insert(
                 "landmark_ids".to_string(),
@@ -298,6 +304,7 @@ impl<const D: usize> Atlas<D> {
             data_frame,
             model_only,
             landmark_ids,
+            cut_facets,
         } = AtlasMetadata::<D>::of(path, bytes)?;
         let st = SafeTensors::deserialize(bytes).map_err(|e| bad(format!("{e}")))?;
         let get = |name: &str, dt: Dtype, cols: Option<usize>| -> Result<(Vec<usize>, Vec<u8>)> {
@@ -394,6 +401,7 @@ impl<const D: usize> Atlas<D> {
             facets,
             landmarks: idxv(&lb, n, "landmark")?,
             landmark_ids,
+            cut_facets,
             mesh: FeMesh {
                 nodes,
                 kind,
@@ -444,6 +452,14 @@ fn validate<const D: usize>(a: &Atlas<D>, model_only: bool) -> std::result::Resu
         || cv.windows(2).any(|w| w[1] < w[0] - 1e-12)
     {
         return Err("the cumulative variance must rise within [0, 1]".into());
+    }
+    if a.cut_facets.windows(2).any(|w| w[0] >= w[1])
+        || a.cut_facets.last().is_some_and(|&f| f >= a.facets.len())
+    {
+        return Err(format!(
+            "cut_facets: sorted distinct facet indices below {} expected",
+            a.facets.len()
+        ));
     }
     if !a.landmark_ids.is_empty() && a.landmark_ids.len() != a.landmarks.len() {
         return Err(format!(
@@ -497,6 +513,8 @@ struct AtlasMetadata<const D: usize> {
     model_only: bool,
     /// The landmarks' ids (`landmark_ids`, optional).
     landmark_ids: Vec<String>,
+    /// The facets of the cut (`cut_facets`, optional).
+    cut_facets: Vec<usize>,
 }
 
 impl<const D: usize> AtlasMetadata<D> {
@@ -580,8 +598,14 @@ impl<const D: usize> AtlasMetadata<D> {
             Some(j) => serde_json::from_str(j)
                 .map_err(|e| bad(format!("malformed landmark_ids metadata: {e}")))?,
         };
+        let cut_facets: Vec<usize> = match meta.get("cut_facets") {
+            None => Vec::new(),
+            Some(j) => serde_json::from_str(j)
+                .map_err(|e| bad(format!("malformed cut_facets metadata: {e}")))?,
+        };
         Ok(AtlasMetadata {
             landmark_ids,
+            cut_facets,
             model_only,
             kind,
             params,

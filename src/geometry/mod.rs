@@ -16,6 +16,7 @@
 //! | `normal_projection` | projection along normals onto a subject |
 //! | `principal_axes` | principal axes and the starting rotations of an alignment |
 //! | `orientation` | closed surfaces oriented outwards, signed volume |
+//! | `plane_cut` | [`cut_by_plane`]: a surface cut by a plane and closed by a flat cap |
 //! | `similarity` | [`Similarity`] `t_{R,T,s}` and rotations from generators |
 //! | `decimate` | vertex-clustering decimation |
 //! | `surface_distance` | [`surface_distances`]: a delivered shape's distances to its subject |
@@ -28,6 +29,7 @@ mod edge_collapse;
 mod normal_projection;
 mod normals;
 mod orientation;
+mod plane_cut;
 mod point;
 mod principal_axes;
 mod query_memo;
@@ -43,6 +45,7 @@ pub use edge_collapse::collapse_short_edges;
 pub use normal_projection::{COMPATIBLE_NORMALS_COS, project_along_normals};
 pub use normals::{facet_normal, vertex_normals};
 pub use orientation::{is_closed_surface, prepare_surface, signed_volume};
+pub use plane_cut::{Plane, PlaneCut, cut_by_plane};
 pub use point::{
     MAX_COORDINATE, Point, add, bounding_box, centroid, centroid_size, coordinate_problem, cross,
     dist2, dot, in_3d, norm, normalize, same_dim, scale, sub,

@@ -8,6 +8,7 @@
 //! | `element_size` | [`ElementSize`]: the mean mesh's element size from a length, a share or the thickness |
 //! | `fe_mesh` | [`FeMesh`] and [`MeshSets`] |
 //! | `boundary` | the boundary faces of a mesh, outward |
+//! | `cut_face` | the mean mesh's face on a population's common cut: the `CUT` node set and surface |
 //! | `boundary_fit` | the boundary nodes moved onto the subject after the morph, the interior relaxed |
 //! | `quad_mesh` | quadrilateral mesh of a 2D outline |
 //! | `hex_mesh` | hexahedral mesh of a closed surface |
@@ -22,6 +23,7 @@
 
 mod boundary;
 mod boundary_fit;
+mod cut_face;
 mod element;
 pub mod element_size;
 mod fe_mesh;
@@ -38,6 +40,7 @@ mod voxel_mesh;
 
 pub use boundary::{BoundaryFace, FacePair, boundary_faces, boundary_surface, face_pairs};
 pub use boundary_fit::{BoundaryFit, fit_boundary};
+pub use cut_face::{CUT_SET, mark_cut_face};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};

@@ -100,6 +100,9 @@ pub struct Atlas<const D: usize> {
     pub facets: Vec<[usize; D]>,
     /// Landmark indices.
     pub landmarks: Vec<usize>,
+    /// The facets (indices into `facets`, sorted) where the population was cut by a common
+    /// plane (`--cut`): a flat cap, not anatomy; empty for an uncut population.
+    pub cut_facets: Vec<usize>,
     /// The landmarks' ids (names in the landmark files), one per landmark, when the
     /// population's files named them; empty otherwise (landmarks are then paired by order).
     pub landmark_ids: Vec<String>,
@@ -284,6 +287,7 @@ impl<const D: usize> Atlas<D> {
             params: *params,
             training_shapes: shapes.len(),
             data_frame: Some(frame),
+            cut_facets: Vec::new(),
         })
     }
 

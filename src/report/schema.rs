@@ -316,10 +316,29 @@ pub struct InputReport {
     /// `None` for the template itself).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub registration: Option<crate::register::RegistrationResiduals>,
+    /// Where it was cut (`--cut`: a population put on a common cut), if it was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cut: Option<CutReport>,
     /// What a user should know about it (islands dropped, a registration that did not
     /// reach).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+}
+
+/// Where a shape was cut: the plane (its point and unit normal towards the removed side, the
+/// shape's frame: world, RAS for label maps) and what the cut removed.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct CutReport {
+    /// A point of the cut plane.
+    pub point: Vec<f64>,
+    /// The plane's unit normal, towards the removed side.
+    pub normal: Vec<f64>,
+    /// The length kept from the shape's far end (the shapes' unit).
+    pub length: f64,
+    /// The share of the surface's area removed.
+    pub removed_share: f64,
+    /// The cap's area (the section; the unit squared).
+    pub cap_area: f64,
 }
 
 /// `report.json`.

@@ -74,7 +74,7 @@ pub fn build<const D: usize>(
     params: &RunParams,
     atlas_path: &Path,
 ) -> Result<Atlas<D>> {
-    build_with_meshes(shapes, None, params, &[], atlas_path)
+    build_with_meshes(shapes, None, params, &[], &[], atlas_path)
 }
 
 /// Names the atlas's landmarks by `ids` (the ids of the population's landmark files, one per
@@ -85,17 +85,27 @@ fn name_landmarks<const D: usize>(atlas: &mut Atlas<D>, ids: &[String]) {
     }
 }
 
-/// [`build`] with template volume meshes (one per shape, or one for the first shape) and the
-/// ids of the landmarks (see [`Atlas::landmark_ids`]).
+/// [`build`] with template volume meshes (one per shape, or one for the first shape), the
+/// ids of the landmarks (see [`Atlas::landmark_ids`]) and the facets of a common cut
+/// ([`super::cut_facets`]; empty for none): the mean mesh's face on the cut is the `CUT` node
+/// set and surface ([`crate::mesh::mark_cut_face`]).
 pub fn build_with_meshes<const D: usize>(
     shapes: &[Shape<D>],
     meshes: Option<&[FeMesh<D>]>,
     params: &RunParams,
     landmark_ids: &[String],
+    cut_facets: &[usize],
     atlas_path: &Path,
 ) -> Result<Atlas<D>> {
     let mut atlas = atlas_of(shapes, meshes, params)?;
     name_landmarks(&mut atlas, landmark_ids);
+    if !cut_facets.is_empty() {
+        atlas.cut_facets = cut_facets.to_vec();
+        if atlas.has_mesh() {
+            crate::mesh::mark_cut_face(&mut atlas.mesh, &atlas.mean, &atlas.facets, cut_facets)
+                .map_err(|e| Error::Mesh(format!("the face of the common cut: {e}")))?;
+        }
+    }
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
     }

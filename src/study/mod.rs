@@ -10,6 +10,7 @@
 //! | `params` | [`RunParams`]: every parameter of a run, and their ranges |
 //! | `progress` | [`Progress`]: the callback through which long work reports progress |
 //! | `population` | loading outlines and surfaces, landmarks, registration to a template |
+//! | `common_cut` | [`cut_population`]: a population cut by a common plane, each closed by a cap |
 //! | `build` | the atlas of a population, written with its mean mesh |
 //! | `sets` | sets and decks on the atlas's mean mesh |
 //! | `subject_file` | [`read_subjects`]: a subject read and cleaned, for every front end |
@@ -32,6 +33,7 @@
 mod baselines;
 pub mod batch;
 mod build;
+mod common_cut;
 mod ct_materials;
 mod demo;
 mod instance;
@@ -57,6 +59,7 @@ mod write_subject;
 pub use baselines::*;
 pub use batch::{fit_batch, fit_shapes};
 pub use build::*;
+pub use common_cut::*;
 pub use ct_materials::*;
 pub use demo::*;
 pub use instance::*;

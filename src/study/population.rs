@@ -281,6 +281,7 @@ pub fn clean_shapes<const D: usize>(shapes: &mut [Shape<D>], min_share: f64) -> 
                     dropped_components: 0,
                     dropped_share: 0.0,
                     registration: None,
+                    cut: None,
                     warnings: Vec::new(),
                 };
             }
@@ -314,6 +315,7 @@ pub fn clean_shapes<const D: usize>(shapes: &mut [Shape<D>], min_share: f64) -> 
                 dropped_components: dropped.len(),
                 dropped_share,
                 registration: None,
+                cut: None,
                 warnings,
             }
         })

@@ -8,6 +8,7 @@ mod aorta;
 mod bad_input;
 mod batch;
 mod cli;
+mod cut_bones;
 mod ecosystem;
 mod femur;
 mod fuzz_regressions;

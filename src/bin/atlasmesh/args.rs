@@ -36,6 +36,13 @@ pub struct PopArgs {
     /// landmarks.
     #[arg(long, value_name = "FILE", requires = "template")]
     pub template_landmarks: Option<PathBuf>,
+    /// 3D: cut every shape by a common plane and close it with a flat cap (anatomy the field
+    /// of view cut): `auto` (the default when a shape is open and a mesh is made: along the
+    /// direction each shape is open in, at the length the shortest reaches), AXIS:LENGTH
+    /// (AXIS one of R, L, A, P, S, I, world: the side removed; LENGTH kept from each shape's
+    /// far end, in the shapes' unit: `S:60`), or `none`.
+    #[arg(long, value_name = "auto|AXIS:LENGTH|none")]
+    pub cut: Option<String>,
     /// Refuse a shape with floating components under 1 % of its area (length) with an error,
     /// instead of dropping them with a warning.
     #[arg(long)]

@@ -78,7 +78,8 @@ fn build<const D: usize>(a: &BuildArgs, pop: Population<D>, term: &Terminal) -> 
     let atlas = if a.no_mesh {
         study::build_model(&shapes, params, &landmark_ids, &a.out)?
     } else {
-        study::build_with_meshes(&shapes, meshes, params, &landmark_ids, &a.out).map_err(|e| match e {
+        let cut = study::cut_facets(&shapes, &inputs);
+        study::build_with_meshes(&shapes, meshes, params, &landmark_ids, &cut, &a.out).map_err(|e| match e {
             atlasmesh::Error::Mesh(m) => atlasmesh::Error::Mesh(format!(
                 "{m}; the shape model itself was built: save it without a mean mesh with --no-mesh, or mesh the mean with another --element-size or a --template-mesh"
             )),

@@ -73,6 +73,7 @@ pub fn surfaces_and_params(
         }
         i.warnings.splice(0..0, n);
     }
+    cut(pop, &mut shapes, &mut inputs, point_sets, term)?;
     let meshes = if pop.template_mesh.is_empty() {
         None
     } else {
@@ -87,6 +88,35 @@ pub fn surfaces_and_params(
     })
 }
 
+/// The shapes put on a common cut ([`study::cut_population`]) as `--cut` asks; by default
+/// (`auto`) when a shape is open and a mesh is to be made.
+fn cut(
+    pop: &PopArgs,
+    shapes: &mut [Shape<3>],
+    inputs: &mut [InputReport],
+    point_sets: bool,
+    term: &Terminal,
+) -> anyhow::Result<()> {
+    let spec: study::CutSpec = match pop.cut.as_deref() {
+        Some(c) if c.eq_ignore_ascii_case("none") => return Ok(()),
+        Some(c) => c.parse()?,
+        None if !point_sets && shapes.iter().any(study::is_open) => study::CutSpec::Auto,
+        None => return Ok(()),
+    };
+    let length = study::cut_population(shapes, inputs, &spec)?;
+    if !term.is_quiet() {
+        eprintln!(
+            "cut: every shape cut {length:.4} from its far end and closed by a flat cap{}",
+            if pop.cut.is_none() {
+                " (--cut auto: some shapes are open; --cut none keeps them as they are)"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
+}
+
 /// The outlines of `pop` (with their landmarks) and the run parameters.
 pub fn outlines_and_params(
     pop: &PopArgs,
@@ -96,6 +126,13 @@ pub fn outlines_and_params(
     if !pop.template_mesh.is_empty() {
         return Err(atlasmesh::Error::Parameter(
             "--template-mesh applies to 3D surfaces; 2D outlines get the automatic quad mesh"
+                .into(),
+        )
+        .into());
+    }
+    if pop.cut.is_some() {
+        return Err(atlasmesh::Error::Parameter(
+            "--cut applies to 3D surfaces; an open outline is meshed closed by the straight segment between its ends"
                 .into(),
         )
         .into());

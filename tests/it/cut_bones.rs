@@ -1,0 +1,182 @@
+//! Bones cut by the field of view: label maps of distal femurs whose shaft leaves the image
+//! at a different height in each (as knee MR has them), written by nibabel (NIfTI, RAS) and
+//! SimpleITK (NRRD, LPS) from the shared femurs voxelized by PyVista (VTK's
+//! `vtkPolyDataToImageStencil`), made into one atlas of cut bones.
+
+use crate::common;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The femurs S001.. voxelized at 0.7 × 0.7 × 1 mm, the field of view ending 6 to 24 mm below
+/// each shaft's top; even ones written as NIfTI by nibabel, odd ones as NRRD by SimpleITK.
+const WRITE_CUT_FEMURS: &str = r#"
+import sys, os, numpy as np, meshio, pyvista as pv, nibabel as nib, SimpleITK as sitk
+femurs, out, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+spacing = np.array([0.7, 0.7, 1.0])
+for k in range(n):
+    name = f"S{k + 1:03d}_Femur"
+    m = meshio.read(os.path.join(femurs, name + ".ply"))
+    surf = pv.PolyData.from_regular_faces(np.asarray(m.points, float), m.cells_dict["triangle"])
+    lo, hi = m.points.min(0) - 3 * spacing, m.points.max(0) + 3 * spacing
+    dims = np.ceil((hi - lo) / spacing).astype(int) + 1
+    ref = pv.ImageData(dimensions=dims, spacing=spacing, origin=lo)
+    mask = surf.voxelize_binary_mask(reference_volume=ref, foreground_value=1)
+    vox = np.asarray(mask.point_data["mask"]).reshape(dims[::-1]).astype(np.uint8)  # z, y, x
+    top = int((m.points[:, 2].max() - lo[2]) / spacing[2])
+    vox = vox[: top - int((6 + 18 * k / max(n - 1, 1)) / spacing[2])]
+    if k % 2 == 0:
+        affine = np.diag(list(spacing) + [1.0])
+        affine[:3, 3] = lo
+        data = np.ascontiguousarray(vox.transpose(2, 1, 0))
+        nib.save(nib.Nifti1Image(data, affine), os.path.join(out, name + ".nii.gz"))
+    else:
+        img = sitk.GetImageFromArray(vox)
+        img.SetSpacing(tuple(float(s) for s in spacing))
+        img.SetOrigin((-float(lo[0]), -float(lo[1]), float(lo[2])))
+        img.SetDirection((-1.0, 0, 0, 0, -1.0, 0, 0, 0, 1.0))
+        sitk.WriteImage(img, os.path.join(out, name + ".nrrd"), useCompression=True)
+"#;
+
+/// Writes `n` cut femur label maps into `dir` ([`WRITE_CUT_FEMURS`]); returns their paths.
+fn cut_femurs(py: &Path, data: &Path, dir: &Path, n: usize) -> Vec<PathBuf> {
+    let o = common::run(
+        Command::new(py)
+            .arg("-c")
+            .arg(WRITE_CUT_FEMURS)
+            .arg(data.join("knee-distal-femur-synthetic-3d/femur"))
+            .arg(dir)
+            .arg(n.to_string()),
+        common::deadline::PYTHON,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (1..=n)
+        .map(|k| {
+            let ext = if k % 2 == 1 { "nii.gz" } else { "nrrd" };
+            dir.join(format!("S{k:03}_Femur.{ext}"))
+        })
+        .collect()
+}
+
+/// Femur label maps cut by the field of view at six heights make one atlas by default: each
+/// cut at the same length from its far end along the shaft (the images' S axis, whichever
+/// convention the writer used), closed by a flat cap, and the mean meshed; the cut of each is
+/// in the build's facts. A cut along an axis keeps the length asked; a cut that misses, a bad
+/// `--cut` and `--cut auto` on closed surfaces are refused naming the shape or the option.
+#[test]
+fn label_maps_cut_by_the_field_of_view_make_one_atlas_of_cut_bones() {
+    let Some(data) = common::data_dir("cut bones") else {
+        return;
+    };
+    let Some(py) = common::python() else {
+        return;
+    };
+    let dir = common::temp_dir("cut-bones");
+    let maps = cut_femurs(&py, &data, &dir, 6);
+    let atlas = dir.join("atlas.safetensors");
+    let mut args: Vec<String> = vec!["build".into(), "--shapes".into()];
+    args.extend(maps.iter().map(|m| m.display().to_string()));
+    args.extend(["--label", "1", "--register"].map(String::from));
+    let mut with_out = args.clone();
+    with_out.extend(["--out".to_string(), atlas.display().to_string()]);
+    let o = common::atlasmesh(&with_out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let facts: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("atlas.inputs.json")).unwrap()).unwrap();
+    let inputs = facts["inputs"].as_array().unwrap();
+    assert_eq!(inputs.len(), 6);
+    let lengths: Vec<f64> = inputs
+        .iter()
+        .map(|i| i["cut"]["length"].as_f64().unwrap())
+        .collect();
+    for (i, l) in inputs.iter().zip(&lengths) {
+        let n: Vec<f64> = serde_json::from_value(i["cut"]["normal"].clone()).unwrap();
+        assert!(
+            n[2] > 0.999,
+            "{}: cut along {n:?}, not the shaft (S)",
+            i["name"]
+        );
+        assert_eq!(*l, lengths[0], "{}: not the common length", i["name"]);
+        let removed = i["cut"]["removed_share"].as_f64().unwrap();
+        assert!(removed > 0.0 && removed < 0.2, "{}: {removed}", i["name"]);
+    }
+    // The femurs reach 90 mm and more from the condyles; the shortest field of view leaves 24
+    // mm less of the shaft than the tallest: the common length lies below both.
+    assert!(lengths[0] > 50.0 && lengths[0] < 90.0, "{}", lengths[0]);
+    let q = common::atlasmesh(&[
+        "quality".to_string(),
+        dir.join("atlas_mean_mesh.vtu").display().to_string(),
+    ]);
+    assert!(q.status.success(), "{}", String::from_utf8_lossy(&q.stderr));
+    // The mean surface is closed (as VTK reads it), and the mean mesh's face on the cut, as
+    // meshio reads it: the `CUT` nodes on one plane normal to the shaft, at the top.
+    let script = r#"
+import sys, json, meshio, numpy as np, pyvista as pv
+mean = pv.read(sys.argv[2])
+m = meshio.read(sys.argv[1])
+cut = m.point_data["set_CUT"] > 0
+p = m.points[cut]
+centre = p.mean(0)
+normal = np.linalg.svd(p - centre)[2][2]
+print(json.dumps({"nodes": int(cut.sum()), "off": float(np.abs((p - centre) @ normal).max()),
+    "normal_z": float(abs(normal[2])), "below_top": float(m.points[:, 2].max() - centre[2]),
+    "open_edges": int(mean.n_open_edges), "triangles": int(mean.n_cells)}))
+"#;
+    let o = common::run(
+        Command::new(&py)
+            .arg("-c")
+            .arg(script)
+            .arg(dir.join("atlas_mean_mesh.vtu"))
+            .arg(dir.join("atlas_mean.vtp")),
+        common::deadline::PYTHON,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cut: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let element = facts["mean_mesh"]["element_size"].as_f64().unwrap();
+    assert!(
+        cut["open_edges"] == 0 && cut["triangles"].as_u64() > Some(1000),
+        "the mean surface is open: {cut}"
+    );
+    assert!(cut["nodes"].as_u64().unwrap() > 200, "{cut}");
+    assert!(cut["off"].as_f64().unwrap() < 1e-6 * element, "{cut}");
+    assert!(cut["normal_z"].as_f64().unwrap() > 0.999, "{cut}");
+    assert!(cut["below_top"].as_f64().unwrap() < 0.5 * element, "{cut}");
+
+    // Along an axis: the length asked, for every shape.
+    let mut along = args.clone();
+    along.extend(["--cut", "S:60", "--no-mesh", "--out"].map(String::from));
+    along.push(dir.join("along.safetensors").display().to_string());
+    let o = common::atlasmesh(&along);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let along: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("along.inputs.json")).unwrap()).unwrap();
+    for i in along["inputs"].as_array().unwrap() {
+        assert_eq!(i["cut"]["length"].as_f64(), Some(60.0), "{}", i["name"]);
+    }
+    // Refusals: a cut beyond the field of view of the shortest, a bad --cut, auto on closed
+    // surfaces.
+    for (cut, expect) in [("S:85", "open"), ("X:60", "--cut")] {
+        let mut bad = args.clone();
+        bad.extend(["--cut", cut, "--out"].map(String::from));
+        bad.push(dir.join("bad.safetensors").display().to_string());
+        let o = common::atlasmesh(&bad);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(expect), "{cut}: {err}");
+        assert!(!dir.join("bad.safetensors").exists());
+    }
+    let femurs = data.join("knee-distal-femur-synthetic-3d/femur");
+    let o = common::atlasmesh(&[
+        "build".to_string(),
+        "--shapes".into(),
+        femurs.join("S001_Femur.ply").display().to_string(),
+        femurs.join("S002_Femur.ply").display().to_string(),
+        "--cut".into(),
+        "auto".into(),
+        "--out".into(),
+        dir.join("closed.safetensors").display().to_string(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("_Femur: --cut auto") && err.contains("closed"),
+        "{err}"
+    );
+}

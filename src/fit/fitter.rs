@@ -90,6 +90,8 @@ pub struct Fitter<const D: usize> {
     /// index, the rows of the linear system), whose pages, allocated afresh for every fit,
     /// cost it a few percent in page faults.
     pub(super) spare: std::sync::Mutex<Vec<Scratches<D>>>,
+    /// The cap of an atlas built on a common cut ([`super::cut_cap`]), where no pair ends.
+    pub(super) cap: Option<super::cut_cap::Cap<D>>,
 }
 
 /// Spare buffers a [`Fitter`] keeps at most (one per worker of a batch, typically).
@@ -111,6 +113,7 @@ impl<const D: usize> Fitter<D> {
             coarse: Model::coarse(&atlas, COARSE_MODEL_FACTOR * coarse_points),
             coarse_points,
             spare: std::sync::Mutex::new(Vec::new()),
+            cap: super::cut_cap::Cap::of(&atlas),
             atlas,
         }
     }
@@ -474,7 +477,7 @@ impl<const D: usize> Fitter<D> {
         full_x.set_weights(&self.full, &run.state.w, false);
         let sim = run.state.sim;
         let instance: Vec<Point<D>> = full_x.x.iter().map(|p| sim.apply(p)).collect();
-        let projected = project_along_normals(
+        let mut projected = project_along_normals(
             &instance,
             &self.atlas.facets,
             subj.index,
@@ -483,11 +486,27 @@ impl<const D: usize> Fitter<D> {
             // has all of them (project_along_normals takes memos of the right length only).
             Some(&mut run.state.forward_memo),
         );
-        let corresponded = if params.partial {
+        let mut corresponded = if params.partial {
             partnered(subj.shape, &projected)
         } else {
             vec![true; projected.len()]
         };
+        // The cap of an atlas of cut bones is where the delivered mesh ends, whether the
+        // subject reaches it or not: the morph follows the instance's cap itself (projected
+        // along its normal, a cap point would land on a longer shaft).
+        if let Some(cap) = &self.cap {
+            for ((c, pr), (&inside, &x)) in corresponded
+                .iter_mut()
+                .zip(&mut projected)
+                .zip(cap.interior.iter().zip(&instance))
+            {
+                if inside {
+                    *c = true;
+                    pr.point = x;
+                    pr.dist2 = 0.0;
+                }
+            }
+        }
         Ok(FitResult {
             corresponded,
             weights: run.state.w,

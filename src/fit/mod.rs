@@ -13,8 +13,10 @@
 //! | `state` | what a fit carries from one update to the next |
 //! | `scratch` | buffers reused by the updates, apart from the maths |
 //! | `result` | [`FitResult`] |
+//! | `cut_cap` | the cap of an atlas of cut shapes, where no pair ends |
 //! | `landmarks` | [`fit_landmarks`]: the posterior of the model given a few landmarks |
 
+mod cut_cap;
 mod fitter;
 mod landmarks;
 mod params;

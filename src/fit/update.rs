@@ -76,6 +76,7 @@ impl<const D: usize> Fitter<D> {
             psi: &model.psi,
             m,
             p,
+            cap: self.cap.as_ref(),
         };
         let buf = &mut scratch.rows;
         buf.clear();
@@ -250,6 +251,8 @@ struct Rows<'a, const D: usize> {
     psi: &'a [f64],
     m: usize,
     p: usize,
+    /// The cap of an atlas of cut shapes: no pair ends on it.
+    cap: Option<&'a super::cut_cap::Cap<D>>,
 }
 
 impl<const D: usize> Rows<'_, D> {
@@ -311,6 +314,12 @@ impl<const D: usize> Rows<'_, D> {
     ) -> f64 {
         let mut forward = 0.0;
         for (&j, memo) in sampling.forward.iter().zip(memos) {
+            if self
+                .cap
+                .is_some_and(|cap| cap.holds(&self.x[j], &normals[j]))
+            {
+                continue;
+            }
             let c = subj.index.closest_memo(&sim.apply(&self.x[j]), memo);
             forward += c.dist2;
             // From the index, which the search has just read.
@@ -354,11 +363,18 @@ impl<const D: usize> Rows<'_, D> {
         let sw = (total * sampling.pairs() as f64 / sampling.backward.len() as f64).sqrt();
         for (&i, memo) in sampling.backward.iter().zip(memos) {
             let z = sim.apply_inverse(&subj.shape.points[i]);
+            if self.cap.is_some_and(|cap| cap.beyond(&z)) {
+                continue;
+            }
             let c = index.closest_memo(&z, memo);
-            backward += c.dist2 * sim.s * sim.s;
             let (Some(n), Some(f)) = (index.normal_at(&c), index.facet_vertices(&c)) else {
+                backward += c.dist2 * sim.s * sim.s;
                 continue;
             };
+            if self.cap.is_some_and(|cap| cap.holds(&c.point, &n)) {
+                continue;
+            }
+            backward += c.dist2 * sim.s * sim.s;
             let cw = compatibility(dot(n, sim.rotate_inverse(&subj.normals[i])));
             if cw == 0.0 {
                 continue;

@@ -96,6 +96,32 @@ pub fn mark_cut_face<const D: usize>(
     Ok((c, n, nodes.len()))
 }
 
+/// A morphed mesh's [`CUT_SET`] put back on one plane (the least-squares plane of its nodes):
+/// the morph and the boundary fit move the face's nodes by a little, and a user fixes the
+/// shaft on a flat face. Returns the largest move (shape units); `None` when the mesh has no
+/// cut, or flattening would invert an element (the nodes stay where they were).
+pub fn flatten_cut_face<const D: usize>(mesh: &mut FeMesh<D>) -> Option<f64> {
+    let nodes = mesh.sets.node_sets.get(CUT_SET)?.clone();
+    if nodes.len() <= D || nodes.iter().any(|&v| v >= mesh.nodes.len()) {
+        return None;
+    }
+    let pts: Vec<Point<D>> = nodes.iter().map(|&v| mesh.nodes[v]).collect();
+    let c = centroid(&pts);
+    let n = principal_axes_of(&pts)[D - 1];
+    let before = mesh.nodes.clone();
+    let mut moved: f64 = 0.0;
+    for &v in &nodes {
+        let off = dot(sub(mesh.nodes[v], c), n);
+        moved = moved.max(off.abs());
+        mesh.nodes[v] = sub(mesh.nodes[v], scale(n, off));
+    }
+    if summarize(&mesh_quality(mesh)).inverted_elements > 0 {
+        mesh.nodes = before;
+        return None;
+    }
+    Some(moved)
+}
+
 /// The median distance between consecutive corners of the boundary faces.
 fn typical_edge<const D: usize>(mesh: &FeMesh<D>, faces: &[super::BoundaryFace<D>]) -> f64 {
     let mut l: Vec<f64> = faces

@@ -40,7 +40,7 @@ mod voxel_mesh;
 
 pub use boundary::{BoundaryFace, FacePair, boundary_faces, boundary_surface, face_pairs};
 pub use boundary_fit::{BoundaryFit, fit_boundary};
-pub use cut_face::{CUT_SET, mark_cut_face};
+pub use cut_face::{CUT_SET, flatten_cut_face, mark_cut_face};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};
 pub use element_size::{ElementSize, resolve_element_size};

@@ -11,7 +11,7 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::{
-    Plane, Point, Shape, centroid, cut_by_plane, dot, median_edge_length, normalize,
+    Plane, Point, Shape, centroid, cut_by_plane, dot, median_edge_length, norm, normalize,
     principal_axes_of, sub,
 };
 use crate::report::{CutReport, InputReport};
@@ -70,6 +70,29 @@ pub fn is_open(shape: &Shape<3>) -> bool {
     !opening(shape).is_empty()
 }
 
+/// Whether a surface is open where a plane cut it (as an image's border cuts a bone): its
+/// opening's points lie within a tenth of the opening's width of their best-fit plane, and the
+/// opening is more than three edges wide. A hole of a few facets, or openings at both ends, are
+/// not such a cut: those surfaces stay open (and the automatic mesher refuses them).
+pub fn is_cut_by_a_plane(shape: &Shape<3>) -> bool {
+    let rim: Vec<Point<3>> = opening(shape)
+        .into_iter()
+        .map(|i| shape.points[i])
+        .collect();
+    if rim.len() < 3 {
+        return false;
+    }
+    let rc = centroid(&rim);
+    let n = principal_axes_of(&rim)[2];
+    let width = rim.iter().map(|&p| norm(sub(p, rc))).fold(0.0, f64::max);
+    let off = rim
+        .iter()
+        .map(|&p| dot(sub(p, rc), n).abs())
+        .fold(0.0, f64::max);
+    let edge = median_edge_length(&shape.points, &shape.facets);
+    off <= 0.1 * width && width > 3.0 * edge
+}
+
 /// The points on the surface's openings (edges on one facet only).
 fn opening(shape: &Shape<3>) -> Vec<usize> {
     let mut edges: HashMap<(usize, usize), usize> = HashMap::new();
@@ -100,6 +123,12 @@ fn open_direction(shape: &Shape<3>) -> Result<(Point<3>, f64)> {
     if rim.len() < 3 {
         return Err(Error::Population(format!(
             "{}: --cut auto cuts a shape where it is open (where its image's border cut it), and this one is closed: give the cut as --cut AXIS:LENGTH (e.g. S:60)",
+            shape.name
+        )));
+    }
+    if !is_cut_by_a_plane(shape) {
+        return Err(Error::Population(format!(
+            "{}: --cut auto cuts a shape where a plane cut it (its image's border), and this one is open elsewhere (a hole, or openings on several sides): close the surface, give the cut as --cut AXIS:LENGTH, or bring a --template-mesh",
             shape.name
         )));
     }
@@ -246,6 +275,46 @@ pub fn cut_facets<const D: usize>(shapes: &[Shape<D>], inputs: &[InputReport]) -
         .collect()
 }
 
+/// `subject` cut where the fitted `instance` (subject frame) of an atlas built on a common
+/// cut has its cap (the least-squares plane of the cap's points, `cut_facets` of `facets`),
+/// closed by a flat cap: the part it shares with the atlas, against which the delivered mesh
+/// is measured. `None` when the atlas has no cut, or the subject does not reach beyond the
+/// plane or cannot be closed there (a subject cut below the atlas's cut stays a part); 3D
+/// only. Returns the trimmed subject and the share of its surface removed.
+pub(crate) fn trimmed_to_cut<const D: usize>(
+    instance: &[Point<D>],
+    facets: &[[usize; D]],
+    cut_facets: &[usize],
+    subject: &Shape<D>,
+) -> Option<(Shape<D>, f64)> {
+    if D != 3 || cut_facets.is_empty() {
+        return None;
+    }
+    let instance: Vec<Point<3>> = instance.iter().map(crate::geometry::in_3d).collect();
+    let mut ids: Vec<usize> = cut_facets
+        .iter()
+        .filter_map(|&f| facets.get(f))
+        .flatten()
+        .copied()
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let cap: Vec<Point<3>> = ids
+        .iter()
+        .filter_map(|&i| instance.get(i).copied())
+        .collect();
+    if cap.len() < 3 {
+        return None;
+    }
+    let point = centroid(&cap);
+    let mut normal = principal_axes_of(&cap)[2];
+    if dot(normal, sub(point, centroid(&instance))) < 0.0 {
+        normal = normal.map(|x| -x);
+    }
+    let cut = cut_by_plane(&subject.clone().into_dim::<3>(), &Plane { point, normal }).ok()?;
+    Some((cut.shape.into_dim::<D>(), cut.removed_share))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,7 +348,7 @@ mod tests {
             bone("b", 5.0, [3.0, -2.0, 7.0]),
             bone("c", -5.0, [-1.0, 0.0, -4.0]),
         ];
-        assert!(shapes.iter().all(is_open));
+        assert!(shapes.iter().all(is_cut_by_a_plane));
         let mut inputs = vec![InputReport::default(); 3];
         let length = cut_population(&mut shapes, &mut inputs, &CutSpec::Auto).unwrap();
         // The shortest reaches its opening just above 15 from its far end (z = -20): the cut a
@@ -331,5 +400,16 @@ mod tests {
         }];
         let e = cut_population(&mut closed, &mut inputs, &CutSpec::Auto).unwrap_err();
         assert!(e.to_string().contains("round") && e.to_string().contains("AXIS:LENGTH"));
+        // A hole of a few facets is open, but not where a plane cut it: auto refuses it.
+        let mut holed = closed.clone();
+        holed[0].name = "holed".into();
+        holed[0].facets.retain(|f| !f.contains(&25));
+        assert!(is_open(&holed[0]) && !is_cut_by_a_plane(&holed[0]));
+        assert!(!is_cut_by_a_plane(&closed[0]));
+        let e = cut_population(&mut holed, &mut inputs, &CutSpec::Auto).unwrap_err();
+        assert!(
+            e.to_string().contains("holed") && e.to_string().contains("hole"),
+            "{e}"
+        );
     }
 }

@@ -24,7 +24,8 @@ pub struct SubjectOutcome<const D: usize> {
     pub mesh: FeMesh<D>,
     /// Corner Jacobians of every element of `mesh` (section 5.3).
     pub quality: Vec<ElementQuality>,
-    /// The subject's closest-point index (the pictures measure distances with it).
+    /// The subject's closest-point index (the pictures measure distances with it); of the
+    /// subject trimmed to the atlas's common cut where it reaches beyond it.
     pub index: ClosestPointIndex<D>,
     /// The measures of `report.json` (`files` empty until the subject is written).
     pub report: SubjectReport,
@@ -50,45 +51,48 @@ pub fn fit_subject<const D: usize>(
     subject: &Shape<D>,
     params: &RunParams,
 ) -> Result<SubjectOutcome<D>> {
-    let index = ClosestPointIndex::from_shape(subject);
+    let own_index = ClosestPointIndex::from_shape(subject);
     let t0 = Instant::now();
-    let fit = fitter.fit(subject, &index, &params.fit)?;
+    let fit = fitter.fit(subject, &own_index, &params.fit)?;
     let fit_seconds = t0.elapsed().as_secs_f64();
-    let (rms, to_instance) = fit_distances(&fit.instance, &atlas.facets, subject, &index);
-    let rel = rms / subject.bbox_diagonal();
-    let (mirrored_rms, warnings) =
-        checked_misfit(atlas, fitter, subject, params, (rms, to_instance))?;
+    // A subject beyond the atlas's common cut is measured on the part they share.
+    let shared = SharedPart::of(atlas, &fit.instance, subject, params);
+    let (whole, index, params) = shared.as_ref().map_or((subject, &own_index, params), |s| {
+        (&s.shape, &s.index, &s.params)
+    });
+    let (rms, to_instance) = fit_distances(&fit.instance, &atlas.facets, whole, index);
+    let rel = rms / whole.bbox_diagonal();
+    let (mirrored_rms, mut warnings) =
+        checked_misfit(atlas, fitter, whole, params, (rms, to_instance))?;
+    warnings.extend(shared.as_ref().map(SharedPart::warning));
     let morph = morpher.morph(&fit.correspondence())?;
     let mut mesh = morph.mesh;
     let mut per_element = morph.quality;
     let unrepaired = summarize(&per_element);
     let mut repair = None;
     if let Some(rp) = &params.repair {
-        let (r, q) = repair_with_quality(&mut mesh, Some(&index), rp, &per_element)?;
+        let (r, q) = repair_with_quality(&mut mesh, Some(index), rp, &per_element)?;
         per_element = q;
         repair = Some(r);
     }
-    let mut delivered = delivered_distances(&mesh, subject, &index, params);
-    if params.boundary_fit
-        && let Some(better) = boundary_fitted(&mesh, &index, subject, params, &delivered)?
-    {
-        (mesh, per_element, delivered) = better;
-    }
+    let mut delivered = delivered_distances(&mesh, whole, index, params);
+    (mesh, per_element, delivered) =
+        boundary_fitted_and_flat(mesh, per_element, delivered, index, whole, params)?;
     let q = summarize(&per_element);
-    check_valid(subject, &mesh, &q, params)?;
+    check_valid(whole, &mesh, &q, params)?;
     let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
     let dist = distribution(&mesh, &per_element);
     let mean_normals = atlas.mean_shape().vertex_normals();
     let nc = normal_correlation(&mean_normals, &normals_at(subject, &fit.projected));
     let baselines = params
         .baselines
-        .then(|| baseline_correlations(atlas, subject, &index, &mean_normals))
+        .then(|| baseline_correlations(atlas, subject, &own_index, &mean_normals))
         .transpose()?;
     let mut report = SubjectReport {
         name: subject.name.clone(),
         iterations: fit.iterations,
         fit_seconds,
-        e_d: e_d(&fit.instance, &index),
+        e_d: e_d(&fit.instance, index),
         rms_distance: rms,
         rms_distance_relative: rel,
         normal_correlation: nc,
@@ -115,7 +119,7 @@ pub fn fit_subject<const D: usize>(
         edge_ratio_max: dist.edge_ratio_max,
         elements_below_bound: dist.elements_below_bound,
         mesh_rms_distance: delivered.distances.rms,
-        mesh_rms_distance_relative: delivered.distances.rms / subject.bbox_diagonal(),
+        mesh_rms_distance_relative: delivered.distances.rms / whole.bbox_diagonal(),
         mesh_p95_distance: delivered.distances.p95,
         mesh_max_distance: delivered.distances.max,
         mesh_share_beyond_element: delivered.distances.share_beyond,
@@ -138,7 +142,7 @@ pub fn fit_subject<const D: usize>(
         fit,
         mesh,
         quality: per_element,
-        index,
+        index: shared.map_or(own_index, |s| s.index),
         report,
         materials: None,
     })
@@ -189,6 +193,18 @@ fn boundary_fitted<const D: usize>(
     // Boundary nodes near an element the moves left invalid or poor stay where they were in
     // the next try.
     let mut keep = vec![false; mesh.nodes.len()];
+    // The face on an atlas's common cut is not anatomy: it stays where the morph put it.
+    for &v in mesh
+        .sets
+        .node_sets
+        .get(crate::mesh::CUT_SET)
+        .into_iter()
+        .flatten()
+    {
+        if let Some(k) = keep.get_mut(v) {
+            *k = true;
+        }
+    }
     for _ in 0..BOUNDARY_FIT_TRIES {
         let mut fitted = mesh.clone();
         let moved = crate::mesh::fit_boundary(&mut fitted, index, reach, &keep);
@@ -212,6 +228,67 @@ fn boundary_fitted<const D: usize>(
         mark_around(&fitted, &bad, BOUNDARY_KEEP_RINGS, &mut keep);
     }
     Ok(None)
+}
+
+/// The boundary fit ([`boundary_fitted`]) where it brings the mesh closer, then the face on an
+/// atlas's common cut made flat ([`crate::mesh::flatten_cut_face`]); the mesh with its quality
+/// and distances.
+fn boundary_fitted_and_flat<const D: usize>(
+    mut mesh: FeMesh<D>,
+    mut per_element: Vec<ElementQuality>,
+    mut delivered: Delivered,
+    index: &ClosestPointIndex<D>,
+    subject: &Shape<D>,
+    params: &RunParams,
+) -> Result<(FeMesh<D>, Vec<ElementQuality>, Delivered)> {
+    if params.boundary_fit
+        && let Some(better) = boundary_fitted(&mesh, index, subject, params, &delivered)?
+    {
+        (mesh, per_element, delivered) = better;
+    }
+    if crate::mesh::flatten_cut_face(&mut mesh).is_some_and(|moved| moved > 0.0) {
+        per_element = crate::mesh::quality::mesh_quality(&mesh);
+        delivered = delivered_distances(&mesh, subject, index, params);
+    }
+    Ok((mesh, per_element, delivered))
+}
+
+/// The part of a subject an atlas built on a common cut shares with it, when the subject
+/// reaches beyond the cut ([`super::trimmed_to_cut`]): the delivered mesh is measured against
+/// it, and nothing of it is partial.
+struct SharedPart<const D: usize> {
+    shape: Shape<D>,
+    index: ClosestPointIndex<D>,
+    params: RunParams,
+    /// Share of the subject's surface beyond the cut.
+    removed: f64,
+}
+
+impl<const D: usize> SharedPart<D> {
+    fn of(
+        atlas: &Atlas<D>,
+        instance: &[crate::geometry::Point<D>],
+        subject: &Shape<D>,
+        params: &RunParams,
+    ) -> Option<Self> {
+        let (shape, removed) =
+            super::trimmed_to_cut(instance, &atlas.facets, &atlas.cut_facets, subject)?;
+        let mut params = params.clone();
+        params.fit.partial = false;
+        Some(SharedPart {
+            index: ClosestPointIndex::from_shape(&shape),
+            shape,
+            params,
+            removed,
+        })
+    }
+
+    fn warning(&self) -> String {
+        format!(
+            "it reaches beyond the atlas's common cut: compared on the part they share, {:.1} % of its surface beyond the cut left out",
+            100.0 * self.removed
+        )
+    }
 }
 
 /// Sweeps of the repair after a boundary fit's try.

@@ -71,10 +71,11 @@ fn label_maps_cut_by_the_field_of_view_make_one_atlas_of_cut_bones() {
         return;
     };
     let dir = common::temp_dir("cut-bones");
-    let maps = cut_femurs(&py, &data, &dir, 6);
+    // Six to build from, two more to fit.
+    let maps = cut_femurs(&py, &data, &dir, 8);
     let atlas = dir.join("atlas.safetensors");
     let mut args: Vec<String> = vec!["build".into(), "--shapes".into()];
-    args.extend(maps.iter().map(|m| m.display().to_string()));
+    args.extend(maps[..6].iter().map(|m| m.display().to_string()));
     args.extend(["--label", "1", "--register"].map(String::from));
     let mut with_out = args.clone();
     with_out.extend(["--out".to_string(), atlas.display().to_string()]);
@@ -141,6 +142,8 @@ print(json.dumps({"nodes": int(cut.sum()), "off": float(np.abs((p - centre) @ no
     assert!(cut["normal_z"].as_f64().unwrap() > 0.999, "{cut}");
     assert!(cut["below_top"].as_f64().unwrap() < 0.5 * element, "{cut}");
 
+    fits_cut_and_whole_subjects(&py, &data, &dir, &atlas, &maps[6..], element);
+
     // Along an axis: the length asked, for every shape.
     let mut along = args.clone();
     along.extend(["--cut", "S:60", "--no-mesh", "--out"].map(String::from));
@@ -152,9 +155,9 @@ print(json.dumps({"nodes": int(cut.sum()), "off": float(np.abs((p - centre) @ no
     for i in along["inputs"].as_array().unwrap() {
         assert_eq!(i["cut"]["length"].as_f64(), Some(60.0), "{}", i["name"]);
     }
-    // Refusals: a cut beyond the field of view of the shortest, a bad --cut, auto on closed
-    // surfaces.
-    for (cut, expect) in [("S:85", "open"), ("X:60", "--cut")] {
+    // Refusals: a cut beyond the field of view of the shortest (naming the shape), a bad --cut,
+    // `--cut auto` on closed surfaces.
+    for (cut, expect) in [("S:85", "_Femur: "), ("X:60", "--cut")] {
         let mut bad = args.clone();
         bad.extend(["--cut", cut, "--out"].map(String::from));
         bad.push(dir.join("bad.safetensors").display().to_string());
@@ -178,5 +181,72 @@ print(json.dumps({"nodes": int(cut.sum()), "off": float(np.abs((p - centre) @ no
     assert!(
         !o.status.success() && err.contains("_Femur: --cut auto") && err.contains("closed"),
         "{err}"
+    );
+}
+
+/// Fits, with the atlas of cut bones, two label maps cut by the field of view at other heights
+/// and the first of them whole (its closed surface, the shaft going on beyond the atlas's
+/// cut), with default options: every one succeeds, its delivered mesh (as meshio reads it)
+/// within an element of the subject and its `CUT` face flat to 1e-6 of an element; the cut
+/// bone's mesh and the whole bone's agree node by node within a quarter of an element.
+fn fits_cut_and_whole_subjects(
+    py: &Path,
+    data: &Path,
+    dir: &Path,
+    atlas: &Path,
+    maps: &[PathBuf],
+    element: f64,
+) {
+    let whole = data.join("knee-distal-femur-synthetic-3d/femur/S007_Femur.ply");
+    let subjects = dir.join("subjects");
+    std::fs::create_dir_all(&subjects).unwrap();
+    std::fs::copy(&whole, subjects.join("S007_whole.ply")).unwrap();
+    let out = dir.join("fit");
+    let mut args: Vec<String> = vec!["fit".into(), "--atlas".into(), atlas.display().to_string()];
+    args.push("--subjects".into());
+    args.extend(maps.iter().map(|m| m.display().to_string()));
+    args.push(subjects.join("S007_whole.ply").display().to_string());
+    args.extend(["--label", "1", "--no-plots", "--out"].map(String::from));
+    args.push(out.display().to_string());
+    let o = common::atlasmesh(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let subjects = report["subjects"].as_array().unwrap();
+    assert_eq!(subjects.len(), 3);
+    for s in subjects {
+        assert_eq!(s["success"], true, "{s}");
+        let rms = s["mesh_rms_distance"].as_f64().unwrap();
+        assert!(rms < element, "{}: delivered RMS {rms}", s["name"]);
+    }
+    let script = r#"
+import sys, json, meshio, numpy as np
+out = sys.argv[1]
+meshes = {n: meshio.read(f"{out}/{n}/{n}_mesh.vtu") for n in ["S007_Femur", "S008_Femur", "S007_whole"]}
+off = {}
+for n, m in meshes.items():
+    p = m.points[m.point_data["set_CUT"] > 0]
+    c = p.mean(0)
+    normal = np.linalg.svd(p - c)[2][2]
+    off[n] = float(np.abs((p - c) @ normal).max())
+d = np.linalg.norm(meshes["S007_Femur"].points - meshes["S007_whole"].points, axis=1)
+print(json.dumps({"off": off, "rms": float(np.sqrt((d ** 2).mean())), "p95": float(np.percentile(d, 95))}))
+"#;
+    let o = common::run(
+        Command::new(py).arg("-c").arg(script).arg(&out),
+        common::deadline::PYTHON,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    eprintln!("cut bones fitted: {m}");
+    for (name, off) in m["off"].as_object().unwrap() {
+        assert!(
+            off.as_f64().unwrap() < 1e-6 * element,
+            "{name}: CUT off its plane by {off}"
+        );
+    }
+    assert!(
+        m["rms"].as_f64().unwrap() < 0.25 * element,
+        "the cut and the whole bone's meshes differ: {m}"
     );
 }

@@ -89,7 +89,7 @@ pub fn surfaces_and_params(
 }
 
 /// The shapes put on a common cut ([`study::cut_population`]) as `--cut` asks; by default
-/// (`auto`) when a shape is open and a mesh is to be made.
+/// (`auto`) when a shape is open where a plane cut it and a mesh is to be made.
 fn cut(
     pop: &PopArgs,
     shapes: &mut [Shape<3>],
@@ -100,7 +100,7 @@ fn cut(
     let spec: study::CutSpec = match pop.cut.as_deref() {
         Some(c) if c.eq_ignore_ascii_case("none") => return Ok(()),
         Some(c) => c.parse()?,
-        None if !point_sets && shapes.iter().any(study::is_open) => study::CutSpec::Auto,
+        None if !point_sets && shapes.iter().any(study::is_cut_by_a_plane) => study::CutSpec::Auto,
         None => return Ok(()),
     };
     let length = study::cut_population(shapes, inputs, &spec)?;

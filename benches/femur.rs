@@ -5,8 +5,8 @@
 //! pair, and the atlas from the 30 femurs made non-corresponding (decimated and
 //! shuffled as in `tests/it/register.rs`; registration with 3 landmarks on both cores, then
 //! GPA, PCA and the hexahedral mesh of the mean), the morph plus Jacobians of a mesh of the
-//! mean with about 100k hexahedra, and the repair of the 2 mm mesh with 1 % of its elements
-//! spoiled. Without the data, seeded synthetic surfaces of the 3D demo (7322 vertices) stand
+//! mean with about 100k hexahedra, the cut of a femur by a plane (capped), and the repair of
+//! the 2 mm mesh with 1 % of its elements spoiled. Without the data, seeded synthetic surfaces of the 3D demo (7322 vertices) stand
 //! in.
 //!
 //! Budget: about 10 minutes of wall time on 2 cores (`cargo bench -p atlasmesh-bench --bench femur`;
@@ -120,6 +120,21 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let m = fine_morpher.morph(&fit.correspondence()).expect("morph");
             summarize(&mesh_quality(&m.mesh))
+        })
+    });
+    // The common cut of one femur (what `--cut` does to each shape of `build` and `loo`, and
+    // `fit` to a subject reaching beyond an atlas's cut): the plane 20 mm below the top, the
+    // part beyond removed, the section capped (constrained Delaunay), and the trimmed shape's
+    // closest-point index.
+    g.bench_function("femur_cut_by_plane", |b| {
+        let top = hi[2];
+        let plane = atlasmesh::geometry::Plane {
+            point: [0.0, 0.0, top - 20.0],
+            normal: [0.0, 0.0, 1.0],
+        };
+        b.iter(|| {
+            let cut = atlasmesh::geometry::cut_by_plane(subject, &plane).expect("cut");
+            ClosestPointIndex::from_shape(&cut.shape)
         })
     });
     // Registration of one femur pair (7313 vertices each, no landmarks): S001 to S002.

@@ -20,10 +20,11 @@ pub(super) struct Cap<const D: usize> {
     point: Point<D>,
     normal: Point<D>,
     near: f64,
-    /// The model's points inside the cap (every facet around them on it): they pull nothing
-    /// in the fit, and the morph takes them where the instance has them (the delivered mesh
-    /// ends at the atlas's cut, as far as the subject reaches or not).
-    pub(super) interior: Vec<bool>,
+    /// The model's points on the cap (its rim included): they pull nothing in the fit, and
+    /// the morph takes them where the instance has them (the delivered mesh ends at the
+    /// atlas's cut, as far as the subject reaches or not; along its normal, a rim point would
+    /// land anywhere on a longer shaft or on the subject's own cut).
+    pub(super) on_cap: Vec<bool>,
 }
 
 impl<const D: usize> Cap<D> {
@@ -55,28 +56,15 @@ impl<const D: usize> Cap<D> {
             .sum::<f64>()
             / atlas.mean.len() as f64)
             .sqrt();
-        let mut on = vec![false; atlas.facets.len()];
-        for &f in &atlas.cut_facets {
-            if let Some(o) = on.get_mut(f) {
-                *o = true;
-            }
-        }
-        let mut interior = vec![false; atlas.mean.len()];
+        let mut on_cap = vec![false; atlas.mean.len()];
         for &i in &ids {
-            interior[i] = true;
-        }
-        for (f, &o) in atlas.facets.iter().zip(&on) {
-            if !o {
-                for &i in f {
-                    interior[i] = false;
-                }
-            }
+            on_cap[i] = true;
         }
         Some(Cap {
             point,
             normal,
             near: NEAR * radius,
-            interior,
+            on_cap,
         })
     }
 

@@ -498,7 +498,7 @@ impl<const D: usize> Fitter<D> {
             for ((c, pr), (&inside, &x)) in corresponded
                 .iter_mut()
                 .zip(&mut projected)
-                .zip(cap.interior.iter().zip(&instance))
+                .zip(cap.on_cap.iter().zip(&instance))
             {
                 if inside {
                     *c = true;

@@ -128,6 +128,10 @@ pub struct SubjectReport {
     /// distances in voxels its page shows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub voxel_size: Option<f64>,
+    /// With an atlas built on a common cut: where the subject's mesh ends and how much of the
+    /// atlas the subject covers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atlas_cut: Option<SubjectCut>,
     /// The mesh's materials from the subject's CT: the recipe, the figures and the checks
     /// (whose findings are among `warnings` too).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -339,6 +343,23 @@ pub struct CutReport {
     pub removed_share: f64,
     /// The cap's area (the section; the unit squared).
     pub cap_area: f64,
+}
+
+/// A subject fitted with an atlas built on a common cut: the atlas's cut plane in the subject's
+/// frame (its point, and its unit normal towards the side the atlas does not have), where the
+/// delivered mesh ends; the share of the subject's surface beyond it (left out of the fit's
+/// measures), and the share of the atlas's surface (the cap excluded) the subject covers (below
+/// 1 when the field of view cut the subject below the atlas's cut).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct SubjectCut {
+    /// A point of the atlas's cut plane, subject frame.
+    pub point: Vec<f64>,
+    /// The plane's unit normal, towards the side beyond the atlas's cut.
+    pub normal: Vec<f64>,
+    /// The share of the subject's surface area beyond the plane.
+    pub beyond_share: f64,
+    /// The share of the atlas's surface area (the cap excluded) with a partner on the subject.
+    pub atlas_covered_share: f64,
 }
 
 /// `report.json`.

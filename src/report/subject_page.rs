@@ -225,6 +225,24 @@ fn measures(h: &mut String, r: &SubjectReport) {
     for (k, v) in rows {
         let _ = write!(h, "<tr><td>{}</td><td>{v}</td></tr>", escape(k));
     }
+    if let Some(c) = &r.atlas_cut {
+        let _ = write!(
+            h,
+            "<tr><td>the atlas's common cut</td><td>the mesh ends on the plane through ({}) normal to ({}); the subject covers {} % of the atlas's surface, {} % of its own lies beyond the cut</td></tr>",
+            c.point
+                .iter()
+                .map(|x| num(*x, 2))
+                .collect::<Vec<_>>()
+                .join(", "),
+            c.normal
+                .iter()
+                .map(|x| num(*x, 3))
+                .collect::<Vec<_>>()
+                .join(", "),
+            num(100.0 * c.atlas_covered_share, 1),
+            num(100.0 * c.beyond_share, 1)
+        );
+    }
     if let Some(m) = r.mirrored_rms_distance {
         let _ = write!(
             h,

@@ -67,6 +67,20 @@ pub fn atlas_of<const D: usize>(
     Ok(atlas)
 }
 
+/// An atlas of a population put on a common cut: the facets of the mean's cap
+/// ([`super::cut_facets`]; empty for none) kept, and the mean mesh's face on the cut made the
+/// `CUT` node set and surface ([`crate::mesh::mark_cut_face`]).
+pub(crate) fn put_on_cut<const D: usize>(atlas: &mut Atlas<D>, cut_facets: &[usize]) -> Result<()> {
+    if !cut_facets.is_empty() {
+        atlas.cut_facets = cut_facets.to_vec();
+        if atlas.has_mesh() {
+            crate::mesh::mark_cut_face(&mut atlas.mesh, &atlas.mean, &atlas.facets, cut_facets)
+                .map_err(|e| Error::Mesh(format!("the face of the common cut: {e}")))?;
+        }
+    }
+    Ok(())
+}
+
 /// Builds an atlas from a population and writes it, with the mean mesh as VTU and the mean
 /// outline as VTP beside it.
 pub fn build<const D: usize>(
@@ -99,13 +113,7 @@ pub fn build_with_meshes<const D: usize>(
 ) -> Result<Atlas<D>> {
     let mut atlas = atlas_of(shapes, meshes, params)?;
     name_landmarks(&mut atlas, landmark_ids);
-    if !cut_facets.is_empty() {
-        atlas.cut_facets = cut_facets.to_vec();
-        if atlas.has_mesh() {
-            crate::mesh::mark_cut_face(&mut atlas.mesh, &atlas.mean, &atlas.facets, cut_facets)
-                .map_err(|e| Error::Mesh(format!("the face of the common cut: {e}")))?;
-        }
-    }
+    put_on_cut(&mut atlas, cut_facets)?;
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
     }

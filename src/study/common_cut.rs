@@ -275,18 +275,14 @@ pub fn cut_facets<const D: usize>(shapes: &[Shape<D>], inputs: &[InputReport]) -
         .collect()
 }
 
-/// `subject` cut where the fitted `instance` (subject frame) of an atlas built on a common
-/// cut has its cap (the least-squares plane of the cap's points, `cut_facets` of `facets`),
-/// closed by a flat cap: the part it shares with the atlas, against which the delivered mesh
-/// is measured. `None` when the atlas has no cut, or the subject does not reach beyond the
-/// plane or cannot be closed there (a subject cut below the atlas's cut stays a part); 3D
-/// only. Returns the trimmed subject and the share of its surface removed.
-pub(crate) fn trimmed_to_cut<const D: usize>(
+/// The plane of the cap of a fitted `instance` (subject frame) of an atlas built on a common
+/// cut (the least-squares plane of the points of `cut_facets` of `facets`), its normal towards
+/// the side the atlas does not have. `None` for an atlas without a cut; 3D only.
+pub(crate) fn cut_plane_of<const D: usize>(
     instance: &[Point<D>],
     facets: &[[usize; D]],
     cut_facets: &[usize],
-    subject: &Shape<D>,
-) -> Option<(Shape<D>, f64)> {
+) -> Option<Plane> {
     if D != 3 || cut_facets.is_empty() {
         return None;
     }
@@ -311,8 +307,59 @@ pub(crate) fn trimmed_to_cut<const D: usize>(
     if dot(normal, sub(point, centroid(&instance))) < 0.0 {
         normal = normal.map(|x| -x);
     }
-    let cut = cut_by_plane(&subject.clone().into_dim::<3>(), &Plane { point, normal }).ok()?;
+    Some(Plane { point, normal })
+}
+
+/// `subject` cut where the fitted `instance` (subject frame) of an atlas built on a common
+/// cut has its cap ([`cut_plane_of`]), closed by a flat cap: the part it shares with the
+/// atlas, against which the delivered mesh is measured. `None` when the atlas has no cut, or
+/// the subject does not reach beyond the plane or cannot be closed there (a subject cut below
+/// the atlas's cut stays a part); 3D only. Returns the trimmed subject and the share of its
+/// surface removed.
+pub(crate) fn trimmed_to_cut<const D: usize>(
+    instance: &[Point<D>],
+    facets: &[[usize; D]],
+    cut_facets: &[usize],
+    subject: &Shape<D>,
+) -> Option<(Shape<D>, f64)> {
+    let plane = cut_plane_of(instance, facets, cut_facets)?;
+    let cut = cut_by_plane(&subject.clone().into_dim::<3>(), &plane).ok()?;
     Some((cut.shape.into_dim::<D>(), cut.removed_share))
+}
+
+/// The share of the area of `instance`'s surface (`facets`, the cap's `cut_facets` left out)
+/// whose facets have every point `partnered` on the subject.
+pub(crate) fn covered_share<const D: usize>(
+    instance: &[Point<D>],
+    facets: &[[usize; D]],
+    cut_facets: &[usize],
+    partnered: &[bool],
+) -> f64 {
+    let mut on_cap = vec![false; facets.len()];
+    for &f in cut_facets {
+        if let Some(c) = on_cap.get_mut(f) {
+            *c = true;
+        }
+    }
+    let (mut all, mut covered) = (0.0, 0.0);
+    for (f, _) in facets.iter().zip(&on_cap).filter(|(_, c)| !**c) {
+        let p: Vec<Point<3>> = f
+            .iter()
+            .map(|&i| crate::geometry::in_3d(&instance[i]))
+            .collect();
+        let area = if D == 3 {
+            0.5 * norm(crate::geometry::cross(sub(p[1], p[0]), sub(p[2], p[0])))
+        } else {
+            norm(sub(p[1], p[0]))
+        };
+        all += area;
+        if f.iter()
+            .all(|&i| partnered.get(i).copied().unwrap_or(false))
+        {
+            covered += area;
+        }
+    }
+    if all > 0.0 { covered / all } else { 1.0 }
 }
 
 #[cfg(test)]

@@ -91,6 +91,8 @@ pub fn leave_one_out_of<const D: usize>(
     progress.step_started(step);
     let full = atlas_of(shapes, meshes, params)?;
     progress.step_finished(step);
+    // A population put on a common cut: every fold's atlas keeps the cap and the CUT face.
+    let cut = super::cut_facets(shapes, &population.inputs);
     let label = "leave-one-out";
     progress.items_started(label, shapes.len());
     let pool = rayon::ThreadPoolBuilder::new()
@@ -101,7 +103,7 @@ pub fn leave_one_out_of<const D: usize>(
         (0..shapes.len())
             .into_par_iter()
             .map(|k| {
-                let r = fold(&folds, k, params, out);
+                let r = fold(&folds, k, &cut, params, out);
                 progress.item_done(label, &subjects[k].name);
                 r
             })
@@ -178,11 +180,13 @@ impl<const D: usize> Folds<'_, D> {
     }
 }
 
-/// Fold `k` of a leave-one-out: the atlas of the other shapes (GPA, PCA, mesh of the mean),
-/// the held-out subject fitted, morphed, repaired, measured and written into `out`.
+/// Fold `k` of a leave-one-out: the atlas of the other shapes (GPA, PCA, mesh of the mean; on
+/// the population's common cut, `cut_facets`), the held-out subject fitted, morphed,
+/// repaired, measured and written into `out`.
 fn fold<const D: usize>(
     folds: &Folds<'_, D>,
     k: usize,
+    cut_facets: &[usize],
     params: &RunParams,
     out: &Path,
 ) -> Result<SubjectReport> {
@@ -194,14 +198,27 @@ fn fold<const D: usize>(
     let training_meshes: Option<Vec<FeMesh<D>>> = folds
         .meshes
         .map(|m| (0..m.len()).filter(others).map(|i| m[i].clone()).collect());
-    let atlas = std::sync::Arc::new(atlas_of(&training, training_meshes.as_deref(), params)?);
+    let mut atlas = atlas_of(&training, training_meshes.as_deref(), params)?;
+    super::build::put_on_cut(&mut atlas, cut_facets)?;
+    let atlas = std::sync::Arc::new(atlas);
     let fitter = Fitter::new(atlas.clone());
     let morpher = atlas.morpher(&params.morph)?;
+    let subject = &folds.subjects[k];
+    // A bone the field of view cut (open where the image ends), fitted as `fit` takes a label
+    // map's: on the part it has.
+    let mut partial = params.clone();
+    partial.fit.partial = true;
+    let params =
+        if !cut_facets.is_empty() && D == 3 && super::is_open(&subject.clone().into_dim::<3>()) {
+            &partial
+        } else {
+            params
+        };
     process_subject(
         &atlas,
         &fitter,
         &morpher,
-        &folds.subjects[k],
+        subject,
         out,
         params,
         "report.html",

@@ -12,7 +12,7 @@ use crate::geometry::{ClosestPointIndex, Shape};
 use crate::mesh::quality::{ElementQuality, distribution, summarize};
 use crate::mesh::{FeMesh, Morpher, boundary_surface, repair_with_quality};
 use crate::model::Atlas;
-use crate::report::{SubjectReport, jacobian_histogram};
+use crate::report::{SubjectCut, SubjectReport, jacobian_histogram};
 use std::time::Instant;
 
 /// What one subject's fit, morph and repair produced, in memory.
@@ -60,11 +60,11 @@ pub fn fit_subject<const D: usize>(
     let (whole, index, params) = shared.as_ref().map_or((subject, &own_index, params), |s| {
         (&s.shape, &s.index, &s.params)
     });
-    let (rms, to_instance) = fit_distances(&fit.instance, &atlas.facets, whole, index);
+    let (rms, to_instance) = fit_distances(atlas, &fit, whole, index, params.fit.partial);
     let rel = rms / whole.bbox_diagonal();
     let (mirrored_rms, mut warnings) =
         checked_misfit(atlas, fitter, whole, params, (rms, to_instance))?;
-    warnings.extend(shared.as_ref().map(SharedPart::warning));
+    let atlas_cut = atlas_cut_facts(atlas, &fit, shared.as_ref(), &mut warnings);
     let morph = morpher.morph(&fit.correspondence())?;
     let mut mesh = morph.mesh;
     let mut per_element = morph.quality;
@@ -128,6 +128,7 @@ pub fn fit_subject<const D: usize>(
         success: false,
         mirrored_rms_distance: mirrored_rms,
         voxel_size: None,
+        atlas_cut,
         materials: None,
         warnings,
         converged: fit.converged,
@@ -246,11 +247,45 @@ fn boundary_fitted_and_flat<const D: usize>(
     {
         (mesh, per_element, delivered) = better;
     }
-    if crate::mesh::flatten_cut_face(&mut mesh).is_some_and(|moved| moved > 0.0) {
-        per_element = crate::mesh::quality::mesh_quality(&mesh);
-        delivered = delivered_distances(&mesh, subject, index, params);
+    if let Some(flat) = flat_cut_face(&mesh, &per_element, index, params)? {
+        delivered = delivered_distances(&flat.0, subject, index, params);
+        (mesh, per_element) = flat;
     }
     Ok((mesh, per_element, delivered))
+}
+
+/// `mesh` with the face on an atlas's common cut made flat ([`crate::mesh::flatten_cut_face`])
+/// and its quality: repaired (the nodes of the face put back on its plane after) where
+/// flattening took an element below the repair's bound, or the mesh it had (`None`) when
+/// that is not enough. `None` too for a mesh without a cut, or one already flat.
+fn flat_cut_face<const D: usize>(
+    mesh: &FeMesh<D>,
+    per_element: &[ElementQuality],
+    index: &ClosestPointIndex<D>,
+    params: &RunParams,
+) -> Result<Option<(FeMesh<D>, Vec<ElementQuality>)>> {
+    let mut flat = mesh.clone();
+    if !crate::mesh::flatten_cut_face(&mut flat).is_some_and(|moved| moved > 0.0) {
+        return Ok(None);
+    }
+    let bound = params
+        .repair
+        .and_then(|r| r.bound)
+        .unwrap_or_else(|| crate::mesh::repair::default_bound(mesh.kind))
+        .min(summarize(per_element).scaled_jacobian_min);
+    let mut quality = crate::mesh::quality::mesh_quality(&flat);
+    if summarize(&quality).scaled_jacobian_min >= bound {
+        return Ok(Some((flat, quality)));
+    }
+    let Some(rp) = &params.repair else {
+        return Ok(None);
+    };
+    repair_with_quality(&mut flat, Some(index), rp, &quality)?;
+    if crate::mesh::flatten_cut_face(&mut flat).is_none() {
+        return Ok(None);
+    }
+    quality = crate::mesh::quality::mesh_quality(&flat);
+    Ok((summarize(&quality).scaled_jacobian_min >= bound).then_some((flat, quality)))
 }
 
 /// The part of a subject an atlas built on a common cut shares with it, when the subject
@@ -282,14 +317,48 @@ impl<const D: usize> SharedPart<D> {
             removed,
         })
     }
-
-    fn warning(&self) -> String {
-        format!(
-            "it reaches beyond the atlas's common cut: compared on the part they share, {:.1} % of its surface beyond the cut left out",
-            100.0 * self.removed
-        )
-    }
 }
+
+/// With an atlas built on a common cut: where the subject's mesh ends and what share of the
+/// atlas the subject covers ([`SubjectCut`]), with a warning when the subject reaches beyond
+/// the cut or does not reach it.
+fn atlas_cut_facts<const D: usize>(
+    atlas: &Atlas<D>,
+    fit: &FitResult<D>,
+    shared: Option<&SharedPart<D>>,
+    warnings: &mut Vec<String>,
+) -> Option<SubjectCut> {
+    let plane = super::cut_plane_of(&fit.instance, &atlas.facets, &atlas.cut_facets)?;
+    let covered = super::covered_share(
+        &fit.instance,
+        &atlas.facets,
+        &atlas.cut_facets,
+        &fit.corresponded,
+    );
+    let beyond = shared.map_or(0.0, |s| s.removed);
+    if beyond > 0.0 {
+        warnings.push(format!(
+            "it reaches beyond the atlas's common cut: compared on the part they share, {:.1} % of its surface beyond the cut left out",
+            100.0 * beyond
+        ));
+    }
+    if covered < COVERED_IN_FULL {
+        warnings.push(format!(
+            "it ends short of the atlas's common cut: it covers {:.1} % of the atlas's surface, and its mesh follows the model beyond",
+            100.0 * covered
+        ));
+    }
+    Some(SubjectCut {
+        point: plane.point.to_vec(),
+        normal: plane.normal.to_vec(),
+        beyond_share: beyond,
+        atlas_covered_share: covered,
+    })
+}
+
+/// A subject covering this share of an atlas's surface covers it all (a few facets at the cut
+/// may lack a partner).
+const COVERED_IN_FULL: f64 = 0.995;
 
 /// Sweeps of the repair after a boundary fit's try.
 const BOUNDARY_REPAIR_SWEEPS: usize = 8;
@@ -460,25 +529,50 @@ fn failed_checks(report: &SubjectReport, finite: bool, params: &RunParams) -> Ve
     failed
 }
 
+/// The instance's points with a partner on a partial subject, the cap of an atlas built on a
+/// common cut left out (it is not anatomy).
+fn partnered_anatomy<const D: usize>(atlas: &Atlas<D>, fit: &FitResult<D>) -> Vec<bool> {
+    let mut counted = fit.corresponded.clone();
+    for &f in &atlas.cut_facets {
+        for &i in atlas.facets.get(f).into_iter().flatten() {
+            if let Some(c) = counted.get_mut(i) {
+                *c = false;
+            }
+        }
+    }
+    counted
+}
+
 /// The fitted instance against its subject (indexed by `index`): the two-way RMS distance
 /// ([`two_way_rms`]) and the distance of every subject point to the instance, from one
-/// index of the instance. Subject units.
+/// index of the instance; of a `partial` subject, only the instance's points with a partner
+/// ([`partnered_anatomy`]) go into the distance from the instance. Subject units.
 fn fit_distances<const D: usize>(
-    instance: &[crate::geometry::Point<D>],
-    facets: &[[usize; D]],
+    atlas: &Atlas<D>,
+    fit: &FitResult<D>,
     subject: &Shape<D>,
     index: &ClosestPointIndex<D>,
+    partial: bool,
 ) -> (f64, Vec<f64>) {
-    let on_instance = ClosestPointIndex::new(instance, facets);
+    let instance = &fit.instance;
+    let on_instance = ClosestPointIndex::new(instance, &atlas.facets);
     let to_instance: Vec<f64> = subject
         .points
         .iter()
         .map(|p| on_instance.closest(p).dist2.sqrt())
         .collect();
     let mean_sq = |v: &mut dyn Iterator<Item = f64>, n: usize| v.sum::<f64>() / n.max(1) as f64;
+    let counted = partial.then(|| partnered_anatomy(atlas, fit));
+    let counts = |i: usize| {
+        counted
+            .as_ref()
+            .is_none_or(|c| c.get(i).copied().unwrap_or(true))
+    };
     let forward = mean_sq(
-        &mut instance.iter().map(|p| index.closest(p).dist2),
-        instance.len(),
+        &mut (0..instance.len())
+            .filter(|&i| counts(i))
+            .map(|i| index.closest(&instance[i]).dist2),
+        (0..instance.len()).filter(|&i| counts(i)).count(),
     );
     let backward = mean_sq(&mut to_instance.iter().map(|d| d * d), to_instance.len());
     ((0.5 * (forward + backward)).sqrt(), to_instance)

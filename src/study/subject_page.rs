@@ -53,7 +53,7 @@ pub fn worst_elements<const D: usize>(
 }
 
 /// The distance of every boundary node of `mesh` to the subject (NaN inside the volume).
-fn boundary_node_distances<const D: usize>(
+pub(crate) fn boundary_node_distances<const D: usize>(
     mesh: &FeMesh<D>,
     index: &ClosestPointIndex<D>,
 ) -> Vec<f64> {

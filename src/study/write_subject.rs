@@ -6,7 +6,7 @@ use super::subject::SubjectOutcome;
 use crate::error::Result;
 use crate::fit::{FitResult, Fitter};
 use crate::formats::{write_atomic, write_mesh_with_materials, write_shape};
-use crate::geometry::{Point, Shape, same_dim};
+use crate::geometry::{ClosestPointIndex, Point, Shape, same_dim};
 use crate::mesh::{ElementQuality, FeMesh, Morpher};
 use crate::model::Atlas;
 use crate::report::{SubjectReport, plot_subject};
@@ -17,14 +17,16 @@ use std::path::Path;
 const PICTURE_WIDTH: usize = 760;
 
 /// The 3D pictures of a subject (figs. 23 and 27): the fitted surface coloured by its
-/// distance to the subject, and the morphed mesh's surface coloured by scaled Jacobian, seen
-/// alike; written as `NAME_distance.png`, `NAME_quality.png` into `out`. Returns their names.
+/// distance to the subject (`distance`, per point; the subject indexed by `index`), the
+/// delivered mesh's surface by its own, and the mesh's surface coloured by scaled Jacobian,
+/// seen alike; written as `NAME_distance.png`, `NAME_mesh_distance.png`, `NAME_quality.png`
+/// into `out`. Returns their names.
 fn pictures_3d<const D: usize>(
     atlas: &Atlas<D>,
     subject: &Shape<D>,
     fit: &FitResult<D>,
     (mesh, per_element): (&FeMesh<D>, &[ElementQuality]),
-    distance: &[f64],
+    (distance, index): (&[f64], &ClosestPointIndex<D>),
     out: &Path,
 ) -> Result<Vec<String>> {
     let base = &file_name(&subject.name);
@@ -64,6 +66,31 @@ fn pictures_3d<const D: usize>(
     );
     let img = render::annotated(&img, &title, Some(&legend));
     let name = format!("{base}_distance.png");
+    write_atomic(&out.join(&name), &img.png()?)?;
+    files.push(name);
+    // The delivered mesh's surface by its distance to the subject, on the same scale.
+    let mesh3 = FeMesh {
+        nodes: mesh.nodes.iter().map(same_dim::<D, 3>).collect(),
+        kind: mesh.kind,
+        connectivity: mesh.connectivity.clone(),
+        sets: Default::default(),
+    };
+    let (btris, _) = render::boundary_triangles(&mesh3, &vec![0.0; mesh.num_elements()]);
+    let img = render::render_front_back(
+        &mesh3.nodes,
+        &btris,
+        Some(&super::subject_page::boundary_node_distances(mesh, index)),
+        None,
+        legend.color,
+        &view,
+        PICTURE_WIDTH,
+    );
+    let title = format!(
+        "{}: delivered mesh, distance to the subject (front, back)",
+        subject.name
+    );
+    let img = render::annotated(&img, &title, Some(&legend));
+    let name = format!("{base}_mesh_distance.png");
     write_atomic(&out.join(&name), &img.png()?)?;
     files.push(name);
     let title = format!(
@@ -230,7 +257,7 @@ pub fn write_subject<const D: usize>(
                 subject,
                 &fit,
                 (&mesh, &per_element),
-                &instance_distance,
+                (&instance_distance, &index),
                 out,
             )?);
         } else {

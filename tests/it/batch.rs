@@ -240,6 +240,17 @@ fn shards_cover_the_batch_and_merge() {
             .collect::<Vec<_>>(),
         names
     );
+    // The run's shape scores beside the merged report: a row per subject, as the shards had.
+    let scores = std::fs::read_to_string(d.join("merged.scores.csv")).unwrap();
+    let rows: Vec<&str> = scores.lines().collect();
+    assert_eq!(rows.len(), 1 + n, "{scores}");
+    assert!(rows[0].starts_with("name,mode_1"), "{}", rows[0]);
+    for name in &names {
+        assert!(
+            rows.iter().any(|r| r.starts_with(&format!("{name},"))),
+            "{name}: {scores}"
+        );
+    }
     // A shard merged twice is refused.
     let mut args = vec!["merge-reports".to_string(), reports[0].clone()];
     args.extend([reports[0].clone(), "--out".into(), s(&d.join("twice.json"))]);

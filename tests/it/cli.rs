@@ -63,6 +63,14 @@ fn demo_writes_meshes_report_and_plots() {
     assert_eq!(r3["summary"]["succeeded"], 6);
     assert_eq!(r3["mean_mesh"]["element_kind"], "hex8");
     assert!(out.join("3d/demo3d-24_mesh.vtu").is_file());
+    // The delivered mesh pictured by its distance to the subject, beside the fit's picture,
+    // and shown on the subject's page.
+    let fit_png = std::fs::read(out.join("3d/demo3d-24_distance.png")).unwrap();
+    let mesh_png = std::fs::read(out.join("3d/demo3d-24_mesh_distance.png")).unwrap();
+    assert_eq!(&mesh_png[1..4], b"PNG");
+    assert!(mesh_png.len() > 10_000 && mesh_png != fit_png);
+    let page = std::fs::read_to_string(out.join("3d/demo3d-24.html")).unwrap();
+    assert!(page.contains("demo3d-24_mesh_distance.png"));
     let png = std::fs::read(out.join("demo-24.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     // A fit with the saved atlas, through the CLI, of one demo shape written as text.

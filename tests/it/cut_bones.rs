@@ -8,12 +8,15 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The femurs S001.. voxelized at 0.7 × 0.7 × 1 mm, the field of view ending 6 to 24 mm below
-/// each shaft's top; even ones written as NIfTI by nibabel, odd ones as NRRD by SimpleITK.
+/// each shaft's top (and one more at a depth given); even ones written as NIfTI by nibabel,
+/// odd ones as NRRD by SimpleITK.
 const WRITE_CUT_FEMURS: &str = r#"
 import sys, os, numpy as np, meshio, pyvista as pv, nibabel as nib, SimpleITK as sitk
 femurs, out, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+# One more femur, S{n + 1}, whose field of view ends this far (mm) below its shaft's top.
+extra = [float(a) for a in sys.argv[4:]]
 spacing = np.array([0.7, 0.7, 1.0])
-for k in range(n):
+for k in range(n + len(extra)):
     name = f"S{k + 1:03d}_Femur"
     m = meshio.read(os.path.join(femurs, name + ".ply"))
     surf = pv.PolyData.from_regular_faces(np.asarray(m.points, float), m.cells_dict["triangle"])
@@ -23,7 +26,8 @@ for k in range(n):
     mask = surf.voxelize_binary_mask(reference_volume=ref, foreground_value=1)
     vox = np.asarray(mask.point_data["mask"]).reshape(dims[::-1]).astype(np.uint8)  # z, y, x
     top = int((m.points[:, 2].max() - lo[2]) / spacing[2])
-    vox = vox[: top - int((6 + 18 * k / max(n - 1, 1)) / spacing[2])]
+    below = extra[0] if k == n else 6 + 18 * k / max(n - 1, 1)
+    vox = vox[: top - int(below / spacing[2])]
     if k % 2 == 0:
         affine = np.diag(list(spacing) + [1.0])
         affine[:3, 3] = lo
@@ -37,19 +41,21 @@ for k in range(n):
         sitk.WriteImage(img, os.path.join(out, name + ".nrrd"), useCompression=True)
 "#;
 
-/// Writes `n` cut femur label maps into `dir` ([`WRITE_CUT_FEMURS`]); returns their paths.
-fn cut_femurs(py: &Path, data: &Path, dir: &Path, n: usize) -> Vec<PathBuf> {
+/// Writes `n` cut femur label maps into `dir` ([`WRITE_CUT_FEMURS`]), and one more whose field
+/// of view ends `extra` mm below its shaft's top; returns their paths.
+fn cut_femurs(py: &Path, data: &Path, dir: &Path, n: usize, extra: Option<f64>) -> Vec<PathBuf> {
     let o = common::run(
         Command::new(py)
             .arg("-c")
             .arg(WRITE_CUT_FEMURS)
             .arg(data.join("knee-distal-femur-synthetic-3d/femur"))
             .arg(dir)
-            .arg(n.to_string()),
+            .arg(n.to_string())
+            .args(extra.map(|e| e.to_string())),
         common::deadline::PYTHON,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    (1..=n)
+    (1..=n + usize::from(extra.is_some()))
         .map(|k| {
             let ext = if k % 2 == 1 { "nii.gz" } else { "nrrd" };
             dir.join(format!("S{k:03}_Femur.{ext}"))
@@ -71,8 +77,8 @@ fn label_maps_cut_by_the_field_of_view_make_one_atlas_of_cut_bones() {
         return;
     };
     let dir = common::temp_dir("cut-bones");
-    // Six to build from, two more to fit.
-    let maps = cut_femurs(&py, &data, &dir, 8);
+    // Six to build from, two more to fit, and one cut far below the others.
+    let maps = cut_femurs(&py, &data, &dir, 8, Some(45.0));
     let atlas = dir.join("atlas.safetensors");
     let mut args: Vec<String> = vec!["build".into(), "--shapes".into()];
     args.extend(maps[..6].iter().map(|m| m.display().to_string()));
@@ -184,11 +190,12 @@ print(json.dumps({"nodes": int(cut.sum()), "off": float(np.abs((p - centre) @ no
     );
 }
 
-/// Fits, with the atlas of cut bones, two label maps cut by the field of view at other heights
-/// and the first of them whole (its closed surface, the shaft going on beyond the atlas's
-/// cut), with default options: every one succeeds, its delivered mesh (as meshio reads it)
-/// within an element of the subject and its `CUT` face flat to 1e-6 of an element; the cut
-/// bone's mesh and the whole bone's agree node by node within a quarter of an element.
+/// Fits, with the atlas of cut bones, label maps cut by the field of view at other heights (one
+/// far below the atlas's cut) and the first of them whole (its closed surface, the shaft going
+/// on beyond the atlas's cut), with default options: every one succeeds, its delivered mesh (as
+/// meshio reads it) within an element of the subject and its `CUT` face flat to 1e-6 of an
+/// element, with the share of the atlas it covers; the cut bone's mesh and the whole bone's
+/// agree node by node within a quarter of an element.
 fn fits_cut_and_whole_subjects(
     py: &Path,
     data: &Path,
@@ -213,16 +220,35 @@ fn fits_cut_and_whole_subjects(
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     let subjects = report["subjects"].as_array().unwrap();
-    assert_eq!(subjects.len(), 3);
+    assert_eq!(subjects.len(), 4);
     for s in subjects {
         assert_eq!(s["success"], true, "{s}");
         let rms = s["mesh_rms_distance"].as_f64().unwrap();
         assert!(rms < element, "{}: delivered RMS {rms}", s["name"]);
+        let covered = s["atlas_cut"]["atlas_covered_share"].as_f64().unwrap();
+        let beyond = s["atlas_cut"]["beyond_share"].as_f64().unwrap();
+        let warned = |w: &str| s["warnings"].to_string().contains(w);
+        if s["name"] == "S009_Femur" {
+            // 45 mm below the top: short of the atlas's cut by 20 mm and more.
+            assert!(covered > 0.6 && covered < 0.95, "{s}");
+            assert!(
+                beyond == 0.0 && warned("short of the atlas's common cut"),
+                "{s}"
+            );
+        } else {
+            assert!(covered > 0.99, "{s}");
+        }
+        if s["name"] == "S007_whole" {
+            assert!(
+                beyond > 0.1 && warned("beyond the atlas's common cut"),
+                "{s}"
+            );
+        }
     }
     let script = r#"
 import sys, json, meshio, numpy as np
 out = sys.argv[1]
-meshes = {n: meshio.read(f"{out}/{n}/{n}_mesh.vtu") for n in ["S007_Femur", "S008_Femur", "S007_whole"]}
+meshes = {n: meshio.read(f"{out}/{n}/{n}_mesh.vtu") for n in ["S007_Femur", "S008_Femur", "S009_Femur", "S007_whole"]}
 off = {}
 for n, m in meshes.items():
     p = m.points[m.point_data["set_CUT"] > 0]

@@ -65,6 +65,7 @@ fn build<const D: usize>(a: &BuildArgs, pop: Population<D>, term: &Terminal) -> 
         params,
         meshes,
         landmark_ids,
+        as_read: _,
     } = pop;
     let (shapes, template) = corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, 0, term)?;
     let meshes = meshes.as_deref();

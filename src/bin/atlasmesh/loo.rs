@@ -44,13 +44,15 @@ fn loo<const D: usize>(a: &LooArgs, pop: Population<D>, term: &Terminal) -> anyh
         params,
         meshes,
         landmark_ids,
+        as_read,
     } = pop;
     let (corresponded, template) =
         corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, a.jobs, term)?;
     Ok(study::leave_one_out_of(
         study::Folds {
             corresponded: &corresponded,
-            subjects: &shapes,
+            // Shapes put on a common cut are fitted as read (a bone the field of view cut).
+            subjects: as_read.as_deref().unwrap_or(&shapes),
             meshes: meshes.as_deref(),
             population: &study::PopulationFacts { inputs, template },
         },

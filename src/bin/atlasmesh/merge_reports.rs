@@ -1,5 +1,6 @@
 //! `atlasmesh merge-reports`: the reports of several shards joined into one (`report.json`
-//! of `fit`, `instances.json` of `sample`, or `posterior.json` of `fit --landmarks-only`).
+//! of `fit`, with the run's `scores.csv` beside it; `instances.json` of `sample`, or
+//! `posterior.json` of `fit --landmarks-only`).
 
 use clap::Args;
 use std::path::PathBuf;
@@ -10,7 +11,8 @@ pub struct MergeArgs {
     /// The reports to join (all report.json, or all instances.json).
     #[arg(num_args = 1.., required = true)]
     reports: Vec<PathBuf>,
-    /// The joined report to write.
+    /// The joined report to write (a fit's shape scores beside it: `scores.csv` for
+    /// `report.json`, `NAME.scores.csv` for `NAME.json`).
     #[arg(long)]
     out: PathBuf,
 }
@@ -56,12 +58,27 @@ pub fn run(a: MergeArgs) -> anyhow::Result<()> {
     }
     let r = atlasmesh::study::batch::merge_reports(&a.reports)?;
     r.write(&a.out)?;
+    let scores = scores_path(&a.out);
+    atlasmesh::formats::write_atomic(
+        &scores,
+        atlasmesh::report::scores_csv(&r.subjects).as_bytes(),
+    )?;
     println!(
-        "{} subjects ({} failed) from {} reports: {}",
+        "{} subjects ({} failed) from {} reports: {} (shape scores: {})",
         r.summary.subjects,
         r.summary.failed,
         a.reports.len(),
-        a.out.display()
+        a.out.display(),
+        scores.display()
     );
     Ok(())
+}
+
+/// The merged run's shape scores beside its report: `scores.csv` beside a `report.json`,
+/// `NAME.scores.csv` beside any other `NAME.json`.
+fn scores_path(report: &std::path::Path) -> PathBuf {
+    match report.file_stem().and_then(|s| s.to_str()) {
+        Some("report") | None => report.with_file_name("scores.csv"),
+        Some(stem) => report.with_file_name(format!("{stem}.scores.csv")),
+    }
 }

@@ -23,6 +23,9 @@ pub struct Population<const D: usize> {
     pub meshes: Option<Vec<FeMesh<D>>>,
     /// The landmark ids every shape has (in their order), for `--template-landmarks`.
     pub landmark_ids: Vec<String>,
+    /// The shapes as read, before a common cut (`--cut`) cut and capped them: `loo` fits
+    /// these, as `fit` would take them.
+    pub as_read: Option<Vec<Shape<D>>>,
 }
 
 /// Drops the floating islands of `shapes` (or refuses them with `--refuse-islands`,
@@ -73,7 +76,8 @@ pub fn surfaces_and_params(
         }
         i.warnings.splice(0..0, n);
     }
-    cut(pop, &mut shapes, &mut inputs, point_sets, term)?;
+    let before = shapes.clone();
+    let as_read = cut(pop, &mut shapes, &mut inputs, point_sets, term)?.then_some(before);
     let meshes = if pop.template_mesh.is_empty() {
         None
     } else {
@@ -85,23 +89,25 @@ pub fn surfaces_and_params(
         params,
         meshes,
         landmark_ids: pairing.ids,
+        as_read,
     })
 }
 
 /// The shapes put on a common cut ([`study::cut_population`]) as `--cut` asks; by default
-/// (`auto`) when a shape is open where a plane cut it and a mesh is to be made.
+/// (`auto`) when a shape is open where a plane cut it and a mesh is to be made. Whether they
+/// were cut.
 fn cut(
     pop: &PopArgs,
     shapes: &mut [Shape<3>],
     inputs: &mut [InputReport],
     point_sets: bool,
     term: &Terminal,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<bool> {
     let spec: study::CutSpec = match pop.cut.as_deref() {
-        Some(c) if c.eq_ignore_ascii_case("none") => return Ok(()),
+        Some(c) if c.eq_ignore_ascii_case("none") => return Ok(false),
         Some(c) => c.parse()?,
         None if !point_sets && shapes.iter().any(study::is_cut_by_a_plane) => study::CutSpec::Auto,
-        None => return Ok(()),
+        None => return Ok(false),
     };
     let length = study::cut_population(shapes, inputs, &spec)?;
     if !term.is_quiet() {
@@ -114,7 +120,7 @@ fn cut(
             }
         );
     }
-    Ok(())
+    Ok(true)
 }
 
 /// The outlines of `pop` (with their landmarks) and the run parameters.
@@ -157,6 +163,7 @@ pub fn outlines_and_params(
         params,
         meshes: None,
         landmark_ids: pairing.ids,
+        as_read: None,
     })
 }
 

@@ -6,7 +6,7 @@
 //!
 //! Frame: the atlas's reference frame (the instance before the pose).
 
-use crate::geometry::{Point, centroid, dot, principal_axes_of, sub};
+use crate::geometry::{Point, cap_plane, centroid, dot, sub};
 use crate::model::Atlas;
 
 /// A point lies on the cap when its normal is within this angle's cosine (25°) of the cap's.
@@ -30,25 +30,8 @@ pub(super) struct Cap<const D: usize> {
 impl<const D: usize> Cap<D> {
     /// The cap of `atlas` (its `cut_facets`), or `None` for an atlas of uncut shapes.
     pub(super) fn of(atlas: &Atlas<D>) -> Option<Self> {
-        let mut ids: Vec<usize> = atlas
-            .cut_facets
-            .iter()
-            .filter_map(|&f| atlas.facets.get(f))
-            .flatten()
-            .copied()
-            .collect();
-        ids.sort_unstable();
-        ids.dedup();
-        if ids.len() <= D {
-            return None;
-        }
-        let pts: Vec<Point<D>> = ids.iter().map(|&i| atlas.mean[i]).collect();
-        let point = centroid(&pts);
-        let mut normal = principal_axes_of(&pts)[D - 1];
+        let (ids, point, normal) = cap_plane(&atlas.mean, &atlas.facets, &atlas.cut_facets)?;
         let c = centroid(&atlas.mean);
-        if dot(normal, sub(point, c)) < 0.0 {
-            normal = normal.map(|x| -x);
-        }
         let radius = (atlas
             .mean
             .iter()

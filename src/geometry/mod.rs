@@ -45,7 +45,7 @@ pub use edge_collapse::collapse_short_edges;
 pub use normal_projection::{COMPATIBLE_NORMALS_COS, project_along_normals};
 pub use normals::{facet_normal, vertex_normals};
 pub use orientation::{is_closed_surface, prepare_surface, signed_volume};
-pub use plane_cut::{Plane, PlaneCut, cut_by_plane};
+pub use plane_cut::{Plane, PlaneCut, cap_plane, cut_by_plane};
 pub use point::{
     MAX_COORDINATE, Point, add, bounding_box, centroid, centroid_size, coordinate_problem, cross,
     dist2, dot, in_3d, norm, normalize, same_dim, scale, sub,

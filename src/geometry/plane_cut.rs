@@ -48,6 +48,36 @@ pub struct PlaneCut {
 /// Points closer to the plane than this share of the median edge are moved onto it.
 const SNAP: f64 = 0.02;
 
+/// The cap of a shape cut by a plane, from the shape's `points` and the `cap` facets among its
+/// `facets`: the cap's points (sorted indices), the least-squares plane's point (their
+/// centroid) and unit normal, turned away from the centroid of all `points` (outwards, towards
+/// the side cut off). `None` when the cap has `D` points or fewer.
+pub fn cap_plane<const D: usize>(
+    points: &[Point<D>],
+    facets: &[[usize; D]],
+    cap: &[usize],
+) -> Option<(Vec<usize>, Point<D>, Point<D>)> {
+    let mut ids: Vec<usize> = cap
+        .iter()
+        .filter_map(|&f| facets.get(f))
+        .flatten()
+        .copied()
+        .filter(|&i| i < points.len())
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    if ids.len() <= D {
+        return None;
+    }
+    let on: Vec<Point<D>> = ids.iter().map(|&i| points[i]).collect();
+    let point = super::centroid(&on);
+    let mut normal = super::principal_axes_of(&on)[D - 1];
+    if dot(normal, sub(point, super::centroid(points))) < 0.0 {
+        normal = normal.map(|x| -x);
+    }
+    Some((ids, point, normal))
+}
+
 /// `shape` cut by `plane`: everything on the normal's side removed, the section closed by a
 /// flat cap (see the module doc). Landmarks on the removed side are dropped.
 ///

@@ -8,7 +8,7 @@
 
 use super::{FeMesh, MeshSets, boundary_faces, mesh_quality, summarize};
 use crate::error::{Error, Result};
-use crate::geometry::{Point, centroid, dot, principal_axes_of, scale, sub};
+use crate::geometry::{Point, cap_plane, centroid, dot, principal_axes_of, scale, sub};
 
 /// The name of the cut's node set and surface.
 pub const CUT_SET: &str = "CUT";
@@ -31,26 +31,9 @@ pub fn mark_cut_face<const D: usize>(
     facets: &[[usize; D]],
     cut_facets: &[usize],
 ) -> Result<(Point<D>, Point<D>, usize)> {
-    let mut on_cap: Vec<usize> = cut_facets
-        .iter()
-        .filter_map(|&f| facets.get(f))
-        .flatten()
-        .copied()
-        .collect();
-    on_cap.sort_unstable();
-    on_cap.dedup();
-    if on_cap.len() <= D {
-        return Err(Error::Mesh(format!(
-            "the cut has {} points: too few for a face",
-            on_cap.len()
-        )));
-    }
-    let cap: Vec<Point<D>> = on_cap.iter().map(|&i| mean[i]).collect();
-    let c = centroid(&cap);
-    let mut n = principal_axes_of(&cap)[D - 1];
-    if dot(n, sub(c, centroid(mean))) < 0.0 {
-        n = n.map(|x| -x);
-    }
+    let Some((_, c, n)) = cap_plane(mean, facets, cut_facets) else {
+        return Err(Error::Mesh("the cut has too few points for a face".into()));
+    };
     let faces = boundary_faces(mesh);
     let h = typical_edge(mesh, &faces);
     let cos45 = std::f64::consts::FRAC_1_SQRT_2;

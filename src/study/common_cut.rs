@@ -283,30 +283,14 @@ pub(crate) fn cut_plane_of<const D: usize>(
     facets: &[[usize; D]],
     cut_facets: &[usize],
 ) -> Option<Plane> {
-    if D != 3 || cut_facets.is_empty() {
+    if D != 3 {
         return None;
     }
-    let instance: Vec<Point<3>> = instance.iter().map(crate::geometry::in_3d).collect();
-    let mut ids: Vec<usize> = cut_facets
-        .iter()
-        .filter_map(|&f| facets.get(f))
-        .flatten()
-        .copied()
-        .collect();
-    ids.sort_unstable();
-    ids.dedup();
-    let cap: Vec<Point<3>> = ids
-        .iter()
-        .filter_map(|&i| instance.get(i).copied())
-        .collect();
-    if cap.len() < 3 {
-        return None;
-    }
-    let point = centroid(&cap);
-    let mut normal = principal_axes_of(&cap)[2];
-    if dot(normal, sub(point, centroid(&instance))) < 0.0 {
-        normal = normal.map(|x| -x);
-    }
+    let (_, point, normal) = crate::geometry::cap_plane(instance, facets, cut_facets)?;
+    let (point, normal) = (
+        crate::geometry::in_3d(&point),
+        crate::geometry::in_3d(&normal),
+    );
     Some(Plane { point, normal })
 }
 

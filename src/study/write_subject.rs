@@ -69,12 +69,7 @@ fn pictures_3d<const D: usize>(
     write_atomic(&out.join(&name), &img.png()?)?;
     files.push(name);
     // The delivered mesh's surface by its distance to the subject, on the same scale.
-    let mesh3 = FeMesh {
-        nodes: mesh.nodes.iter().map(same_dim::<D, 3>).collect(),
-        kind: mesh.kind,
-        connectivity: mesh.connectivity.clone(),
-        sets: Default::default(),
-    };
+    let mesh3 = in_3d_without_sets(mesh);
     let (btris, _) = render::boundary_triangles(&mesh3, &vec![0.0; mesh.num_elements()]);
     let img = render::render_front_back(
         &mesh3.nodes,
@@ -106,6 +101,16 @@ fn pictures_3d<const D: usize>(
     Ok(files)
 }
 
+/// `mesh` in 3D coordinates (a 2D mesh at z = 0), its sets left out: what the pictures draw.
+fn in_3d_without_sets<const D: usize>(mesh: &FeMesh<D>) -> FeMesh<3> {
+    FeMesh {
+        nodes: mesh.nodes.iter().map(same_dim::<D, 3>).collect(),
+        kind: mesh.kind,
+        connectivity: mesh.connectivity.clone(),
+        sets: Default::default(),
+    }
+}
+
 /// The boundary of the volume mesh `mesh` coloured by the scaled Jacobian of its elements
 /// (fig. 27), seen by `view`, with `title` and the colour scale: a PNG.
 pub(crate) fn quality_picture<const D: usize>(
@@ -115,12 +120,7 @@ pub(crate) fn quality_picture<const D: usize>(
     title: &str,
 ) -> Result<Vec<u8>> {
     use crate::report::render;
-    let mesh3 = FeMesh {
-        nodes: mesh.nodes.iter().map(same_dim::<D, 3>).collect(),
-        kind: mesh.kind,
-        connectivity: mesh.connectivity.clone(),
-        sets: Default::default(),
-    };
+    let mesh3 = in_3d_without_sets(mesh);
     let sj: Vec<f64> = per_element.iter().map(|e| e.scaled_jacobian_min).collect();
     let (btris, bvals) = render::boundary_triangles(&mesh3, &sj);
     let legend = render::Legend {

@@ -173,17 +173,24 @@ pub fn parse_vtu(path: &Path, bytes: &[u8]) -> Result<FeMesh<3>> {
     mesh_from_cells(path, nodes, &cells, &types, &point_data, &cell_data)
 }
 
-pub(crate) fn points_xml<const D: usize>(out: &mut String, pts: &[Point<D>]) {
-    out.push_str("      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for p in pts {
-        let z = if D > 2 { p[2] } else { 0.0 };
-        let _ = writeln!(out, "          {:.17e} {:.17e} {:.17e}", p[0], p[1], z);
-    }
-    out.push_str("        </DataArray>\n      </Points>\n");
-}
+/// The `VTKFile` element's attributes of every file written here: little-endian binary arrays
+/// with 64-bit headers, compressed with zlib as VTK, ParaView and meshio write them.
+const VTK_FILE_ATTRIBUTES: &str = "version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\"";
 
-/// One `DataArray` in VTK's inline binary encoding: base64 of a UInt64 byte count followed by
-/// the little-endian values (`header_type="UInt64"`, no compression).
+/// The uncompressed size of the blocks an array is compressed in (VTK's default is 32 KiB;
+/// larger blocks compress a little better and cost nothing to a reader).
+const BLOCK_BYTES: usize = 1 << 16;
+
+/// The zlib level of the arrays written: 1, the fastest. On a fitted femur's mesh (57 000
+/// hexahedra with their displacement and Jacobians, 8.1 MB of arrays; zlib from Python on
+/// 64 KiB blocks) level 1 leaves 55.2 % of the bytes in 0.17 s, level 6 54.4 % in 0.32 s; the
+/// VTU goes from 10.8 MB to 5.9 MB.
+const ZLIB_LEVEL: u32 = 1;
+
+/// One `DataArray` in VTK's inline binary encoding with zlib compression (the file's
+/// [`VTK_FILE_ATTRIBUTES`]): base64 of the header (UInt64 block count, block size, size of the
+/// last block when partial, then each block's compressed size), followed by base64 of the
+/// compressed blocks, as VTK writes it.
 pub(crate) fn binary_array(
     s: &mut String,
     vtk_type: &str,
@@ -192,19 +199,38 @@ pub(crate) fn binary_array(
     bytes: &[u8],
 ) {
     use base64::Engine as _;
-    let mut raw = Vec::with_capacity(8 + bytes.len());
-    raw.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
-    raw.extend_from_slice(bytes);
+    use std::io::Write as _;
+    let blocks: Vec<Vec<u8>> = bytes
+        .chunks(BLOCK_BYTES)
+        .map(|chunk| {
+            let mut z = flate2::write::ZlibEncoder::new(
+                Vec::with_capacity(chunk.len() / 2 + 64),
+                flate2::Compression::new(ZLIB_LEVEL),
+            );
+            // (writing to a Vec cannot fail)
+            let _ = z.write_all(chunk);
+            z.finish().unwrap_or_default()
+        })
+        .collect();
+    let mut header: Vec<u8> = Vec::with_capacity(8 * (3 + blocks.len()));
+    for word in [blocks.len(), BLOCK_BYTES, bytes.len() % BLOCK_BYTES]
+        .into_iter()
+        .chain(blocks.iter().map(Vec::len))
+    {
+        header.extend_from_slice(&(word as u64).to_le_bytes());
+    }
     let name = name.map(|n| format!(" Name=\"{n}\"")).unwrap_or_default();
     let comps = if components > 1 {
         format!(" NumberOfComponents=\"{components}\"")
     } else {
         String::new()
     };
+    let b64 = &base64::engine::general_purpose::STANDARD;
     let _ = writeln!(
         s,
-        "        <DataArray type=\"{vtk_type}\"{name}{comps} format=\"binary\">\n          {}\n        </DataArray>",
-        base64::engine::general_purpose::STANDARD.encode(&raw)
+        "        <DataArray type=\"{vtk_type}\"{name}{comps} format=\"binary\">\n          {}{}\n        </DataArray>",
+        b64.encode(&header),
+        b64.encode(blocks.concat())
     );
 }
 
@@ -229,10 +255,10 @@ pub(crate) fn set_mask(s: &mut String, name: &str, members: &[usize], n: usize) 
     binary_array(s, "UInt8", Some(&format!("set_{name}")), 1, &mask);
 }
 
-/// Writes an FE mesh as VTU (VTK XML, binary arrays; readable by ParaView and meshio), with
-/// cell data `jacobian_min` and `scaled_jacobian_min` (corner minima, section 5.3), and, when
-/// `reference` is given (the same mesh before morphing), point data `displacement` (node
-/// position minus reference). Node sets and element sets are point and cell data `set_NAME`
+/// Writes an FE mesh as VTU (VTK XML, zlib-compressed binary arrays; readable by ParaView, VTK
+/// and meshio), with cell data `jacobian_min` and `scaled_jacobian_min` (corner minima,
+/// section 5.3), and, when `reference` is given (the same mesh before morphing), point data
+/// `displacement` (node position minus reference). Node sets and element sets are point and cell data `set_NAME`
 /// (1 for members, else 0); surfaces are not written (VTU has no face sets; use `.inp`,
 /// `.msh` or `.feb`).
 pub fn write_vtu<const D: usize>(
@@ -288,7 +314,10 @@ pub fn write_vtu_with_data<const D: usize>(
     let ne = mesh.num_elements();
     let z = |p: &Point<D>| if D > 2 { p[2] } else { 0.0 };
     let mut s = String::with_capacity(mesh.nodes.len() * 40 + ne * 100);
-    s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n");
+    let _ = writeln!(
+        s,
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" {VTK_FILE_ATTRIBUTES}>\n  <UnstructuredGrid>"
+    );
     let _ = writeln!(
         s,
         "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
@@ -378,7 +407,8 @@ fn check_fields(path: &Path, fields: &[(&str, &[f64])], n: usize) -> Result<()> 
     Ok(())
 }
 
-/// Writes a shape as VTP: an outline as line cells, a surface as polygons.
+/// Writes a shape as VTP (zlib-compressed binary arrays): an outline as line cells, a surface
+/// as polygons.
 pub fn write_vtp<const D: usize>(path: &Path, shape: &Shape<D>) -> Result<()> {
     write_vtp_with_point_data(path, shape, &[])
 }
@@ -394,7 +424,10 @@ pub fn write_vtp_with_point_data<const D: usize>(
 ) -> Result<()> {
     check_fields(path, fields, shape.points.len())?;
     let mut s = String::new();
-    s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <PolyData>\n");
+    let _ = writeln!(
+        s,
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" {VTK_FILE_ATTRIBUTES}>\n  <PolyData>"
+    );
     let tag = if D == 2 { "Lines" } else { "Polys" };
     let (nl, np) = if D == 2 {
         (shape.facets.len(), 0)
@@ -411,28 +444,15 @@ pub fn write_vtp_with_point_data<const D: usize>(
         scalar_arrays(&mut s, fields);
         s.push_str("      </PointData>\n");
     }
-    points_xml(&mut s, &shape.points);
-    let _ = writeln!(
-        s,
-        "      <{tag}>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
-    );
-    for f in &shape.facets {
-        let _ = writeln!(
-            s,
-            "          {}",
-            f.iter()
-                .map(|i| i.to_string())
-                .collect::<Vec<_>>()
-                .join(" ")
-        );
-    }
-    s.push_str("        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    for i in 0..shape.facets.len() {
-        let _ = writeln!(s, "          {}", (i + 1) * D);
-    }
-    let _ = writeln!(
-        s,
-        "        </DataArray>\n      </{tag}>\n    </Piece>\n  </PolyData>\n</VTKFile>"
-    );
+    s.push_str("      <Points>\n");
+    let z = |p: &Point<D>| if D > 2 { p[2] } else { 0.0 };
+    let pts = f64_bytes(shape.points.iter().flat_map(|p| [p[0], p[1], z(p)]));
+    binary_array(&mut s, "Float64", None, 3, &pts);
+    let _ = writeln!(s, "      </Points>\n      <{tag}>");
+    let conn = i64_bytes(shape.facets.iter().flat_map(|f| f.iter().copied()));
+    binary_array(&mut s, "Int64", Some("connectivity"), 1, &conn);
+    let offsets = i64_bytes((1..=shape.facets.len()).map(|i| i * D));
+    binary_array(&mut s, "Int64", Some("offsets"), 1, &offsets);
+    let _ = writeln!(s, "      </{tag}>\n    </Piece>\n  </PolyData>\n</VTKFile>");
     crate::formats::write_atomic(path, s.as_bytes())
 }

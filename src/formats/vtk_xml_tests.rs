@@ -55,6 +55,78 @@ fn written_vtp_and_vtu_read_back() {
     assert!(e.contains("c.vtu") && e.contains("not closed"), "{e}");
 }
 
+/// Arrays larger than a compression block (a bar of 4 000 hexahedra: 384 kB of coordinates)
+/// and a 2D outline written compressed, read back to the bit, sets included; the file smaller
+/// than its arrays.
+#[test]
+fn compressed_arrays_of_several_blocks_read_back() {
+    let tmp = tempfile::Builder::new()
+        .prefix("atlasmesh-xml-")
+        .tempdir()
+        .unwrap();
+    let n = 4000;
+    let mut nodes = Vec::new();
+    for i in 0..=n {
+        for (y, z) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            nodes.push([i as f64 * 0.37 + 1e-9 * (i * i) as f64, y, z]);
+        }
+    }
+    let connectivity: Vec<usize> = (0..n)
+        .flat_map(|e| {
+            let a = 4 * e;
+            [a, a + 4, a + 5, a + 1, a + 3, a + 7, a + 6, a + 2]
+        })
+        .collect();
+    let mut bar = FeMesh {
+        nodes,
+        kind: ElementKind::Hex8,
+        connectivity,
+        sets: Default::default(),
+    };
+    bar.sets
+        .node_sets
+        .insert("END".into(), (4 * n..4 * n + 4).collect());
+    bar.sets.element_sets.insert("FIRST".into(), vec![0, 1]);
+    let p = tmp.path().join("bar.vtu");
+    crate::formats::write_vtu(&p, &bar, None).unwrap();
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert!(text.contains("compressor=\"vtkZLibDataCompressor\""));
+    let raw = bar.nodes.len() * 24 + bar.connectivity.len() * 8;
+    assert!(
+        text.len() < raw,
+        "{} bytes for {raw} bytes of arrays",
+        text.len()
+    );
+    let m = read_vtu(&p).unwrap();
+    assert_eq!(m.nodes, bar.nodes);
+    assert_eq!(m.connectivity, bar.connectivity);
+    assert_eq!(m.sets.node_sets["END"], bar.sets.node_sets["END"]);
+    assert_eq!(m.sets.element_sets["FIRST"], vec![0, 1]);
+
+    let outline = Shape::<2> {
+        name: "o".into(),
+        points: (0..5000)
+            .map(|i| {
+                let t = i as f64 * std::f64::consts::TAU / 5000.0;
+                [t.cos(), 0.5 * t.sin()]
+            })
+            .collect(),
+        facets: (0..5000).map(|i| [i, (i + 1) % 5000]).collect(),
+        landmarks: Vec::new(),
+    };
+    let p = tmp.path().join("o.vtp");
+    crate::formats::write_vtp(&p, &outline).unwrap();
+    let v = read_vtp(&p).unwrap();
+    assert_eq!(v.points.len(), 5000);
+    assert!(
+        v.points
+            .iter()
+            .zip(&outline.points)
+            .all(|(a, b)| a[0] == b[0] && a[1] == b[1] && a[2] == 0.0)
+    );
+    assert_eq!(v.lines.len(), 5000);
+}
+
 /// A VTU of one hexahedron whose eight point-data arrays share one appended zlib block that
 /// inflates to 40 MB of bytes (320 MB as values) each: refused before it is inflated, by the
 /// file's decoding budget, with a message that says why.

@@ -51,7 +51,32 @@ def to_meshio(mesh):
     )
 
 
+def to_pyvista(mesh):
+    """The mesh as a ``pyvista.UnstructuredGrid`` (3D points; cell data ``scaled_jacobian``;
+    node and element sets as 0/1 point and cell data ``set_NAME``, as in the VTU files
+    atlasmesh writes)."""
+    import numpy as np
+    import pyvista as pv
+
+    nodes = mesh.nodes
+    if nodes.shape[1] == 2:
+        nodes = np.hstack([nodes, np.zeros((len(nodes), 1))])
+    elements = mesh.elements
+    cells = np.hstack([np.full((len(elements), 1), elements.shape[1]), elements]).ravel()
+    types = np.full(len(elements), mesh.vtk_type, dtype=np.uint8)
+    grid = pv.UnstructuredGrid(cells, types, np.ascontiguousarray(nodes))
+    grid.cell_data["scaled_jacobian"] = mesh.scaled_jacobian
+    sets = mesh.sets
+    for kind, data, n in (("nodes", grid.point_data, len(nodes)), ("elements", grid.cell_data, len(elements))):
+        for name, members in sets[kind].items():
+            mask = np.zeros(n, dtype=np.uint8)
+            mask[members] = 1
+            data[f"set_{name}"] = mask
+    return grid
+
+
 Mesh.to_meshio = to_meshio
+Mesh.to_pyvista = to_pyvista
 
 __all__ = [
     "Atlas",

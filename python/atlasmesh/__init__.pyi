@@ -42,7 +42,19 @@ class NotConvergedError(Error, RuntimeError):
     also a RuntimeError."""
 
 class Mesh:
-    """An FE mesh in the data's frame and unit."""
+    """An FE mesh in the data's frame and unit. Picklable."""
+
+    def __init__(
+        self,
+        nodes: npt.ArrayLike,
+        elements: npt.ArrayLike,
+        kind: Optional[str] = None,
+        sets: Optional[Dict[str, Dict[str, npt.ArrayLike]]] = None,
+    ) -> None:
+        """A mesh from arrays: nodes (N, 2) or (N, 3), elements (E, k) in VTK node order,
+        kind (quad4, tri3, hex8, tet4, hex20, tet10; by default the kind of k nodes in the
+        nodes' dimension), sets as the sets property gives them. BadInputError for what cannot
+        make a mesh (an index beyond the nodes, a coordinate not finite, a bad set name)."""
 
     @property
     def nodes(self) -> FloatArray:
@@ -65,6 +77,9 @@ class Mesh:
         """Writes .vtu, .vtk, .inp, .msh or .feb (by extension), with the sets."""
     def to_meshio(self) -> Any:
         """The mesh as a meshio.Mesh."""
+    def to_pyvista(self) -> Any:
+        """The mesh as a pyvista.UnstructuredGrid (cell data scaled_jacobian; sets as 0/1
+        arrays set_NAME)."""
 
 class FitResult:
     """A subject fitted (Algorithm 1, eq. 5-8) with its morphed mesh (eq. 9) and measures.

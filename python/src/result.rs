@@ -1,6 +1,7 @@
 //! What a fit gives back to Python: the morphed FE mesh and the fit's figures.
 
 use crate::arrays;
+use crate::errors::BadInputError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -59,8 +60,211 @@ impl Mesh {
     }
 }
 
+/// The element kind of `k`-node elements in `dim` dimensions.
+fn kind_of(dim: usize, k: usize) -> Option<atlasmesh::mesh::ElementKind> {
+    use atlasmesh::mesh::ElementKind as K;
+    match (dim, k) {
+        (2, 4) => Some(K::Quad4),
+        (2, 3) => Some(K::Tri3),
+        (3, 8) => Some(K::Hex8),
+        (3, 4) => Some(K::Tet4),
+        (3, 20) => Some(K::Hex20),
+        (3, 10) => Some(K::Tet10),
+        _ => None,
+    }
+}
+
+/// `obj` as a 1-D array of indices, named `what` in errors.
+fn index_list(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<usize>> {
+    let np = obj.py().import("numpy")?;
+    let column = np
+        .call_method1("reshape", (obj, (-1i64, 1i64)))
+        .map_err(|e| {
+            BadInputError::new_err(format!(
+                "{what}: not a list of indices ({})",
+                e.value(obj.py())
+            ))
+        })?;
+    arrays::flat_indices(&column, 1, what)
+}
+
+/// The sets of a `sets` dictionary as [`Mesh::sets`] gives them (`"nodes"`, `"elements"`:
+/// name to indices; `"surfaces"`: name to `(n, 2)` element and face).
+fn sets_of(sets: &Bound<'_, PyDict>) -> PyResult<atlasmesh::mesh::MeshSets> {
+    let mut out = atlasmesh::mesh::MeshSets::default();
+    for (key, value) in sets.iter() {
+        let key: String = key.extract().map_err(|_| {
+            BadInputError::new_err("sets: the keys are \"nodes\", \"elements\" and \"surfaces\"")
+        })?;
+        let named = value.cast::<PyDict>().map_err(|_| {
+            BadInputError::new_err(format!(
+                "sets[{key:?}]: a dictionary of name to indices expected"
+            ))
+        })?;
+        for (name, members) in named.iter() {
+            let name: String = name
+                .extract()
+                .map_err(|_| BadInputError::new_err(format!("sets[{key:?}]: names are strings")))?;
+            let what = format!("sets[{key:?}][{name:?}]");
+            match key.as_str() {
+                "nodes" => {
+                    out.node_sets.insert(name, index_list(&members, &what)?);
+                }
+                "elements" => {
+                    out.element_sets.insert(name, index_list(&members, &what)?);
+                }
+                "surfaces" => {
+                    let pairs = arrays::flat_indices(&members, 2, &what)?;
+                    let faces = pairs
+                        .chunks_exact(2)
+                        .map(|c| {
+                            u8::try_from(c[1]).map(|f| (c[0], f)).map_err(|_| {
+                                BadInputError::new_err(format!(
+                                    "{what}: face {} does not exist",
+                                    c[1]
+                                ))
+                            })
+                        })
+                        .collect::<PyResult<Vec<_>>>()?;
+                    out.surfaces.insert(name, faces);
+                }
+                _ => {
+                    return Err(BadInputError::new_err(format!(
+                        "sets: {key:?} is not a kind of set (\"nodes\", \"elements\", \"surfaces\")"
+                    )));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
 #[pymethods]
 impl Mesh {
+    /// A mesh from arrays: `nodes` `(N, 2)` or `(N, 3)` in the data's frame and unit,
+    /// `elements` `(E, k)` node indices in VTK's node order, `kind` (`quad4`, `tri3`, `hex8`,
+    /// `tet4`, `hex20`, `tet10`; by default the kind of `k` nodes in the nodes' dimension) and
+    /// `sets` as the `sets` property gives them. Each element's quality is computed; nothing
+    /// is repaired. What cannot make a mesh (an index beyond the nodes, a coordinate that is
+    /// not finite, a kind of another dimension, a bad set name) raises `BadInputError`.
+    #[new]
+    #[pyo3(signature = (nodes, elements, kind=None, sets=None))]
+    fn new(
+        nodes: &Bound<'_, PyAny>,
+        elements: &Bound<'_, PyAny>,
+        kind: Option<&Bound<'_, PyAny>>,
+        sets: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let kind: Option<String> = kind
+            .filter(|k| !k.is_none())
+            .map(|k| {
+                k.extract().map_err(|_| {
+                    BadInputError::new_err(
+                        "kind: a name expected (quad4, tri3, hex8, tet4, hex20, tet10)",
+                    )
+                })
+            })
+            .transpose()?;
+        let sets = sets
+            .filter(|s| !s.is_none())
+            .map(|s| {
+                s.cast::<PyDict>().map_err(|_| {
+                    BadInputError::new_err(
+                        "sets: a dictionary expected ({\"nodes\": {name: indices}, ...})",
+                    )
+                })
+            })
+            .transpose()?;
+        let np = nodes.py().import("numpy")?;
+        let shape: Vec<usize> = np
+            .call_method1("shape", (nodes,))
+            .and_then(|s| s.extract())
+            .map_err(|e| {
+                BadInputError::new_err(format!("nodes: not an array ({})", e.value(nodes.py())))
+            })?;
+        let dim = match shape.as_slice() {
+            [_, d @ (2 | 3)] => *d,
+            _ => {
+                return Err(BadInputError::new_err(format!(
+                    "nodes: an array of shape (n, 2) or (n, 3) expected, got {shape:?}"
+                )));
+            }
+        };
+        let k: usize = np
+            .call_method1("shape", (elements,))
+            .and_then(|s| s.extract::<Vec<usize>>())
+            .ok()
+            .filter(|s| s.len() == 2)
+            .map(|s| s[1])
+            .ok_or_else(|| BadInputError::new_err("elements: an array of shape (n, k) expected"))?;
+        let kind = match kind.as_deref() {
+            Some(name) => atlasmesh::mesh::ElementKind::from_name(name).ok_or_else(|| {
+                BadInputError::new_err(format!(
+                    "kind {name:?}: one of quad4, tri3, hex8, tet4, hex20, tet10 expected"
+                ))
+            })?,
+            None => kind_of(dim, k).ok_or_else(|| {
+                BadInputError::new_err(format!(
+                    "elements of {k} nodes in {dim}D: no element kind has them (quad4, tri3 in 2D; hex8, tet4, hex20, tet10 in 3D)"
+                ))
+            })?,
+        };
+        if kind.dimension() != dim || kind.nodes() != k {
+            return Err(BadInputError::new_err(format!(
+                "kind {}: elements of {} nodes in {}D, got {k} nodes in {dim}D",
+                kind.name(),
+                kind.nodes(),
+                kind.dimension()
+            )));
+        }
+        let sets = match sets {
+            Some(s) => sets_of(s)?,
+            None => atlasmesh::mesh::MeshSets::default(),
+        };
+        let connectivity = arrays::flat_indices(elements, k, "elements")?;
+        fn make<const D: usize>(
+            nodes: &Bound<'_, PyAny>,
+            kind: atlasmesh::mesh::ElementKind,
+            connectivity: Vec<usize>,
+            sets: atlasmesh::mesh::MeshSets,
+        ) -> PyResult<Mesh> {
+            let nodes = arrays::points::<D>(nodes, "nodes")?;
+            if let Some(i) = nodes.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+                return Err(BadInputError::new_err(format!(
+                    "nodes: node {i} has a coordinate that is not a finite number"
+                )));
+            }
+            let mesh = atlasmesh::mesh::FeMesh {
+                nodes,
+                kind,
+                connectivity,
+                sets,
+            };
+            mesh.check_connectivity()
+                .map_err(|m| BadInputError::new_err(format!("elements: {m}")))?;
+            mesh.sets
+                .check(kind, mesh.nodes.len(), mesh.num_elements())
+                .map_err(|m| BadInputError::new_err(format!("sets: {m}")))?;
+            Ok(Mesh::of(
+                &mesh,
+                &atlasmesh::mesh::quality::mesh_quality(&mesh),
+            ))
+        }
+        if dim == 3 {
+            make::<3>(nodes, kind, connectivity, sets)
+        } else {
+            make::<2>(nodes, kind, connectivity, sets)
+        }
+    }
+
+    /// Pickling: the arguments of the constructor that makes this mesh again.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let py = slf.py();
+        let m = slf.get();
+        let args = (m.nodes(py)?, m.elements(py)?, m.kind(), m.sets(py)?).into_pyobject(py)?;
+        Ok((slf.get_type().into_any(), args.into_any()))
+    }
+
     /// Node coordinates, `(N, D)` float64 (data's frame and unit).
     #[getter]
     fn nodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

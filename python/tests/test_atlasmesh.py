@@ -2,6 +2,7 @@
 figures as the Rust tests, the meshes read back by meshio (and PyVista when installed)."""
 
 import pickle
+import re
 import time
 
 import numpy as np
@@ -189,6 +190,66 @@ def test_save_load_and_mesh_files(tmp_path):
     m = r.mesh.to_meshio()
     assert m.cells[0].type == "quad"
     assert len(m.cell_data["scaled_jacobian"][0]) == len(r.mesh.elements)
+
+
+def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
+    """A mesh made from arrays (two hexahedra with sets) has the quality the library gives
+    it, survives pickling whole, and reaches PyVista and meshio with its sets; what cannot
+    make a mesh raises BadInputError."""
+    pv = pytest.importorskip("pyvista")
+    nodes = np.array(
+        [[x, y, z] for z in (0.0, 1.0) for y in (0.0, 1.0) for x in (0.0, 1.0, 2.0)]
+    )
+    # VTK order: the bottom face counter-clockwise, then the top face.
+    hexes = np.array([[0, 1, 4, 3, 6, 7, 10, 9], [1, 2, 5, 4, 7, 8, 11, 10]])
+    sets = {"nodes": {"END": [2, 5, 8, 11]}, "elements": {"LEFT": [0]}, "surfaces": {"BASE": [[0, 4], [1, 4]]}}
+    m = atlasmesh.Mesh(nodes, hexes, sets=sets)
+    assert m.kind == "hex8" and m.vtk_type == 12
+    assert np.allclose(m.scaled_jacobian, 1.0)
+    assert list(m.sets["nodes"]["END"]) == [2, 5, 8, 11]
+    assert m.sets["surfaces"]["BASE"].tolist() == [[0, 4], [1, 4]]
+    again = pickle.loads(pickle.dumps(m))
+    assert np.array_equal(again.nodes, m.nodes) and np.array_equal(again.elements, m.elements)
+    assert again.kind == m.kind and np.array_equal(again.scaled_jacobian, m.scaled_jacobian)
+    assert {k: {n: v.tolist() for n, v in d.items()} for k, d in again.sets.items()} == {
+        k: {n: v.tolist() for n, v in d.items()} for k, d in m.sets.items()
+    }
+    grid = m.to_pyvista()
+    assert grid.n_points == 12 and grid.n_cells == 2
+    assert grid.volume == pytest.approx(2.0)
+    assert list(grid.point_data["set_END"]) == [0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1]
+    assert list(grid.cell_data["set_LEFT"]) == [1, 0]
+    # The file atlasmesh writes (compressed VTU), read by PyVista: the same grid.
+    m.write(str(tmp_path / "mine.vtu"))
+    back = pv.read(tmp_path / "mine.vtu")
+    assert np.array_equal(np.asarray(back.points), np.asarray(grid.points))
+    assert np.array_equal(back.cells, grid.cells)
+    meshio = pytest.importorskip("meshio")
+    mm = m.to_meshio()
+    assert mm.cells[0].type == "hexahedron" and mm.point_sets["END"].tolist() == [2, 5, 8, 11]
+    # And back, as docs/python.md says.
+    for back in [
+        atlasmesh.Mesh(grid.points, grid.cells_dict[pv.CellType.HEXAHEDRON]),
+        atlasmesh.Mesh(mm.points, mm.cells_dict["hexahedron"]),
+    ]:
+        assert np.array_equal(back.nodes, m.nodes) and np.array_equal(back.elements, m.elements)
+    # A 2D mesh of quadrilaterals, its kind from its shape.
+    quad = atlasmesh.Mesh(nodes[:6, :2], [[0, 1, 4, 3], [1, 2, 5, 4]])
+    assert quad.kind == "quad4" and quad.to_pyvista().n_cells == 2
+    bad = [
+        (nodes, [[0, 1, 4, 3, 6, 7, 10, 12]], {}, "node 13"),
+        (np.where(nodes == 2.0, np.nan, nodes), hexes, {}, "finite"),
+        (nodes, hexes, {"kind": "quad4"}, "quad4"),
+        (nodes, hexes[:, :5], {}, "5 nodes"),
+        (nodes, hexes.astype(float), {}, "integer"),
+        (nodes, hexes, {"sets": {"nodes": {"bad name": [0]}}}, "bad name"),
+        (nodes, hexes, {"sets": {"elements": {"E": [2]}}}, "element 3"),
+        (nodes, hexes, {"sets": {"volumes": {"E": [0]}}}, "volumes"),
+        (nodes[:, :1], hexes, {}, "(n, 2) or (n, 3)"),
+    ]
+    for n, e, kw, words in bad:
+        with pytest.raises(atlasmesh.BadInputError, match=re.escape(words)):
+            atlasmesh.Mesh(n, e, **kw)
 
 
 def test_hands_leave_one_out_as_the_rust_test(data):

@@ -137,3 +137,22 @@ def test_read_shapes_arguments(resample, tmp_path_factory):
     if isinstance(resample, int) and not isinstance(resample, bool) and 0 < resample < 10**4:
         resample = 10**7 + resample  # refused on its size, never resampled
     allowed(lambda: atlasmesh.read_shapes(csv, resample=resample))
+
+
+@SETTINGS
+@given(
+    nodes=arrays,
+    elements=arrays,
+    kind=st.one_of(st.none(), st.sampled_from(["hex8", "quad4", "tet10", "x"]), scalars),
+    sets=st.one_of(
+        st.none(),
+        scalars,
+        st.dictionaries(
+            st.one_of(st.sampled_from(["nodes", "elements", "surfaces"]), st.text(max_size=4)),
+            st.one_of(st.dictionaries(st.text(max_size=6), arrays, max_size=2), scalars),
+            max_size=3,
+        ),
+    ),
+)
+def test_mesh_arguments(nodes, elements, kind, sets):
+    allowed(lambda: atlasmesh.Mesh(nodes, elements, kind=kind, sets=sets))

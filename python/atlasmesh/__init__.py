@@ -78,6 +78,88 @@ def to_pyvista(mesh):
 Mesh.to_meshio = to_meshio
 Mesh.to_pyvista = to_pyvista
 
+
+def _shape(obj, dimension=None):
+    """A PyVista ``PolyData`` or a ``meshio.Mesh`` as ``(points, facets)`` arrays: triangles
+    for a surface (PyVista's polygons triangulated first), segments for an outline (a 2D
+    shape: z dropped where it is zero). Anything else is returned as it is."""
+    import os
+
+    if isinstance(obj, (str, bytes, tuple, list, os.PathLike, LabelMap)):
+        return obj
+    points = getattr(obj, "points", None)
+    if points is None:
+        return obj
+    import numpy as np
+
+    cells = getattr(obj, "cells_dict", None)
+    if hasattr(obj, "faces") and hasattr(obj, "lines") and hasattr(obj, "triangulate"):
+        # PyVista PolyData: padded cell arrays, [n, i_1..i_n, n, ...].
+        if np.asarray(obj.faces).size > 0 and dimension != 2:
+            tri = obj if obj.is_all_triangles else obj.triangulate()
+            return np.asarray(tri.points, dtype=float), np.asarray(tri.faces).reshape(-1, 4)[:, 1:]
+        lines, segments, i = np.asarray(obj.lines), [], 0
+        while i < len(lines):
+            n = int(lines[i])
+            chain = lines[i + 1 : i + 1 + n]
+            segments.extend(zip(chain[:-1], chain[1:]))
+            i += n + 1
+        return _planar(np.asarray(obj.points, dtype=float)), np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    if isinstance(cells, dict):
+        # meshio.Mesh
+        if "triangle" in cells and dimension != 2:
+            return np.asarray(points, dtype=float), np.asarray(cells["triangle"], dtype=np.int64)
+        if "line" in cells:
+            return _planar(np.asarray(points, dtype=float)), np.asarray(cells["line"], dtype=np.int64)
+        raise BadInputError(
+            f"a meshio mesh of {sorted(cells)} cells: a surface of triangles or an outline of lines expected"
+        )
+    return obj
+
+
+def _planar(points):
+    """Points of an outline: (N, 2) when their z is zero everywhere."""
+    if points.ndim == 2 and points.shape[1] == 3 and not points[:, 2].any():
+        return points[:, :2]
+    return points
+
+
+_fit, _fit_many, _build = Atlas.fit, Atlas.fit_many, Atlas.build
+
+
+def _shapes(shapes, dimension=None):
+    """Each shape of a list or tuple through ``_shape``; anything else as it is (the
+    extension refuses it with its own error)."""
+    if isinstance(shapes, (list, tuple)):
+        return [_shape(s, dimension) for s in shapes]
+    return shapes
+
+
+def _fit_any(self, subject, facets=None, *args, **kwargs):
+    if facets is None:
+        subject = _shape(subject, self.dimension)
+    return _fit(self, subject, facets, *args, **kwargs)
+
+
+def _fit_many_any(self, subjects, *args, **kwargs):
+    return _fit_many(self, _shapes(subjects, self.dimension), *args, **kwargs)
+
+
+def _build_any(shapes, *args, **kwargs):
+    return _build(_shapes(shapes), *args, **kwargs)
+
+
+_fit_any.__doc__ = (_fit.__doc__ or "") + (
+    "\n\nThe subject may also be a PyVista PolyData or a meshio Mesh (triangles; lines in 2D)."
+)
+_fit_many_any.__doc__ = _fit_many.__doc__
+_build_any.__doc__ = (_build.__doc__ or "") + (
+    "\n\nShapes may also be PyVista PolyData or meshio Meshes (triangles; lines in 2D)."
+)
+Atlas.fit = _fit_any
+Atlas.fit_many = _fit_many_any
+Atlas.build = staticmethod(_build_any)
+
 __all__ = [
     "Atlas",
     "LabelMap",

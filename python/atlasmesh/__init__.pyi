@@ -149,7 +149,12 @@ class Atlas:
         element_size: Union[str, float] = "auto",
         register: bool = False,
         mesh: bool = True,
-    ) -> "Atlas": ...
+    ) -> "Atlas":
+        """An atlas of shapes (files, (points, facets) pairs, LabelMaps, PyVista PolyData or
+        meshio Meshes), read and cleaned as the command line reads them: GPA, PCA keeping
+        modes (or the fewest explaining variance), and the FE mesh of the mean (element_size a
+        length in the shapes' unit, a share "1.5%", or "auto"); register=True when the shapes
+        are not in correspondence (FFD registration, eq. 2)."""
     def save(self, path: Union[str, PathLike]) -> None: ...
     @property
     def dimension(self) -> int: ...
@@ -184,7 +189,11 @@ class Atlas:
         grid: int = 20,
         alpha: float = 50.0,
         mesh: bool = True,
-    ) -> FitResult: ...
+    ) -> FitResult:
+        """Fits a subject in its own frame and unit: (points, facets) arrays, a file, a
+        LabelMap, a PyVista PolyData or a meshio Mesh. Algorithm 1 (eq. 5-8), then the mean
+        mesh morphed by the FFD of eq. 9 (grid, alpha), repaired and checked; partial=True
+        for a subject that misses parts; mesh=False for the fit alone."""
     def fit_many(
         self,
         subjects: List[ShapeLike],

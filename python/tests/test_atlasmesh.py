@@ -235,6 +235,15 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
         assert np.array_equal(back.nodes, m.nodes) and np.array_equal(back.elements, m.elements)
     # A 2D mesh of quadrilaterals, its kind from its shape.
     quad = atlasmesh.Mesh(nodes[:6, :2], [[0, 1, 4, 3], [1, 2, 5, 4]])
+    # A 2D atlas from PyVista's and meshio's outlines (lines, z zero) as from arrays.
+    shapes = ellipses(6)
+    as_pv = [pv.PolyData(np.hstack([p, np.zeros((len(p), 1))]), lines=np.hstack([np.full((len(f), 1), 2), f]).ravel()) for p, f in shapes]
+    as_meshio = [meshio.Mesh(np.hstack([p, np.zeros((len(p), 1))]), [("line", f)]) for p, f in shapes]
+    a = atlasmesh.Atlas.build(shapes, modes=2, mesh=False)
+    for other in (as_pv, as_meshio):
+        b = atlasmesh.Atlas.build(other, modes=2, mesh=False)
+        assert np.allclose(b.mean, a.mean, atol=1e-12)
+    assert np.allclose(a.fit(as_pv[0], mesh=False).weights, a.fit(*shapes[0], mesh=False).weights, atol=1e-12)
     assert quad.kind == "quad4" and quad.to_pyvista().n_cells == 2
     bad = [
         (nodes, [[0, 1, 4, 3, 6, 7, 10, 12]], {}, "node 13"),
@@ -304,6 +313,15 @@ def test_a_femur_mesh_read_back_by_pyvista(data, femur_atlas, tmp_path):
     assert grid.n_points == len(r.mesh.nodes) and grid.n_cells == len(r.mesh.elements)
     assert np.abs(np.asarray(grid.points) - r.mesh.nodes).max() < 1e-9
     assert np.allclose(grid.cell_data["scaled_jacobian_min"], r.mesh.scaled_jacobian)
+    # The same subject as PyVista and meshio read it: the same fit.
+    for obj in [pv.read(data / "knee-distal-femur-synthetic-3d/femur/S032_Femur.ply")]:
+        again = femur_atlas.fit(obj)
+        assert np.allclose(again.mesh.nodes, r.mesh.nodes, atol=1e-9)
+        assert np.allclose(again.weights, r.weights, atol=1e-12)
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(data / "knee-distal-femur-synthetic-3d/femur/S032_Femur.ply")
+    [again] = femur_atlas.fit_many([m], jobs=1)
+    assert np.allclose(again.mesh.nodes, r.mesh.nodes, atol=1e-9)
     alone = femur_atlas.fit(points, facets, mesh=False)
     assert alone.mesh is None
     # Without a mesh there is nothing to check: success is None, the mesh's measures NaN.

@@ -137,7 +137,8 @@ class FitResult:
         """Any other measure of report.json by name (iterations, e_d, inverted_elements, ...)."""
 
 class Atlas:
-    """A statistical atlas: shape model (eq. 3-4) and FE mesh of the mean, in the data's unit."""
+    """A statistical atlas: shape model (eq. 3-4) and FE mesh of the mean, in the data's unit.
+    Picklable (as the bytes save writes)."""
 
     @staticmethod
     def load(path: Union[str, PathLike]) -> "Atlas": ...

@@ -56,6 +56,10 @@ pub struct Atlas {
     inner: Inner,
 }
 
+/// What `__reduce__` gives pickle: the function that makes the object again and its
+/// arguments (an atlas's dimension and bytes).
+type Reduced<'py> = (Bound<'py, PyAny>, (usize, Bound<'py, pyo3::types::PyBytes>));
+
 /// A subject from `(points, facets)` arrays or a file path, read and cleaned as the command
 /// line reads it ([`atlasmesh::study::read_subjects`], [`atlasmesh::study::prepare_subject`]);
 /// a surface given as arrays is checked and oriented as a surface file is.
@@ -381,6 +385,35 @@ impl Atlas {
     /// Writes the atlas (safetensors; `atlasmesh` reads it back).
     fn save(&self, path: PathBuf) -> PyResult<()> {
         each!(&self.inner, a, D => a.atlas.save(&path)).map_err(to_py)
+    }
+
+    /// Pickling: the atlas as `save` writes it (safetensors bytes) and its dimension, made
+    /// again by `_from_bytes`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Reduced<'py>> {
+        let py = slf.py();
+        let (dimension, bytes) = each!(&slf.get().inner, a, D => (D, a.atlas.to_bytes()));
+        let bytes = bytes.map_err(to_py)?;
+        Ok((
+            slf.get_type().getattr("_from_bytes")?,
+            (dimension, pyo3::types::PyBytes::new(py, &bytes)),
+        ))
+    }
+
+    /// The atlas of `data`, the bytes of an atlas file of `dimension` (2 or 3): what
+    /// unpickling an atlas calls.
+    #[staticmethod]
+    fn _from_bytes(dimension: usize, data: &[u8]) -> PyResult<Self> {
+        let path = std::path::Path::new("<pickled atlas>");
+        let inner = match dimension {
+            3 => Inner::Three(context(RustAtlas::from_bytes(path, data).map_err(to_py)?)?),
+            2 => Inner::Two(context(RustAtlas::from_bytes(path, data).map_err(to_py)?)?),
+            d => {
+                return Err(crate::errors::BadInputError::new_err(format!(
+                    "a pickled atlas of dimension {d}: 2 or 3 expected"
+                )));
+            }
+        };
+        Ok(Atlas { inner })
     }
 
     /// 2 or 3.

@@ -244,6 +244,18 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
         b = atlasmesh.Atlas.build(other, modes=2, mesh=False)
         assert np.allclose(b.mean, a.mean, atol=1e-12)
     assert np.allclose(a.fit(as_pv[0], mesh=False).weights, a.fit(*shapes[0], mesh=False).weights, atol=1e-12)
+    # An atlas pickles whole: the same model, mesh and fit after.
+    meshed = atlasmesh.Atlas.build(shapes, modes=2)
+    again = pickle.loads(pickle.dumps(meshed))
+    assert again.dimension == 2 and np.array_equal(again.mean, meshed.mean)
+    assert np.array_equal(again.modes, meshed.modes) and np.array_equal(again.variances, meshed.variances)
+    assert np.array_equal(again.mean_mesh.nodes, meshed.mean_mesh.nodes)
+    r1, r2 = meshed.fit(*ellipses(1, seed=9)[0]), again.fit(*ellipses(1, seed=9)[0])
+    assert np.array_equal(r1.mesh.nodes, r2.mesh.nodes) and np.array_equal(r1.weights, r2.weights)
+    with pytest.raises(atlasmesh.BadInputError, match="dimension 4"):
+        atlasmesh.Atlas._from_bytes(4, b"")
+    with pytest.raises(atlasmesh.Error):
+        atlasmesh.Atlas._from_bytes(2, b"not an atlas")
     assert quad.kind == "quad4" and quad.to_pyvista().n_cells == 2
     bad = [
         (nodes, [[0, 1, 4, 3, 6, 7, 10, 12]], {}, "node 13"),

@@ -135,14 +135,28 @@ def _shapes(shapes, dimension=None):
     return shapes
 
 
+def _warn(result):
+    """A fit's warnings (islands dropped, a subject beyond the atlas's cut, a mesh repaired,
+    ...) as Python warnings too (``UserWarning``); they stay in ``result.warnings``."""
+    import warnings
+
+    if isinstance(result, FitResult):
+        for w in result.warnings:
+            warnings.warn(w, UserWarning, stacklevel=3)
+    return result
+
+
 def _fit_any(self, subject, facets=None, *args, **kwargs):
     if facets is None:
         subject = _shape(subject, self.dimension)
-    return _fit(self, subject, facets, *args, **kwargs)
+    return _warn(_fit(self, subject, facets, *args, **kwargs))
 
 
 def _fit_many_any(self, subjects, *args, **kwargs):
-    return _fit_many(self, _shapes(subjects, self.dimension), *args, **kwargs)
+    results = _fit_many(self, _shapes(subjects, self.dimension), *args, **kwargs)
+    for r in results:
+        _warn(r)
+    return results
 
 
 def _build_any(shapes, *args, **kwargs):

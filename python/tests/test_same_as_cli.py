@@ -79,3 +79,6 @@ def test_vertebrae_through_cli_and_python_are_the_same(data, tmp_path):
     # sub-verse010 carries a 14-vertex island: dropped, with a warning in both reports.
     island = by_name["sub-verse010_segment_20"]
     assert any("floating component" in w for w in island["warnings"]), island["warnings"]
+    # And as a Python warning of the fit.
+    with pytest.warns(UserWarning, match="floating component"):
+        atlas.fit(str(held[0]))

@@ -170,6 +170,15 @@ _fit_many_any.__doc__ = _fit_many.__doc__
 _build_any.__doc__ = (_build.__doc__ or "") + (
     "\n\nShapes may also be PyVista PolyData or meshio Meshes (triangles; lines in 2D)."
 )
+def _explained_variance_ratio(self):
+    """Each mode's share of the population's variance, as scikit-learn's
+    ``explained_variance_ratio_``: the steps of ``cumulative_variance``."""
+    import numpy as np
+
+    return np.diff(np.asarray(self.cumulative_variance, dtype=float), prepend=0.0)
+
+
+Atlas.explained_variance_ratio = property(_explained_variance_ratio)
 Atlas.fit = _fit_any
 Atlas.fit_many = _fit_many_any
 Atlas.build = staticmethod(_build_any)

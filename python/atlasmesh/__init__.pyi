@@ -173,6 +173,10 @@ class Atlas:
     @property
     def cumulative_variance(self) -> FloatArray: ...
     @property
+    def explained_variance_ratio(self) -> FloatArray:
+        """Each mode's share of the population's variance (scikit-learn's
+        explained_variance_ratio_); the steps of cumulative_variance."""
+    @property
     def mean_mesh(self) -> Optional[Mesh]: ...
     def instance(self, sd: npt.ArrayLike) -> FloatArray:
         """The shape of weights sd (standard deviations), eq. 4, (N, D)."""

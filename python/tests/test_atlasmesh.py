@@ -34,6 +34,13 @@ def test_a_2d_atlas_from_arrays_samples_projects_and_fits():
     assert atlas.mean.shape == (120, 2)
     assert atlas.modes.shape == (3, 120, 2)
     assert np.all(np.diff(atlas.variances) <= 0) and np.all(atlas.variances > 0)
+    # Each mode's share of the variance (scikit-learn's explained_variance_ratio_): in
+    # proportion to its variance, adding up to the cumulative share.
+    ratio = atlas.explained_variance_ratio
+    assert ratio.shape == atlas.cumulative_variance.shape
+    assert np.allclose(np.cumsum(ratio), atlas.cumulative_variance, atol=1e-12)
+    kept = ratio[: len(atlas.variances)]
+    assert np.allclose(kept / kept[0], atlas.variances / atlas.variances[0], rtol=1e-9)
     # In the data's unit: the mean is about as large as the shapes (80 across).
     extent = np.ptp(atlas.mean, axis=0).max()
     assert 60 < extent < 100, extent

@@ -51,43 +51,38 @@ fn pictures_3d<const D: usize>(
         lo_label: "0".into(),
         hi_label: format!("{far:.3} (95th pct.)"),
     };
-    let img = render::render_front_back(
-        &instance,
-        &tris,
-        Some(distance),
-        None,
-        legend.color,
-        &view,
-        PICTURE_WIDTH,
-    );
-    let title = format!(
-        "{}: fit, distance to the subject (front, back)",
-        subject.name
-    );
-    let img = render::annotated(&img, &title, Some(&legend));
-    let name = format!("{base}_distance.png");
-    write_atomic(&out.join(&name), &img.png()?)?;
-    files.push(name);
-    // The delivered mesh's surface by its distance to the subject, on the same scale.
+    // The fitted surface, then the delivered mesh's surface, by their distance to the
+    // subject on one scale.
+    let picture = |nodes: &[Point<3>], tris: &[[usize; 3]], d: &[f64], what: &str, suffix: &str| {
+        let img = render::render_front_back(
+            nodes,
+            tris,
+            Some(d),
+            None,
+            legend.color,
+            &view,
+            PICTURE_WIDTH,
+        );
+        let title = format!(
+            "{}: {what}, distance to the subject (front, back)",
+            subject.name
+        );
+        let img = render::annotated(&img, &title, Some(&legend));
+        let name = format!("{base}_{suffix}.png");
+        write_atomic(&out.join(&name), &img.png()?)?;
+        Ok::<_, crate::Error>(name)
+    };
+    files.push(picture(&instance, &tris, distance, "fit", "distance")?);
     let mesh3 = in_3d_without_sets(mesh);
     let (btris, _) = render::boundary_triangles(&mesh3, &vec![0.0; mesh.num_elements()]);
-    let img = render::render_front_back(
+    let mesh_distance = super::subject_page::boundary_node_distances(mesh, index);
+    files.push(picture(
         &mesh3.nodes,
         &btris,
-        Some(&super::subject_page::boundary_node_distances(mesh, index)),
-        None,
-        legend.color,
-        &view,
-        PICTURE_WIDTH,
-    );
-    let title = format!(
-        "{}: delivered mesh, distance to the subject (front, back)",
-        subject.name
-    );
-    let img = render::annotated(&img, &title, Some(&legend));
-    let name = format!("{base}_mesh_distance.png");
-    write_atomic(&out.join(&name), &img.png()?)?;
-    files.push(name);
+        &mesh_distance,
+        "delivered mesh",
+        "mesh_distance",
+    )?);
     let title = format!(
         "{}: morphed mesh, scaled Jacobian (front, back)",
         subject.name

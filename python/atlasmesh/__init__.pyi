@@ -94,7 +94,9 @@ class FitResult:
         """The instance's weights in standard deviations of each mode."""
     @property
     def pose(self) -> Dict[str, Any]:
-        """{"scale", "rotation" (D, D), "translation" (D,)}: reference frame to subject."""
+        """{"scale", "rotation" (D, D), "translation" (D,), "matrix" (D+1, D+1)}: reference
+        frame to subject, x_subject = scale * rotation @ x + translation; the matrix is
+        [[scale * rotation, translation], [0, 1]], as PyVista's transform applies it."""
     @property
     def surface(self) -> FloatArray:
         """The fitted shape projected onto the subject, (N, D)."""

@@ -429,11 +429,22 @@ impl FitResult {
         arrays::frozen_f64(py, self.sd.iter().copied(), &[self.sd.len()])
     }
 
-    /// The pose `t_{R,T,s}` (reference frame → subject): `{"scale", "rotation" (D×D),
-    /// "translation" (D,)}`.
+    /// The pose `t_{R,T,s}` (reference frame → subject, `x_subject = s R x + T`): `{"scale",
+    /// "rotation" (D×D), "translation" (D,), "matrix"}`, the matrix `[[s R, T], [0, 1]]`
+    /// ((D+1)×(D+1)) as PyVista's `transform` and VTK apply it.
     #[getter]
     fn pose<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
+        let n = self.dim + 1;
+        let matrix = (0..n * n).map(|k| {
+            let (r, c) = (k / n, k % n);
+            match (r < self.dim, c < self.dim) {
+                (true, true) => self.scale * self.rotation[r * self.dim + c],
+                (true, false) => self.translation[r],
+                (false, last) => f64::from(u8::from(!last)),
+            }
+        });
+        d.set_item("matrix", arrays::frozen_f64(py, matrix, &[n, n])?)?;
         d.set_item("scale", self.scale)?;
         d.set_item(
             "rotation",
@@ -564,6 +575,64 @@ impl FitResult {
             pyo3::exceptions::PyAttributeError::new_err(format!(
                 "FitResult has no attribute {name:?}"
             ))
+        })
+    }
+
+    /// Pickling: the result's arrays, its mesh (a `Mesh` pickles) and its measures, made
+    /// again by `_from_state`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let py = slf.py();
+        let r = slf.get();
+        let measures = r.measures_dict(py)?.call_method0("copy")?;
+        let state = (
+            r.dim,
+            r.sd.clone(),
+            (r.scale, r.rotation.clone(), r.translation.clone()),
+            (r.surface.clone(), r.facets.clone()),
+            r.mesh.as_ref().map(|m| m.clone_ref(py)),
+            measures,
+        );
+        Ok((
+            slf.get_type().getattr("_from_state")?,
+            state.into_pyobject(py)?.into_any(),
+        ))
+    }
+
+    /// The result of `__reduce__`'s state: what unpickling a result calls.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    fn _from_state(
+        dim: usize,
+        sd: Vec<f64>,
+        pose: (f64, Vec<f64>, Vec<f64>),
+        shape: (Vec<f64>, Vec<usize>),
+        mesh: Option<Py<Mesh>>,
+        measures: Bound<'_, PyDict>,
+    ) -> PyResult<Self> {
+        let (scale, rotation, translation) = pose;
+        let (surface, facets) = shape;
+        let fits = (dim == 2 || dim == 3)
+            && rotation.len() == dim * dim
+            && translation.len() == dim
+            && surface.len() % dim == 0
+            && facets.len() % dim == 0
+            && facets.iter().all(|&f| f < surface.len() / dim);
+        if !fits {
+            return Err(BadInputError::new_err(
+                "a pickled FitResult whose arrays do not fit together",
+            ));
+        }
+        Ok(FitResult {
+            dim,
+            sd,
+            scale,
+            rotation,
+            translation,
+            surface,
+            facets,
+            mesh,
+            measures: measures.copy()?.into_any().unbind(),
+            pending: std::sync::Mutex::new(None),
         })
     }
 

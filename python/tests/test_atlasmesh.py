@@ -259,6 +259,26 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
     assert np.array_equal(again.mean_mesh.nodes, meshed.mean_mesh.nodes)
     r1, r2 = meshed.fit(*ellipses(1, seed=9)[0]), again.fit(*ellipses(1, seed=9)[0])
     assert np.array_equal(r1.mesh.nodes, r2.mesh.nodes) and np.array_equal(r1.weights, r2.weights)
+    # A result pickles too (for joblib and multiprocessing): arrays, mesh, measures, pose.
+    for r in (r1, meshed.fit(*ellipses(1, seed=9)[0], mesh=False)):
+        back = pickle.loads(pickle.dumps(r))
+        assert np.array_equal(back.weights, r.weights) and np.array_equal(back.surface, r.surface)
+        assert np.array_equal(back.facets, r.facets) and back.measures == r.measures
+        assert back.success == r.success and back.rms_distance == r.rms_distance
+        assert (back.mesh is None) == (r.mesh is None)
+        assert r.mesh is None or np.array_equal(back.mesh.nodes, r.mesh.nodes)
+        for k in ("scale", "rotation", "translation", "matrix"):
+            assert np.array_equal(back.pose[k], r.pose[k])
+    # The pose's matrix [[s R, T], [0, 1]] moves points as its scale, rotation and
+    # translation do.
+    pose = r1.pose
+    assert pose["matrix"].shape == (3, 3) and np.array_equal(pose["matrix"][2], [0.0, 0.0, 1.0])
+    x = meshed.mean[:5]
+    by_parts = pose["scale"] * x @ pose["rotation"].T + pose["translation"]
+    by_matrix = (np.hstack([x, np.ones((5, 1))]) @ pose["matrix"].T)[:, :2]
+    assert np.allclose(by_parts, by_matrix, atol=1e-9)
+    with pytest.raises(atlasmesh.BadInputError, match="do not fit together"):
+        atlasmesh.FitResult._from_state(2, [], (1.0, [1.0], [0.0, 0.0]), ([], []), None, {})
     with pytest.raises(atlasmesh.BadInputError, match="dimension 4"):
         atlasmesh.Atlas._from_bytes(4, b"")
     with pytest.raises(atlasmesh.Error):

@@ -109,6 +109,11 @@ fn optimized<const D: usize>(mut mesh: FeMesh<D>, mean: &Shape<D>) -> Result<FeM
         bound: Some(MEAN_MESH_SCALED_JACOBIAN_TARGET),
         // Well under the bar's, so that the mesh keeps room for the morph.
         edge_ratio_max: Some(0.5 * MEAN_MESH_EDGE_RATIO_MAX),
+        // Steps down to 3 % of an edge, not 0.3 % as a subject's repair: the mean of 10
+        // femurs (24 800 hexahedra) reaches the same smallest scaled Jacobian (0.600, 1st
+        // percentile 0.639) with 190 trials a node instead of 355; its build, one thread,
+        // 4.2 s instead of 5.0 s.
+        step_tolerance: 0.1,
         ..RepairParams::default()
     };
     let quality = mesh_quality(&mesh);

@@ -3,7 +3,7 @@
 //! is valid when all its corner Jacobians are positive.
 
 use super::FeMesh;
-use crate::geometry::{Point, norm, sub};
+use crate::geometry::{Point, dist2, dot, norm, sub};
 
 /// Corner measures of one element.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -104,13 +104,31 @@ pub fn corner<const D: usize>(
     nodes: &[Point<D>],
     c: usize,
 ) -> (f64, f64) {
+    let (j, sj, _) = corner_with_edges(kind, el, nodes, c);
+    (j, sj)
+}
+
+/// [`corner`] and the sum of the squared lengths of the corner's edges (the chords from the
+/// corner node to its frame's corner nodes), which the repair's mean ratio needs: taken from
+/// the same edge vectors for linear elements.
+#[inline]
+pub fn corner_with_edges<const D: usize>(
+    kind: super::ElementKind,
+    el: &[usize],
+    nodes: &[Point<D>],
+    c: usize,
+) -> (f64, f64, f64) {
     let frame = kind.corner_frames()[c];
     let x = nodes[el[c]];
-    let v: [Point<D>; D] = match kind {
+    let (v, edges): ([Point<D>; D], f64) = match kind {
         super::ElementKind::Hex20 | super::ElementKind::Tet10 => {
-            quadratic_frame(kind, el, nodes, c)
+            let chords = frame.iter().map(|&m| dist2(nodes[el[m]], x)).sum();
+            (quadratic_frame(kind, el, nodes, c), chords)
         }
-        _ => std::array::from_fn(|k| sub(nodes[el[frame[k]]], x)),
+        _ => {
+            let v: [Point<D>; D] = std::array::from_fn(|k| sub(nodes[el[frame[k]]], x));
+            (v, v.iter().map(|e| dot(*e, *e)).sum())
+        }
     };
     let j = det(&v);
     let l: f64 = v.iter().map(|e| norm(*e)).product();
@@ -119,7 +137,7 @@ pub fn corner<const D: usize>(
     } else {
         -1.0
     };
-    (j, sj)
+    (j, sj, edges)
 }
 
 /// The edge vectors at corner `c` of a quadratic element: the tangent at the corner of the

@@ -15,6 +15,15 @@ pub struct SubjectReport {
     /// Wall time of the fit (seconds).
     #[serde(deserialize_with = "f64_or_nan")]
     pub fit_seconds: f64,
+    /// Wall time of the subject's whole processing in a run: its fit, morph, repair, checks
+    /// and files (seconds; the reading of its file not included). NaN where not measured.
+    #[serde(default = "nan", deserialize_with = "f64_or_nan")]
+    pub seconds: f64,
+    /// The process's heap at its peak while the subject was processed (MB, 10⁶ bytes; what
+    /// the run holds, the atlas included): measured by the command line when it makes one
+    /// subject at a time (`--jobs 1`), absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heap_peak_mb: Option<f64>,
     /// `E_d` (eq. 6) at the end of the fit, subject units squared.
     #[serde(deserialize_with = "f64_or_nan")]
     pub e_d: f64,
@@ -259,6 +268,13 @@ pub struct Summary {
     /// Median fit time (seconds).
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_fit_seconds: f64,
+    /// The subjects' [`SubjectReport::seconds`] added up: the run's work (seconds; NaN
+    /// where one was not measured).
+    #[serde(default = "nan", deserialize_with = "f64_or_nan")]
+    pub subject_seconds: f64,
+    /// The largest [`SubjectReport::heap_peak_mb`] (MB), when every subject has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heap_peak_mb: Option<f64>,
     /// Median two-way RMS distance of the fitted instance over the subject's diagonal.
     #[serde(deserialize_with = "f64_or_nan")]
     pub median_rms_distance_relative: f64,
@@ -399,6 +415,10 @@ pub struct Report {
     /// The atlas file a fit used (a leave-one-out builds its own).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub atlas: Option<AtlasSource>,
+    /// The peak of the process's resident memory when the report was written (MB, 10⁶
+    /// bytes): what a scheduler must give the run (of merged reports, the largest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resident_peak_mb: Option<f64>,
 }
 
 /// An atlas file as a run used it.
@@ -419,6 +439,10 @@ pub(super) fn write_pretty<T: Serialize>(path: &Path, value: &T, what: &str) -> 
     let s = serde_json::to_string_pretty(value)
         .map_err(|e| Error::Numerical(format!("{what}: {e}")))?;
     crate::formats::write_atomic(path, s.as_bytes())
+}
+
+fn nan() -> f64 {
+    f64::NAN
 }
 
 /// A number that `report.json` may hold as `null` (NaN and infinities are written so).
@@ -481,6 +505,12 @@ impl Summary {
                 subjects.iter().map(|s| s.mesh_p95_distance).collect(),
             ),
             median_fit_seconds: median(subjects.iter().map(|s| s.fit_seconds).collect()),
+            subject_seconds: subjects.iter().map(|s| s.seconds).sum(),
+            heap_peak_mb: subjects
+                .iter()
+                .map(|s| s.heap_peak_mb)
+                .collect::<Option<Vec<f64>>>()
+                .and_then(|v| v.into_iter().reduce(f64::max)),
             median_rms_distance_relative: median(
                 subjects.iter().map(|s| s.rms_distance_relative).collect(),
             ),

@@ -35,6 +35,10 @@ impl super::run::UnitReport for SubjectReport {
     fn files_mut(&mut self) -> &mut Vec<String> {
         &mut self.files
     }
+    fn set_cost(&mut self, seconds: f64, heap_peak_mb: Option<f64>) {
+        self.seconds = seconds;
+        self.heap_peak_mb = heap_peak_mb;
+    }
 }
 
 /// The subject files named by `specs`: a folder gives every shape file in it (by extension:

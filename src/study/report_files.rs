@@ -93,6 +93,7 @@ pub(crate) fn finish_report<const D: usize>(
         subjects,
         atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
         atlas,
+        resident_peak_mb: super::run::resident_peak_mb(),
     };
     report.write(&out.join("report.json"))?;
     crate::formats::write_atomic(

@@ -92,6 +92,8 @@ pub fn fit_subject<const D: usize>(
         name: subject.name.clone(),
         iterations: fit.iterations,
         fit_seconds,
+        seconds: f64::NAN,
+        heap_peak_mb: None,
         e_d: e_d(&fit.instance, index),
         rms_distance: rms,
         rms_distance_relative: rel,
@@ -364,7 +366,7 @@ const COVERED_IN_FULL: f64 = 0.995;
 const BOUNDARY_REPAIR_SWEEPS: usize = 8;
 
 /// Tries of the boundary fit, each leaving more nodes where they were.
-const BOUNDARY_FIT_TRIES: usize = 4;
+const BOUNDARY_FIT_TRIES: usize = 6;
 
 /// Rings of elements around a poor one whose nodes the next try leaves.
 const BOUNDARY_KEEP_RINGS: usize = 2;

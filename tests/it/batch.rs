@@ -140,6 +140,26 @@ fn a_killed_batch_resumes_where_it_stopped() {
     let r2 = report(&part);
     assert_eq!(r2.summary.resumed, done, "only the rest was fitted");
     assert_eq!(r2.summary.subjects, 24);
+    // What each subject cost: its time (its fit's and more) and, made one at a time, the
+    // heap's peak meanwhile; the run's resident peak. With several workers, no heap per subject.
+    for s in &r2.subjects {
+        assert!(
+            s.seconds >= s.fit_seconds && s.seconds < 600.0,
+            "{}: {} s, fit {} s",
+            s.name,
+            s.seconds,
+            s.fit_seconds
+        );
+        let heap = s.heap_peak_mb.expect("one worker: the heap's peak");
+        assert!(heap > 0.1 && heap < 24_000.0, "{}: {heap} MB", s.name);
+    }
+    let total: f64 = r2.subjects.iter().map(|s| s.seconds).sum();
+    assert!((r2.summary.subject_seconds - total).abs() < 1e-9);
+    assert!(r2.summary.heap_peak_mb.is_some());
+    let rss = r2.resident_peak_mb.expect("the process's resident peak");
+    assert!(rss > 1.0 && rss < 24_000.0, "{rss} MB");
+    let several = std::thread::available_parallelism().map_or(1, |n| n.get()) > 1;
+    assert_eq!(r.subjects.iter().all(|s| s.heap_peak_mb.is_none()), several);
     // The same outputs as the uninterrupted run, byte for byte (temporary files aside).
     let clean = |v: Vec<(String, Vec<u8>)>| -> Vec<(String, Vec<u8>)> {
         v.into_iter()
@@ -156,6 +176,8 @@ fn a_killed_batch_resumes_where_it_stopped() {
                 let mut r: atlasmesh::study::batch::SubjectRecord =
                     serde_json::from_slice(v).unwrap();
                 r.report.fit_seconds = 0.0;
+                r.report.seconds = 0.0;
+                r.report.heap_peak_mb = None;
                 r.input.clear();
                 serde_json::to_string(&r).unwrap()
             };

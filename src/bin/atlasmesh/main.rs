@@ -98,6 +98,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
+/// The heap counted, so that a run's report gives each subject's peak (`--jobs 1`).
+#[global_allocator]
+static ALLOCATOR: atlasmesh::study::run::CountingAllocator =
+    atlasmesh::study::run::CountingAllocator;
+
 fn main() -> ExitCode {
     // A file-size limit (`ulimit -f`) makes writes fail with an error, which removes the
     // temporary and names the file, instead of killing the process mid-write.

@@ -25,6 +25,9 @@ pub trait UnitReport: Serialize + DeserializeOwned + Send {
     fn files(&self) -> &[String];
     /// The unit's files, to prefix with its folder.
     fn files_mut(&mut self) -> &mut Vec<String>;
+    /// Records what the unit cost: its wall time (seconds) and, when the run makes one unit
+    /// at a time and the program counts its heap, the heap's peak meanwhile (MB).
+    fn set_cost(&mut self, _seconds: f64, _heap_peak_mb: Option<f64>) {}
 }
 
 /// A kind of run: what one item makes and what the run's report is.
@@ -155,11 +158,23 @@ impl Units<'_> {
         // files of an interrupted run with it.
         let _ = std::fs::remove_file(dir.join(self.looping.record));
         remove_temporaries(&dir);
+        // One unit at a time: the heap's peak from here on is this unit's.
+        let alone = rayon::current_num_threads() == 1;
+        if alone {
+            super::memory::reset_heap_peak();
+        }
+        let t0 = std::time::Instant::now();
         let mut report = make(&dir).inspect_err(|_| {
             // A unit refused before it wrote anything leaves no empty folder behind (one that
             // holds files is left as it is).
             let _ = std::fs::remove_dir(&dir);
         })?;
+        let heap = if alone {
+            super::memory::heap_peak_mb()
+        } else {
+            None
+        };
+        report.set_cost(t0.elapsed().as_secs_f64(), heap);
         for f in report.files_mut() {
             *f = format!("{folder}/{f}");
         }

@@ -67,6 +67,10 @@ impl RunReport for Report {
         self.subjects.extend(o.subjects);
         self.failed.extend(o.failed);
         self.summary.resumed += o.summary.resumed;
+        self.resident_peak_mb = match (self.resident_peak_mb, o.resident_peak_mb) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
     }
     fn sort(&mut self) -> Vec<&str> {
         self.subjects.sort_by(|a, b| a.name.cmp(&b.name));

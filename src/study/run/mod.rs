@@ -9,9 +9,11 @@
 //! | `context` | [`RunContext`]: the atlas, the parameters, the fitter and morph made once |
 //! | `items` | [`run_items`]: the item loop, units' folders and records, resume |
 //! | `merge` | [`merge`]: the reports of several shards joined |
+//! | `memory` | [`CountingAllocator`]: the heap's peak per subject; the process's resident peak |
 
 mod context;
 mod items;
+mod memory;
 mod merge;
 mod shard;
 
@@ -19,5 +21,6 @@ pub use context::{RunContext, RunPlace};
 pub use items::{
     Job, Looping, Origin, Record, RunOutcome, UnitReport, Units, check_folders, run_items,
 };
+pub use memory::{CountingAllocator, heap_peak_mb, reset_heap_peak, resident_peak_mb};
 pub use merge::{RunReport, merge};
 pub use shard::Shard;

@@ -259,6 +259,10 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
     assert np.array_equal(again.mean_mesh.nodes, meshed.mean_mesh.nodes)
     r1, r2 = meshed.fit(*ellipses(1, seed=9)[0]), again.fit(*ellipses(1, seed=9)[0])
     assert np.array_equal(r1.mesh.nodes, r2.mesh.nodes) and np.array_equal(r1.weights, r2.weights)
+    # Shapes of different point counts, not registered: the error says how, in Python's words.
+    uneven = ellipses(3) + ellipses(1, points=118)
+    with pytest.raises(atlasmesh.BadInputError, match="register=True"):
+        atlasmesh.Atlas.build(uneven, modes=2, mesh=False)
     # A result pickles too (for joblib and multiprocessing): arrays, mesh, measures, pose.
     for r in (r1, meshed.fit(*ellipses(1, seed=9)[0], mesh=False)):
         back = pickle.loads(pickle.dumps(r))

@@ -217,7 +217,7 @@ impl<const D: usize> Atlas<D> {
             s.validate()?;
             if s.points.len() != shapes[0].points.len() {
                 return Err(Error::Population(format!(
-                    "shape {} has {} points but shape {} has {}; use --resample",
+                    "shape {} has {} points but shape {} has {}: the shapes are not in point correspondence; register them first (the command line's --register, Python's register=True)",
                     s.name,
                     s.points.len(),
                     shapes[0].name,

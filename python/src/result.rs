@@ -434,17 +434,25 @@ impl FitResult {
     /// ((D+1)×(D+1)) as PyVista's `transform` and VTK apply it.
     #[getter]
     fn pose<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        /// The report's pose of the similarity (its homogeneous matrix made there).
+        fn pose_of<const D: usize>(r: &FitResult) -> atlasmesh::report::Pose {
+            atlasmesh::report::Pose::of(&atlasmesh::geometry::Similarity::<D> {
+                s: r.scale,
+                r: std::array::from_fn(|i| std::array::from_fn(|j| r.rotation[i * D + j])),
+                t: std::array::from_fn(|i| r.translation[i]),
+            })
+        }
+        let pose = if self.dim == 3 {
+            pose_of::<3>(self)
+        } else {
+            pose_of::<2>(self)
+        };
         let d = PyDict::new(py);
         let n = self.dim + 1;
-        let matrix = (0..n * n).map(|k| {
-            let (r, c) = (k / n, k % n);
-            match (r < self.dim, c < self.dim) {
-                (true, true) => self.scale * self.rotation[r * self.dim + c],
-                (true, false) => self.translation[r],
-                (false, last) => f64::from(u8::from(!last)),
-            }
-        });
-        d.set_item("matrix", arrays::frozen_f64(py, matrix, &[n, n])?)?;
+        d.set_item(
+            "matrix",
+            arrays::frozen_f64(py, pose.matrix.into_iter().flatten(), &[n, n])?,
+        )?;
         d.set_item("scale", self.scale)?;
         d.set_item(
             "rotation",

@@ -3,7 +3,7 @@
 //! is valid when all its corner Jacobians are positive.
 
 use super::FeMesh;
-use crate::geometry::{Point, dist2, dot, norm, sub};
+use crate::geometry::{Point, dist2, dot, sub};
 
 /// Corner measures of one element.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -120,18 +120,19 @@ pub fn corner_with_edges<const D: usize>(
 ) -> (f64, f64, f64) {
     let frame = kind.corner_frames()[c];
     let x = nodes[el[c]];
-    let (v, edges): ([Point<D>; D], f64) = match kind {
+    // (A quadratic element's edges are its chords, not the tangents of its frame.)
+    let (v, chords): ([Point<D>; D], Option<f64>) = match kind {
         super::ElementKind::Hex20 | super::ElementKind::Tet10 => {
             let chords = frame.iter().map(|&m| dist2(nodes[el[m]], x)).sum();
-            (quadratic_frame(kind, el, nodes, c), chords)
+            (quadratic_frame(kind, el, nodes, c), Some(chords))
         }
-        _ => {
-            let v: [Point<D>; D] = std::array::from_fn(|k| sub(nodes[el[frame[k]]], x));
-            (v, v.iter().map(|e| dot(*e, *e)).sum())
-        }
+        _ => (std::array::from_fn(|k| sub(nodes[el[frame[k]]], x)), None),
     };
+    // Each edge vector's squared length once: its norm and, for a linear element, the edges.
+    let squared: [f64; D] = std::array::from_fn(|k| dot(v[k], v[k]));
+    let edges = chords.unwrap_or_else(|| squared.iter().sum());
     let j = det(&v);
-    let l: f64 = v.iter().map(|e| norm(*e)).product();
+    let l: f64 = squared.iter().map(|s| s.sqrt()).product();
     let sj = if l > 0.0 {
         (j / l * kind.scaled_jacobian_factor()).min(1.0)
     } else {

@@ -187,17 +187,10 @@ pub fn reaction_totals(dat: &str) -> BTreeMap<String, [f64; 3]> {
     out
 }
 
-/// The largest resident memory of the waited-for children (MB; 0 when the system does not
-/// say).
+/// The largest resident memory of the waited-for children (MB of 2^20 bytes; 0 when the
+/// system does not say).
 fn children_peak_rss_mb() -> f64 {
-    // SAFETY: getrusage writes into the zeroed struct it is given.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    let r = unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
-    if r == 0 {
-        u.ru_maxrss as f64 / 1024.0
-    } else {
-        0.0
-    }
+    super::run::peak_resident_bytes(libc::RUSAGE_CHILDREN).map_or(0.0, |b| b / 1_048_576.0)
 }
 
 #[cfg(test)]

@@ -91,19 +91,23 @@ pub fn heap_peak_mb() -> Option<f64> {
 /// The peak of the process's resident memory so far, in MB (`getrusage`; `None` where it
 /// is not available).
 pub fn resident_peak_mb() -> Option<f64> {
-    let mut u: libc::rusage = unsafe {
-        // SAFETY: rusage is plain data; all zeros is a valid value.
-        std::mem::zeroed()
-    };
-    // SAFETY: getrusage writes into the struct it is given.
-    let r = unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) };
+    peak_resident_bytes(libc::RUSAGE_SELF).map(|b| b / 1e6)
+}
+
+/// The largest resident memory (bytes) of the process (`who`: `RUSAGE_SELF`) or of its
+/// waited-for children (`RUSAGE_CHILDREN`: a solver's), from `getrusage`; `None` where the
+/// system does not say.
+pub(crate) fn peak_resident_bytes(who: libc::c_int) -> Option<f64> {
+    // SAFETY: rusage is plain data, all zeros a valid value; getrusage writes into it.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    let r = unsafe { libc::getrusage(who, &mut u) };
     // Linux gives kilobytes (KiB), macOS bytes.
     let bytes = if cfg!(target_os = "macos") {
         u.ru_maxrss as f64
     } else {
         u.ru_maxrss as f64 * 1024.0
     };
-    (r == 0 && bytes > 0.0).then_some(bytes / 1e6)
+    (r == 0 && bytes > 0.0).then_some(bytes)
 }
 
 #[cfg(test)]

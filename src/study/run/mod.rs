@@ -21,6 +21,7 @@ pub use context::{RunContext, RunPlace};
 pub use items::{
     Job, Looping, Origin, Record, RunOutcome, UnitReport, Units, check_folders, run_items,
 };
+pub(crate) use memory::peak_resident_bytes;
 pub use memory::{CountingAllocator, heap_peak_mb, reset_heap_peak, resident_peak_mb};
 pub use merge::{RunReport, merge};
 pub use shard::Shard;

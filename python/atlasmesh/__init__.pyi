@@ -116,7 +116,7 @@ class FitResult:
         """What a user should know about this subject, one sentence each (empty when nothing)."""
     @property
     def failed_checks(self) -> List[str]:
-        """The checks of success that failed: fit, mesh_distance, mesh_quality."""
+        """The checks of success that failed: fit, mesh_distance, mesh_farther_than_fit, mesh_quality."""
     @property
     def rms_distance(self) -> float:
         """The instance's two-way RMS distance to the subject (eq. 6 both ways; its unit)."""

@@ -530,8 +530,8 @@ impl FitResult {
         self.list(py, "warnings")
     }
 
-    /// The checks of `success` that failed (`fit`, `mesh_distance`, `mesh_quality`; empty
-    /// when all passed or without a mesh).
+    /// The checks of `success` that failed (`fit`, `mesh_distance`, `mesh_farther_than_fit`,
+    /// `mesh_quality`; empty when all passed or without a mesh).
     #[getter]
     fn failed_checks(&self, py: Python<'_>) -> PyResult<Vec<String>> {
         self.list(py, "failed_checks")

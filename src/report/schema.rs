@@ -119,8 +119,10 @@ pub struct SubjectReport {
     pub element_size: f64,
     /// Which of the checks of `success` failed: `fit` (the instance farther than its bound,
     /// `max_instance_distance` of the diagonal, two-way RMS), `mesh_distance` (the mesh
-    /// farther than `max_mesh_distance`), `mesh_quality` (inverted elements, non-finite
-    /// nodes, or elements below the repair bound).
+    /// farther than `max_mesh_distance`), `mesh_farther_than_fit` (the delivered mesh
+    /// farther from the subject than the fitted instance, two-way RMS, by more than a tenth of
+    /// an element size), `mesh_quality` (inverted elements, non-finite nodes, or elements
+    /// below the repair bound).
     #[serde(default)]
     pub failed_checks: Vec<String>,
     /// Every check passed: the delivered mesh is within its distance bound of the subject and
@@ -253,7 +255,8 @@ pub struct Summary {
     /// Subjects whose fitted instance is farther than its bound (`fit` in `failed_checks`).
     #[serde(default)]
     pub failed_fit: usize,
-    /// Subjects whose delivered mesh is farther than its bound (`mesh_distance`).
+    /// Subjects whose delivered mesh is farther than one of its bounds (`mesh_distance` or
+    /// `mesh_farther_than_fit`).
     #[serde(default)]
     pub failed_mesh_distance: usize,
     /// Subjects whose delivered mesh is not of valid quality (`mesh_quality`).
@@ -488,7 +491,14 @@ impl Summary {
                 .filter(|s| s.scaled_jacobian_min < s.repair_bound)
                 .count(),
             failed_fit: failed_check(subjects, "fit"),
-            failed_mesh_distance: failed_check(subjects, "mesh_distance"),
+            failed_mesh_distance: subjects
+                .iter()
+                .filter(|s| {
+                    s.failed_checks
+                        .iter()
+                        .any(|c| ["mesh_distance", "mesh_farther_than_fit"].contains(&c.as_str()))
+                })
+                .count(),
             failed_mesh_quality: failed_check(subjects, "mesh_quality"),
             morph_escalations: subjects.iter().filter(|s| s.morph_escalated).count(),
             not_converged: subjects.iter().filter(|s| !s.converged).count(),

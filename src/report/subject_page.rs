@@ -100,9 +100,9 @@ pub fn write_subject_page(path: &Path, page: &SubjectPage) -> Result<()> {
         if r.success { "ok" } else { "bad" },
         if r.success {
             format!(
-                "Every check passed: the mesh is within its distance bound of the subject, no \
-                 element is inverted and every element's scaled Jacobian is at or above the \
-                 repair bound {}.",
+                "Every check passed: the mesh is within its distance bound of the subject and \
+                 no farther than the fitted instance, no element is inverted and every \
+                 element's scaled Jacobian is at or above the repair bound {}.",
                 num(r.repair_bound, 2)
             )
         } else {

@@ -158,10 +158,13 @@ const BOUNDARY_REACH: f64 = 8.0;
 const BOUNDARY_REACH_PARTIAL: f64 = 1.0;
 
 /// The morphed (and repaired) `mesh` after the boundary fit ([`crate::mesh::fit_boundary`]),
-/// repaired again with its boundary sliding on the subject, with its quality and distances;
-/// `None` when that mesh is not better: an element inverted, a smallest scaled Jacobian below
-/// the repair bound (or below the mesh's before, when that was lower), or a two-way RMS or
-/// 95th percentile distance larger than before.
+/// repaired again with its boundary sliding on the subject, with its quality and distances.
+/// Where a try leaves elements poor (inverted, or a smallest scaled Jacobian below the repair
+/// bound, or below the mesh's before when that was lower), the next leaves the boundary nodes
+/// around them where they were; after [`BOUNDARY_FIT_TRIES`], the morphed mesh's nodes are put
+/// back around each element still poor, region by region, and the rest of the fit kept.
+/// `None` when no mesh passes, or when the one that does has a two-way RMS or 95th
+/// percentile distance larger than before.
 #[allow(
     clippy::type_complexity,
     reason = "the three parts of the delivered mesh"
@@ -208,27 +211,56 @@ fn boundary_fitted<const D: usize>(
             *k = true;
         }
     }
-    for _ in 0..BOUNDARY_FIT_TRIES {
-        let mut fitted = mesh.clone();
-        let moved = crate::mesh::fit_boundary(&mut fitted, index, reach, &keep);
-        if moved.moved == 0 {
-            return Ok(None);
-        }
-        let quality = crate::mesh::quality::mesh_quality(&fitted);
-        let (_, quality) = repair_with_quality(&mut fitted, Some(index), &rp, &quality)?;
-        let bad: Vec<usize> = (0..quality.len())
+    let poor = |quality: &[ElementQuality]| -> Vec<usize> {
+        (0..quality.len())
             .filter(|&e| {
                 let sj = quality[e].scaled_jacobian_min;
                 sj.is_nan() || sj < bound || quality[e].jacobian_min <= 0.0
             })
-            .collect();
+            .collect()
+    };
+    let closer = |fitted: FeMesh<D>, quality: Vec<ElementQuality>| {
+        let after = delivered_distances(&fitted, subject, index, params);
+        let closer = after.distances.rms <= before.distances.rms
+            && after.distances.p95 <= before.distances.p95;
+        closer.then_some((fitted, quality, after))
+    };
+    let mut last = None;
+    for _ in 0..BOUNDARY_FIT_TRIES {
+        let mut fitted = mesh.clone();
+        let moved = crate::mesh::fit_boundary(&mut fitted, index, reach, &keep);
+        if moved.moved == 0 {
+            break;
+        }
+        let quality = crate::mesh::quality::mesh_quality(&fitted);
+        let (_, quality) = repair_with_quality(&mut fitted, Some(index), &rp, &quality)?;
+        let bad = poor(&quality);
         if bad.is_empty() {
-            let after = delivered_distances(&fitted, subject, index, params);
-            let closer = after.distances.rms <= before.distances.rms
-                && after.distances.p95 <= before.distances.p95;
-            return Ok(closer.then_some((fitted, quality, after)));
+            return Ok(closer(fitted, quality));
         }
         mark_around(&fitted, &bad, BOUNDARY_KEEP_RINGS, &mut keep);
+        last = Some((fitted, bad));
+    }
+    // The tries left poor elements: the fit is kept where it holds, and put back region by
+    // region where it does not (the morphed mesh's nodes around each poor element, the
+    // transition repaired), so that one poor corner does not cost the whole fit.
+    let Some((mut fitted, mut bad)) = last else {
+        return Ok(None);
+    };
+    let mut back = vec![false; mesh.nodes.len()];
+    for _ in 0..BOUNDARY_REVERT_ROUNDS {
+        mark_around(&fitted, &bad, BOUNDARY_KEEP_RINGS, &mut back);
+        for (n, p) in fitted.nodes.iter_mut().enumerate() {
+            if back[n] {
+                *p = mesh.nodes[n];
+            }
+        }
+        let quality = crate::mesh::quality::mesh_quality(&fitted);
+        let (_, quality) = repair_with_quality(&mut fitted, Some(index), &rp, &quality)?;
+        bad = poor(&quality);
+        if bad.is_empty() {
+            return Ok(closer(fitted, quality));
+        }
     }
     Ok(None)
 }
@@ -367,6 +399,10 @@ const BOUNDARY_REPAIR_SWEEPS: usize = 8;
 
 /// Tries of the boundary fit, each leaving more nodes where they were.
 const BOUNDARY_FIT_TRIES: usize = 6;
+
+/// Rounds of the boundary fit's local retreat after its tries, each putting back the morphed
+/// mesh's nodes around the elements still poor.
+const BOUNDARY_REVERT_ROUNDS: usize = 6;
 
 /// Rings of elements around a poor one whose nodes the next try leaves.
 const BOUNDARY_KEEP_RINGS: usize = 2;
@@ -514,7 +550,22 @@ pub(crate) fn delivered_distances<const D: usize>(
     }
 }
 
-/// The checks of `success` that `report` fails: `fit`, `mesh_distance`, `mesh_quality`.
+/// How much farther than the fitted instance a delivered mesh may be (two-way RMS), in element
+/// sizes: its faces' chord error on a curved surface.
+const CHORD_ALLOWANCE_ELEMENTS: f64 = 0.1;
+
+/// Whether a delivered mesh at the two-way RMS distance `mesh_rms` from its subject is farther
+/// than the fitted instance it was morphed to (`instance_rms`): the morph and the boundary fit
+/// are there to carry the fit to the mesh, and such a mesh has lost what the fit found. Its
+/// linear faces may cut the chords of a curved surface the instance's finer facets follow: up
+/// to [`CHORD_ALLOWANCE_ELEMENTS`] of its `element_size` farther is that (the chord error of a
+/// feature about one element round), not a loss. Subject units; NaN is never farther.
+fn farther_than_fit(mesh_rms: f64, instance_rms: f64, element_size: f64) -> bool {
+    mesh_rms > instance_rms + CHORD_ALLOWANCE_ELEMENTS * element_size
+}
+
+/// The checks of `success` that `report` fails: `fit`, `mesh_distance`,
+/// `mesh_farther_than_fit`, `mesh_quality`.
 fn failed_checks(report: &SubjectReport, finite: bool, params: &RunParams) -> Vec<String> {
     let mut failed = Vec::new();
     if !within(report.rms_distance_relative, params.max_instance_distance) {
@@ -522,6 +573,13 @@ fn failed_checks(report: &SubjectReport, finite: bool, params: &RunParams) -> Ve
     }
     if !within(report.mesh_rms_distance_relative, params.max_mesh_distance) {
         failed.push("mesh_distance".to_string());
+    }
+    if farther_than_fit(
+        report.mesh_rms_distance,
+        report.rms_distance,
+        report.element_size,
+    ) {
+        failed.push("mesh_farther_than_fit".to_string());
     }
     let below_bound =
         params.repair.is_some() && !within(report.repair_bound, report.scaled_jacobian_min);
@@ -679,6 +737,16 @@ fn checked_misfit<const D: usize>(
 mod tests {
     use super::*;
     use crate::mesh::{ElementKind, FeMesh};
+
+    /// A mesh is farther than its fit beyond the chord error of its faces only.
+    #[test]
+    fn a_mesh_farther_than_its_fit_beyond_its_chord_error_fails() {
+        assert!(!farther_than_fit(0.18, 0.06, 5.0));
+        assert!(!farther_than_fit(0.10, 0.15, 1.0));
+        assert!(farther_than_fit(2.3, 1.4, 2.0));
+        assert!(farther_than_fit(0.5, 0.3, 1.0));
+        assert!(!farther_than_fit(f64::NAN, 0.3, 1.0));
+    }
 
     /// A mesh with an inverted element, a non-finite node or no element is refused, naming
     /// the subject and what is wrong; a valid one passes.

@@ -215,8 +215,10 @@ fn summary(h: &mut String, report: &Report) {
 }
 
 /// The population's figures.
-fn population(h: &mut String, report: &Report, dir: &Path, pictures: &Pictures) {
-    h.push_str("<h2>Population</h2>\n<div class=\"figs\">\n");
+fn population(out: &mut String, report: &Report, dir: &Path, pictures: &Pictures) {
+    // (Nothing at all without pictures: a run with `--no-plots`.)
+    let mut body = String::new();
+    let h = &mut body;
     let mut figs: Vec<(String, &str)> = vec![
         (
             "cumulative_variance.png".into(),
@@ -287,7 +289,11 @@ fn population(h: &mut String, report: &Report, dir: &Path, pictures: &Pictures) 
             );
         }
     }
-    h.push_str("</div>\n");
+    if !body.is_empty() {
+        out.push_str("<h2>Population</h2>\n<div class=\"figs\">\n");
+        out.push_str(&body);
+        out.push_str("</div>\n");
+    }
 }
 
 /// The table of the subjects that failed, and why.
@@ -313,10 +319,20 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
         .subjects
         .iter()
         .any(|s| s.normal_correlation_icp.is_some());
+    let columns = Columns {
+        baselines,
+        cut: report.subjects.iter().any(|s| s.atlas_cut.is_some()),
+        pictures: report
+            .subjects
+            .iter()
+            .any(|s| s.files.iter().any(|f| f.ends_with("_thumb.png"))),
+    };
     h.push_str("<h2>Subjects</h2>\n<p class=\"hint\">Click a column's title to sort.</p>\n<div class=\"wide\"><table id=\"subjects\" class=\"sortable\"><thead><tr>");
-    let mut cols = vec![
-        "subject",
-        "picture",
+    let mut cols = vec!["subject"];
+    if columns.pictures {
+        cols.push("picture");
+    }
+    cols.extend([
         "success",
         "checks failed, warnings",
         "mesh RMS distance (data units)",
@@ -325,9 +341,12 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
         "fit (ms)",
         "RMS distance of the fit (share of the diagonal)",
         "normal correlation",
-    ];
+    ]);
     if baselines {
         cols.extend(["FFD baseline", "ICP baseline"]);
+    }
+    if columns.cut {
+        cols.push("share of the atlas covered, of the subject beyond the atlas's cut");
     }
     cols.extend([
         "min scaled Jacobian",
@@ -341,12 +360,22 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
     }
     h.push_str("</tr></thead><tbody>\n");
     for s in &report.subjects {
-        subject_row(h, s, dir, baselines);
+        subject_row(h, s, dir, columns);
     }
     h.push_str("</tbody></table></div>\n");
 }
 
-fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
+/// The optional columns of the subjects' table: the baselines', the atlas's cut, the
+/// thumbnails (absent without pictures).
+#[derive(Clone, Copy)]
+struct Columns {
+    baselines: bool,
+    cut: bool,
+    pictures: bool,
+}
+
+/// A subject's row, with the optional `columns`.
+fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, columns: Columns) {
     let page = s.files.iter().find(|f| f.ends_with(".html"));
     let name = match page {
         Some(p) => format!(
@@ -359,7 +388,11 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
     let _ = write!(
         h,
         "<tr><td>{name}</td>{}<td data-v=\"{}\">{}</td><td class=\"notes\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
-        thumbnail_cell(s, dir, page),
+        if columns.pictures {
+            thumbnail_cell(s, dir, page)
+        } else {
+            String::new()
+        },
         u8::from(s.success),
         if s.success { "yes" } else { "<b>no</b>" },
         escape(
@@ -377,13 +410,29 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, baselines: bool) {
         num(s.rms_distance_relative, 4),
         num(s.normal_correlation, 3)
     );
-    if baselines {
+    if columns.baselines {
         let _ = write!(
             h,
             "<td>{}</td><td>{}</td>",
             num(s.normal_correlation_ffd.unwrap_or(f64::NAN), 3),
             num(s.normal_correlation_icp.unwrap_or(f64::NAN), 3)
         );
+    }
+    if columns.cut {
+        // Where the subject's mesh ends: how much of the atlas it covers (below 100 % when
+        // the field of view cut it short of the atlas's cut), how much of it lies beyond.
+        match &s.atlas_cut {
+            Some(c) => {
+                let _ = write!(
+                    h,
+                    "<td data-v=\"{}\">covers {} %, {} % beyond</td>",
+                    c.atlas_covered_share,
+                    num(100.0 * c.atlas_covered_share, 1),
+                    num(100.0 * c.beyond_share, 1)
+                );
+            }
+            None => h.push_str("<td></td>"),
+        }
     }
     let _ = write!(
         h,

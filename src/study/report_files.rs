@@ -34,8 +34,9 @@ pub struct BatchFacts {
     pub atlas: Option<crate::report::AtlasSource>,
 }
 
-/// Writes the population-level plots and the report; with plots, the model's page too (by
-/// `morpher`, the atlas's; one is made when `None` and the atlas has a mesh).
+/// Writes `report.json`, `scores.csv` and the overview `report.html`; with plots, the
+/// population-level pictures and the model's page too (by `morpher`, the atlas's; one is made
+/// when `None` and the atlas has a mesh).
 pub(crate) fn finish_report<const D: usize>(
     out: &Path,
     atlas_for_variance: &Atlas<D>,
@@ -100,8 +101,9 @@ pub(crate) fn finish_report<const D: usize>(
         &out.join("scores.csv"),
         crate::report::scores_csv(&report.subjects).as_bytes(),
     )?;
+    // The overview stays without pictures (a cohort's run): its tables, every file linked.
+    let mut pictures = crate::report::html::Pictures::default();
     if params.plots {
-        let mut pictures = crate::report::html::Pictures::default();
         if let Some(m) = &measures {
             crate::report::plot_shape_model_measures(&out.join("measures.png"), m, "")?;
             pictures.measures = Some("measures.png".into());
@@ -136,7 +138,7 @@ pub(crate) fn finish_report<const D: usize>(
                 .map_err(|e| e.to_string())
             }));
         }
-        crate::report::html::write(&out.join("report.html"), &report, out, &pictures)?;
     }
+    crate::report::html::write(&out.join("report.html"), &report, out, &pictures)?;
     Ok(report)
 }

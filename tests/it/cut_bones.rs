@@ -245,6 +245,17 @@ fn fits_cut_and_whole_subjects(
             );
         }
     }
+    // The overview says where each subject's mesh ends: the share of the atlas it covers and
+    // the share of it beyond the atlas's cut.
+    let overview = std::fs::read_to_string(out.join("report.html")).unwrap();
+    for s in subjects {
+        let cell = format!(
+            "covers {:.1} %, {:.1} % beyond",
+            100.0 * s["atlas_cut"]["atlas_covered_share"].as_f64().unwrap(),
+            100.0 * s["atlas_cut"]["beyond_share"].as_f64().unwrap()
+        );
+        assert!(overview.contains(&cell), "{}: {cell}", s["name"]);
+    }
     let script = r#"
 import sys, json, meshio, numpy as np
 out = sys.argv[1]

@@ -111,7 +111,8 @@ pub struct RunArgs {
     /// normal_correlation_icp, normal_correlation_ffd).
     #[arg(long)]
     pub baselines: bool,
-    /// Skip the PNG plots.
+    /// No pictures and no pages per subject (for a cohort's run; report.json, scores.csv and
+    /// the overview report.html stay)
     #[arg(long)]
     pub no_plots: bool,
     /// Formats of every subject's FE mesh, comma-separated: vtu, vtk, inp (Abaqus/CalculiX),

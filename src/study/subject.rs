@@ -75,9 +75,11 @@ pub fn fit_subject<const D: usize>(
         per_element = q;
         repair = Some(r);
     }
-    let mut delivered = delivered_distances(&mesh, whole, index, params);
-    (mesh, per_element, delivered) =
-        boundary_fitted_and_flat(mesh, per_element, delivered, index, whole, params)?;
+    let delivered = delivered_distances(&mesh, whole, index, params);
+    let on = (index, whole);
+    let delivered_mesh = (mesh, per_element, delivered);
+    let (mesh, per_element, delivered) =
+        boundary_fitted_and_flat(delivered_mesh, on, params, &mut warnings)?;
     let q = summarize(&per_element);
     check_valid(whole, &mesh, &q, params)?;
     let surface_distance_change = repair.map_or(0.0, |r| r.surface_distance_change);
@@ -162,8 +164,9 @@ const BOUNDARY_REACH_PARTIAL: f64 = 1.0;
 /// Where a try leaves elements poor (inverted, or a smallest scaled Jacobian below the repair
 /// bound, or below the mesh's before when that was lower), the next leaves the boundary nodes
 /// around them where they were; after [`BOUNDARY_FIT_TRIES`], the morphed mesh's nodes are put
-/// back around each element still poor, region by region, and the rest of the fit kept.
-/// `None` when no mesh passes, or when the one that does has a two-way RMS or 95th
+/// back around each element still poor, region by region, and the rest of the fit kept (with
+/// a warning in `warnings` saying how much was put back). `None` when no mesh passes (with a
+/// warning), or when the one that does has a two-way RMS or 95th
 /// percentile distance larger than before.
 #[allow(
     clippy::type_complexity,
@@ -171,10 +174,10 @@ const BOUNDARY_REACH_PARTIAL: f64 = 1.0;
 )]
 fn boundary_fitted<const D: usize>(
     mesh: &FeMesh<D>,
-    index: &ClosestPointIndex<D>,
-    subject: &Shape<D>,
+    (index, subject): (&ClosestPointIndex<D>, &Shape<D>),
     params: &RunParams,
     before: &Delivered,
+    warnings: &mut Vec<String>,
 ) -> Result<Option<(FeMesh<D>, Vec<ElementQuality>, Delivered)>> {
     if !before.element_size.is_finite() {
         return Ok(None);
@@ -259,25 +262,39 @@ fn boundary_fitted<const D: usize>(
         let (_, quality) = repair_with_quality(&mut fitted, Some(index), &rp, &quality)?;
         bad = poor(&quality);
         if bad.is_empty() {
-            return Ok(closer(fitted, quality));
+            let kept = closer(fitted, quality);
+            if kept.is_some() {
+                let n = back.iter().filter(|b| **b).count();
+                warnings.push(format!(
+                    "the boundary fit was put back where it left elements poor ({n} nodes, {:.1} % of the mesh's): there the mesh is where the morph put it",
+                    100.0 * n as f64 / mesh.nodes.len().max(1) as f64
+                ));
+            }
+            return Ok(kept);
         }
     }
+    warnings.push(
+        "the boundary fit was not kept (every try left elements below the repair bound): the mesh is where the morph put it".to_string(),
+    );
     Ok(None)
 }
 
 /// The boundary fit ([`boundary_fitted`]) where it brings the mesh closer, then the face on an
 /// atlas's common cut made flat ([`crate::mesh::flatten_cut_face`]); the mesh with its quality
 /// and distances.
+#[allow(
+    clippy::type_complexity,
+    reason = "the three parts of the delivered mesh"
+)]
 fn boundary_fitted_and_flat<const D: usize>(
-    mut mesh: FeMesh<D>,
-    mut per_element: Vec<ElementQuality>,
-    mut delivered: Delivered,
-    index: &ClosestPointIndex<D>,
-    subject: &Shape<D>,
+    (mut mesh, mut per_element, mut delivered): (FeMesh<D>, Vec<ElementQuality>, Delivered),
+    (index, subject): (&ClosestPointIndex<D>, &Shape<D>),
     params: &RunParams,
+    warnings: &mut Vec<String>,
 ) -> Result<(FeMesh<D>, Vec<ElementQuality>, Delivered)> {
     if params.boundary_fit
-        && let Some(better) = boundary_fitted(&mesh, index, subject, params, &delivered)?
+        && let Some(better) =
+            boundary_fitted(&mesh, (index, subject), params, &delivered, warnings)?
     {
         (mesh, per_element, delivered) = better;
     }

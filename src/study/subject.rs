@@ -166,8 +166,8 @@ const BOUNDARY_REACH_PARTIAL: f64 = 1.0;
 /// around them where they were; after [`BOUNDARY_FIT_TRIES`], the morphed mesh's nodes are put
 /// back around each element still poor, region by region, and the rest of the fit kept (with
 /// a warning in `warnings` saying how much was put back). `None` when no mesh passes (with a
-/// warning), or when the one that does has a two-way RMS or 95th
-/// percentile distance larger than before.
+/// warning), or when the one that does has a two-way RMS or 95th percentile distance larger
+/// than before.
 #[allow(
     clippy::type_complexity,
     reason = "the three parts of the delivered mesh"

@@ -90,6 +90,37 @@ pub(crate) fn data_section(bytes: &[u8]) -> Option<&[u8]> {
     bytes.get(start..)
 }
 
+/// The safetensors file `bytes` with its header's keys in sorted order (the metadata's order
+/// is otherwise that of a hash map, new in every run): the same atlas is the same file, byte
+/// for byte. The header stays padded with spaces to a multiple of 8 bytes, as safetensors
+/// writes it; the data section is unchanged (its offsets are relative to it).
+fn sorted_header(bytes: &[u8]) -> Result<Vec<u8>> {
+    fn sorted(v: serde_json::Value) -> serde_json::Value {
+        match v {
+            serde_json::Value::Object(m) => {
+                let mut entries: Vec<(String, serde_json::Value)> = m.into_iter().collect();
+                entries.sort_by(|a, b| a.0.cmp(&b.0));
+                serde_json::Value::Object(
+                    entries.into_iter().map(|(k, v)| (k, sorted(v))).collect(),
+                )
+            }
+            other => other,
+        }
+    }
+    let bad = |m: &str| Error::Numerical(format!("serializing the atlas: {m}"));
+    let data = data_section(bytes).ok_or_else(|| bad("no data section"))?;
+    let header = &bytes[8..bytes.len() - data.len()];
+    let json: serde_json::Value =
+        serde_json::from_slice(header).map_err(|e| bad(&format!("its header: {e}")))?;
+    let mut header = serde_json::to_vec(&sorted(json)).map_err(|e| bad(&e.to_string()))?;
+    header.resize(header.len().next_multiple_of(8), b' ');
+    let mut out = Vec::with_capacity(8 + header.len() + data.len());
+    out.extend_from_slice(&(header.len() as u64).to_le_bytes());
+    out.extend_from_slice(&header);
+    out.extend_from_slice(data);
+    Ok(out)
+}
+
 /// CRC-32 of an atlas: its tensors' bytes, then every metadata entry but the checksum, in
 /// key order (`key=value;`).
 pub(crate) fn atlas_checksum(data: &[u8], meta: &HashMap<String, String>) -> u32 {
@@ -222,8 +253,9 @@ impl<const D: usize> Atlas<D> {
             .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
         let crc = atlas_checksum(data_section(&first).unwrap_or_default(), &meta);
         meta.insert("checksum_crc32".to_string(), format!("{crc:08x}"));
-        safetensors::serialize(views, Some(meta))
-            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))
+        let bytes = safetensors::serialize(views, Some(meta))
+            .map_err(|e| Error::Numerical(format!("serializing the atlas: {e}")))?;
+        sorted_header(&bytes)
     }
 
     /// The atlas file's metadata (everything but the tensors and the checksum).

@@ -86,7 +86,13 @@ pub fn components<const D: usize>(shape: &Shape<D>) -> Vec<Component> {
             }
         })
         .collect();
-    out.sort_by(|a, b| b.size.total_cmp(&a.size));
+    // Largest first; components of the same size by their first facet (the same order in
+    // every run).
+    out.sort_by(|a, b| {
+        b.size
+            .total_cmp(&a.size)
+            .then(a.facets[0].cmp(&b.facets[0]))
+    });
     out
 }
 

@@ -16,7 +16,7 @@ use crate::geometry::{Point, Shape, add, norm, scale, sub};
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeSet, HashMap, HashSet};
 
 /// Parameters of the quad mesher.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -210,7 +210,9 @@ fn smooth(mesh: &mut FeMesh<2>, passes: usize) {
     let boundary = boundary_nodes(mesh);
     let n = mesh.nodes.len();
     let mut elems_of: Vec<Vec<usize>> = vec![Vec::new(); n];
-    let mut nbrs: Vec<HashSet<usize>> = vec![HashSet::new(); n];
+    // (ordered sets: the sum below adds the neighbours in the same order in every run, so
+    // that a mesh is the same to the last bit)
+    let mut nbrs: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); n];
     for e in 0..mesh.num_elements() {
         let el = mesh.element(e).to_vec();
         for k in 0..4 {

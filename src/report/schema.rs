@@ -469,10 +469,11 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-fn failed_check(subjects: &[SubjectReport], check: &str) -> usize {
+/// Subjects that failed any of `checks`.
+fn failed_any(subjects: &[SubjectReport], checks: &[&str]) -> usize {
     subjects
         .iter()
-        .filter(|s| s.failed_checks.iter().any(|c| c == check))
+        .filter(|s| s.failed_checks.iter().any(|c| checks.contains(&c.as_str())))
         .count()
 }
 
@@ -490,16 +491,9 @@ impl Summary {
                 .iter()
                 .filter(|s| s.scaled_jacobian_min < s.repair_bound)
                 .count(),
-            failed_fit: failed_check(subjects, "fit"),
-            failed_mesh_distance: subjects
-                .iter()
-                .filter(|s| {
-                    s.failed_checks
-                        .iter()
-                        .any(|c| ["mesh_distance", "mesh_farther_than_fit"].contains(&c.as_str()))
-                })
-                .count(),
-            failed_mesh_quality: failed_check(subjects, "mesh_quality"),
+            failed_fit: failed_any(subjects, &["fit"]),
+            failed_mesh_distance: failed_any(subjects, &["mesh_distance", "mesh_farther_than_fit"]),
+            failed_mesh_quality: failed_any(subjects, &["mesh_quality"]),
             morph_escalations: subjects.iter().filter(|s| s.morph_escalated).count(),
             not_converged: subjects.iter().filter(|s| !s.converged).count(),
             median_mesh_rms_distance: median(

@@ -10,6 +10,7 @@ use crate::fit::Fitter;
 use crate::formats::create_dir;
 use crate::geometry::Shape;
 use crate::mesh::FeMesh;
+use crate::model::{Atlas, ModeSelection};
 use crate::report::{FailedSubject, Report, SubjectReport};
 use rayon::prelude::*;
 use std::path::Path;
@@ -77,6 +78,83 @@ pub fn leave_one_out_of<const D: usize>(
     jobs: usize,
     progress: &dyn Progress,
 ) -> Result<Report> {
+    let variant = Variant {
+        modes: None,
+        params: params.clone(),
+        out: out.to_path_buf(),
+    };
+    let mut reports = run_folds(folds, dataset, params, &[variant], jobs, progress)?;
+    Ok(reports.remove(0))
+}
+
+/// The leave-one-out at several numbers of modes (section 6.1's generalization with 15 and 5
+/// modes): each fold's atlas (GPA, the PCA with the most modes asked, the mesh of the mean)
+/// built once and cut to each number of `modes` ([`crate::model::Atlas::truncate`]: the same
+/// models as separate runs, since the PCA's first modes do not depend on how many are kept);
+/// its subject fitted, morphed and measured with each. The report of `modes[i]` is the `i`-th,
+/// written into `out/modes-M` (M the number of modes) as [`leave_one_out_of`] writes `out`.
+/// `params.atlas.modes` is not used.
+///
+/// # Errors
+/// [`Error::Parameter`] for an empty `modes`; otherwise as [`leave_one_out_of`] (a number of
+/// modes of 0 or above a fold's population's fails every fold).
+pub fn leave_one_out_by_modes<const D: usize>(
+    folds: Folds<'_, D>,
+    dataset: &str,
+    params: &RunParams,
+    modes: &[usize],
+    out: &Path,
+    jobs: usize,
+    progress: &dyn Progress,
+) -> Result<Vec<Report>> {
+    let most = modes.iter().copied().max().ok_or_else(|| {
+        Error::Parameter("a leave-one-out by modes needs at least one number of modes".into())
+    })?;
+    let mut base = params.clone();
+    base.atlas.modes = ModeSelection::Count(most);
+    let variants: Vec<Variant> = modes
+        .iter()
+        .map(|&m| {
+            let mut p = params.clone();
+            p.atlas.modes = ModeSelection::Count(m);
+            Variant {
+                modes: Some(m),
+                params: p,
+                out: out.join(format!("modes-{m}")),
+            }
+        })
+        .collect();
+    run_folds(folds, dataset, &base, &variants, jobs, progress)
+}
+
+/// One report of a leave-one-out: the number of modes its atlases are cut to (`None`: as
+/// built), its parameters and its folder.
+struct Variant {
+    modes: Option<usize>,
+    params: RunParams,
+    out: std::path::PathBuf,
+}
+
+impl Variant {
+    /// The atlas `built` cut to this variant's modes.
+    fn atlas<const D: usize>(&self, built: &Atlas<D>) -> Result<Atlas<D>> {
+        match self.modes {
+            Some(m) => built.truncate(m),
+            None => Ok(built.clone()),
+        }
+    }
+}
+
+/// The folds run once, each fold's atlas built with `params` and cut to every variant's
+/// modes; one report per variant.
+fn run_folds<const D: usize>(
+    folds: Folds<'_, D>,
+    dataset: &str,
+    params: &RunParams,
+    variants: &[Variant],
+    jobs: usize,
+    progress: &dyn Progress,
+) -> Result<Vec<Report>> {
     let Folds {
         corresponded: shapes,
         subjects,
@@ -84,8 +162,11 @@ pub fn leave_one_out_of<const D: usize>(
         population,
     } = folds;
     folds.check()?;
-    create_dir(out)?;
-    let _lock = crate::formats::lock_dir(out)?;
+    let mut _locks = Vec::new();
+    for v in variants {
+        create_dir(&v.out)?;
+        _locks.push(crate::formats::lock_dir(&v.out)?);
+    }
     // The full atlas, for the variance figures and to check the population once.
     let step = "atlas of all shapes (GPA, PCA, mesh of the mean)";
     progress.step_started(step);
@@ -99,11 +180,11 @@ pub fn leave_one_out_of<const D: usize>(
         .num_threads(jobs)
         .build()
         .map_err(|e| Error::Parameter(format!("--jobs: {e}")))?;
-    let results: Vec<Result<SubjectReport>> = pool.install(|| {
+    let results: Vec<Result<Vec<Result<SubjectReport>>>> = pool.install(|| {
         (0..shapes.len())
             .into_par_iter()
             .map(|k| {
-                let r = fold(&folds, k, &cut, params, out);
+                let r = fold(&folds, k, &cut, params, variants);
                 progress.item_done(label, &subjects[k].name);
                 r
             })
@@ -112,12 +193,24 @@ pub fn leave_one_out_of<const D: usize>(
     progress.items_finished(label);
     // A fold that fails (a subject outside the model, a refused mesh) is recorded with its
     // reason and the experiment goes on.
-    let mut reports = Vec::new();
-    let mut failed = Vec::new();
+    let mut reports = vec![Vec::new(); variants.len()];
+    let mut failed = vec![Vec::new(); variants.len()];
     for (k, r) in results.into_iter().enumerate() {
+        let name = &subjects[k].name;
         match r {
-            Ok(s) => reports.push(s),
-            Err(e) => failed.push(FailedSubject::new(&subjects[k].name, "", &e)),
+            Ok(each) => {
+                for (i, r) in each.into_iter().enumerate() {
+                    match r {
+                        Ok(s) => reports[i].push(s),
+                        Err(e) => failed[i].push(FailedSubject::new(name, "", &e)),
+                    }
+                }
+            }
+            Err(e) => {
+                for f in &mut failed {
+                    f.push(FailedSubject::new(name, "", &e));
+                }
+            }
         }
     }
     // Compactness, generalization and specificity of the population's model, for the HTML
@@ -127,26 +220,27 @@ pub fn leave_one_out_of<const D: usize>(
     } else {
         None
     };
-    let mean_mesh = Some(mean_mesh_report(
-        &full,
-        data_per_mean(shapes, &full.mean_shape()),
-    ));
-    finish_report(
-        out,
-        &full,
-        None,
-        reports,
-        params,
-        crate::study::report_files::BatchFacts {
-            dataset: dataset.to_string(),
-            mean_mesh,
-            measures,
-            failed,
-            inputs: population.inputs.clone(),
-            template: population.template.clone(),
-            ..Default::default()
-        },
-    )
+    let mean_mesh = mean_mesh_report(&full, data_per_mean(shapes, &full.mean_shape()));
+    let mut out = Vec::with_capacity(variants.len());
+    for ((v, reports), failed) in variants.iter().zip(reports).zip(failed) {
+        out.push(finish_report(
+            &v.out,
+            &v.atlas(&full)?,
+            None,
+            reports,
+            &v.params,
+            crate::study::report_files::BatchFacts {
+                dataset: dataset.to_string(),
+                mean_mesh: Some(mean_mesh.clone()),
+                measures: measures.clone(),
+                failed,
+                inputs: population.inputs.clone(),
+                template: population.template.clone(),
+                ..Default::default()
+            },
+        )?);
+    }
+    Ok(out)
 }
 
 impl<const D: usize> Folds<'_, D> {
@@ -181,15 +275,16 @@ impl<const D: usize> Folds<'_, D> {
 }
 
 /// Fold `k` of a leave-one-out: the atlas of the other shapes (GPA, PCA, mesh of the mean; on
-/// the population's common cut, `cut_facets`), the held-out subject fitted, morphed,
-/// repaired, measured and written into `out`.
+/// the population's common cut, `cut_facets`) built with `params`, then for each of `variants`
+/// that atlas cut to its modes and the held-out subject fitted, morphed, repaired, measured
+/// and written into its folder. The outer error: the atlas failed (every variant's fold).
 fn fold<const D: usize>(
     folds: &Folds<'_, D>,
     k: usize,
     cut_facets: &[usize],
     params: &RunParams,
-    out: &Path,
-) -> Result<SubjectReport> {
+    variants: &[Variant],
+) -> Result<Vec<Result<SubjectReport>>> {
     let t0 = std::time::Instant::now();
     let others = |i: &usize| *i != k;
     let training: Vec<Shape<D>> = (0..folds.corresponded.len())
@@ -199,32 +294,35 @@ fn fold<const D: usize>(
     let training_meshes: Option<Vec<FeMesh<D>>> = folds
         .meshes
         .map(|m| (0..m.len()).filter(others).map(|i| m[i].clone()).collect());
-    let mut atlas = atlas_of(&training, training_meshes.as_deref(), params)?;
-    super::build::put_on_cut(&mut atlas, cut_facets)?;
-    let atlas = std::sync::Arc::new(atlas);
-    let fitter = Fitter::new(atlas.clone());
-    let morpher = atlas.morpher(&params.morph)?;
+    let mut built = atlas_of(&training, training_meshes.as_deref(), params)?;
+    super::build::put_on_cut(&mut built, cut_facets)?;
+    let atlas_seconds = t0.elapsed().as_secs_f64();
     let subject = &folds.subjects[k];
     // A bone the field of view cut (open where the image ends), fitted as `fit` takes a label
     // map's: on the part it has.
-    let mut partial = params.clone();
-    partial.fit.partial = true;
-    let params =
-        if !cut_facets.is_empty() && D == 3 && super::is_open(&subject.clone().into_dim::<3>()) {
-            &partial
-        } else {
-            params
-        };
-    let mut report = process_subject(
-        &atlas,
-        &fitter,
-        &morpher,
-        subject,
-        out,
-        params,
-        "report.html",
-    )?;
-    // The fold's whole cost: its atlas too.
-    report.seconds = t0.elapsed().as_secs_f64();
-    Ok(report)
+    let cut = !cut_facets.is_empty() && D == 3 && super::is_open(&subject.clone().into_dim::<3>());
+    Ok(variants
+        .iter()
+        .map(|v| {
+            let t1 = std::time::Instant::now();
+            let atlas = std::sync::Arc::new(v.atlas(&built)?);
+            let fitter = Fitter::new(atlas.clone());
+            let morpher = atlas.morpher(&v.params.morph)?;
+            let mut partial = v.params.clone();
+            partial.fit.partial = true;
+            let params = if cut { &partial } else { &v.params };
+            let mut report = process_subject(
+                &atlas,
+                &fitter,
+                &morpher,
+                subject,
+                &v.out,
+                params,
+                "report.html",
+            )?;
+            // The fold's whole cost: its atlas too.
+            report.seconds = atlas_seconds + t1.elapsed().as_secs_f64();
+            Ok(report)
+        })
+        .collect())
 }

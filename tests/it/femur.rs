@@ -5,7 +5,7 @@
 use crate::common;
 
 use atlasmesh::model::ModeSelection;
-use atlasmesh::study::{RunParams, leave_one_out};
+use atlasmesh::study::RunParams;
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -22,20 +22,30 @@ fn femur_leave_one_out_with_15_and_5_modes() {
     let edge = median(shapes.iter().map(|s| s.median_edge_length()).collect());
     assert!((edge - 1.85).abs() < 0.1, "median edge length {edge} mm");
     let out = common::temp_dir("femur-loo");
-    for (modes, bound) in [(15, 0.5 * edge), (5, 0.6)] {
-        let mut params = RunParams::default();
-        params.atlas.modes = ModeSelection::Count(modes);
-        params.element_size = atlasmesh::mesh::ElementSize::Share(0.02); // about 2 mm on a femur 100 mm long
-        params.plots = false;
-        let r = leave_one_out(
-            &shapes,
-            "femur",
-            &params,
-            &out,
-            0,
-            &atlasmesh::study::Silent,
-        )
-        .unwrap();
+    let params = RunParams {
+        element_size: atlasmesh::mesh::ElementSize::Share(0.02), // about 2 mm on a femur 100 mm long
+        plots: false,
+        ..Default::default()
+    };
+    // Each fold's atlas and mean mesh built once, cut to 15 and to 5 modes.
+    let reports = atlasmesh::study::leave_one_out_by_modes(
+        atlasmesh::study::Folds {
+            corresponded: &shapes,
+            subjects: &shapes,
+            meshes: None,
+            population: &Default::default(),
+        },
+        "femur",
+        &params,
+        &[15, 5],
+        &out,
+        0,
+        &atlasmesh::study::Silent,
+    )
+    .unwrap();
+    for ((modes, bound), r) in [(15, 0.5 * edge), (5, 0.6)].into_iter().zip(reports) {
+        let out = out.join(format!("modes-{modes}"));
+        assert_eq!(r.modes, modes);
         assert_eq!(r.dimension, 3);
         assert_eq!(r.summary.subjects, 30);
         common::assert_repaired(&format!("femurs, {modes} modes"), &r);

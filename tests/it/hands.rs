@@ -234,3 +234,79 @@ fn morphed_mesh_boundary_lies_on_the_subject() {
         assert!(p90 < 0.01, "subject {k}: 90th percentile {p90}");
     }
 }
+
+/// A leave-one-out at several numbers of modes (each fold's atlas built once) reports what
+/// separate leave-one-outs report: 12 hands (1001 points), 6 and 3 modes, every subject's
+/// fitted and delivered distances and mesh quality the same to the last bit.
+#[test]
+fn a_leave_one_out_by_modes_is_the_runs_one_at_a_time() {
+    let Some(data) = common::data_dir("a_leave_one_out_by_modes_is_the_runs_one_at_a_time") else {
+        return;
+    };
+    let shapes: Vec<_> = common::hands(&data, Some(1001))
+        .into_iter()
+        .take(12)
+        .collect();
+    let mut params = RunParams {
+        plots: false,
+        ..Default::default()
+    };
+    let out = common::temp_dir("hands-loo-by-modes");
+    let both = atlasmesh::study::leave_one_out_by_modes(
+        atlasmesh::study::Folds {
+            corresponded: &shapes,
+            subjects: &shapes,
+            meshes: None,
+            population: &Default::default(),
+        },
+        "imm-hands-2d",
+        &params,
+        &[6, 3],
+        &out,
+        0,
+        &atlasmesh::study::Silent,
+    )
+    .unwrap();
+    assert_eq!(both.len(), 2);
+    for (modes, r) in [6, 3].into_iter().zip(&both) {
+        params.atlas.modes = ModeSelection::Count(modes);
+        let alone = common::temp_dir("hands-loo-alone");
+        let one = leave_one_out(
+            &shapes,
+            "imm-hands-2d",
+            &params,
+            &alone,
+            0,
+            &atlasmesh::study::Silent,
+        )
+        .unwrap();
+        assert_eq!(r.modes, modes);
+        assert_eq!(r.subjects.len(), 12, "{modes} modes: {:?}", r.failed);
+        assert_eq!(one.subjects.len(), 12);
+        // The same to the last bit: a run is reproducible, and the shared fold's atlas is
+        // the one a run with that many modes builds.
+        let close = |a: f64, b: f64| a.to_bits() == b.to_bits();
+        for (a, b) in r.subjects.iter().zip(&one.subjects) {
+            assert_eq!(a.name, b.name);
+            assert!(
+                close(a.rms_distance, b.rms_distance)
+                    && close(a.mesh_rms_distance, b.mesh_rms_distance)
+                    && close(a.scaled_jacobian_min, b.scaled_jacobian_min),
+                "{modes} modes, {}: fit {} / {}, mesh {} / {}, quality {} / {}",
+                a.name,
+                a.rms_distance,
+                b.rms_distance,
+                a.mesh_rms_distance,
+                b.mesh_rms_distance,
+                a.scaled_jacobian_min,
+                b.scaled_jacobian_min
+            );
+        }
+        // Each report in its own folder, with its subjects' meshes.
+        let dir = out.join(format!("modes-{modes}"));
+        assert!(dir.join("report.json").is_file());
+        assert_eq!(common::assert_delivered(r, &dir, &shapes), 12);
+        let _ = std::fs::remove_dir_all(&alone);
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -152,12 +152,18 @@ class Atlas:
         element_size: Union[str, float] = "auto",
         register: bool = False,
         mesh: bool = True,
+        cut: Optional[str] = None,
+        closed: bool = True,
     ) -> "Atlas":
         """An atlas of shapes (files, (points, facets) pairs, LabelMaps, PyVista PolyData or
-        meshio Meshes), read and cleaned as the command line reads them: GPA, PCA keeping
-        modes (or the fewest explaining variance), and the FE mesh of the mean (element_size a
-        length in the shapes' unit, a share "1.5%", or "auto"); register=True when the shapes
-        are not in correspondence (FFD registration, eq. 2)."""
+        meshio Meshes), read, cleaned, cut and registered as `atlasmesh build` does (a CSV file
+        holds one shape or several; the same options give the same atlas file): GPA, PCA
+        keeping modes (or the fewest explaining variance), and the FE mesh of the mean
+        (element_size a length in the shapes' unit, a share "1.5%", or "auto");
+        register=True when the shapes are not in correspondence (FFD registration, eq. 2);
+        cut as --cut ("auto", "S:60", "none"; by default when a surface is open where a plane
+        cut it); closed=False for open outlines (--open). What the command line says on
+        stderr (an island dropped, the cut) comes as a UserWarning."""
     def save(self, path: Union[str, PathLike]) -> None: ...
     @property
     def dimension(self) -> int: ...

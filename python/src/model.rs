@@ -289,9 +289,14 @@ impl Atlas {
     /// quadrilateral or hexahedral mesh of the mean at `element_size` (a length in the
     /// shapes' unit, a share such as `"2%"`, or `"auto"`); `mesh=False` keeps the shape model
     /// alone. `register=True` brings raw shapes into correspondence first (FFD registration
-    /// of a template, eq. 1-2).
+    /// of a template, eq. 1-2). `cut`: surfaces put on a common cut as the command line's
+    /// `--cut` (`"auto"`, `"S:60"`, `"none"`; by default when a shape is open where a plane
+    /// cut it). `closed=False`: outlines in CSV and text files are open (`--open`). Files are
+    /// read as `atlasmesh build` reads them; what it says on stderr (an island dropped, the
+    /// cut) comes as Python warnings.
     #[staticmethod]
-    #[pyo3(signature = (shapes, modes=None, variance=None, element_size=None, register=false, mesh=true))]
+    #[pyo3(signature = (shapes, modes=None, variance=None, element_size=None, register=false, mesh=true, cut=None, closed=true))]
+    #[allow(clippy::too_many_arguments, clippy::too_many_lines)]
     fn build(
         py: Python<'_>,
         shapes: &Bound<'_, PyList>,
@@ -300,6 +305,8 @@ impl Atlas {
         element_size: Option<&Bound<'_, PyAny>>,
         register: bool,
         mesh: bool,
+        cut: Option<&str>,
+        closed: bool,
     ) -> PyResult<Self> {
         if shapes.is_empty() {
             return Err(crate::errors::BadInputError::new_err("no shape given"));
@@ -329,55 +336,95 @@ impl Atlas {
                 crate::errors::BadInputError::new_err(format!("element_size: {m}"))
             })?,
         };
+        let cut: atlasmesh::study::CutChoice = match cut {
+            None => atlasmesh::study::CutChoice::WhenOpen,
+            Some(c) => c.parse().map_err(|e: atlasmesh::Error| {
+                crate::errors::BadInputError::new_err(format!("cut: {e}"))
+            })?,
+        };
+        let spec = atlasmesh::study::PopulationSpec {
+            outlines: atlasmesh::study::PopulationOptions {
+                closed,
+                ..Default::default()
+            },
+            point_sets: !mesh,
+            cut,
+            registration: register.then(Default::default),
+            ..Default::default()
+        };
         fn go<const D: usize>(
             py: Python<'_>,
             list: &Bound<'_, PyList>,
             params: &RunParams,
-            register: bool,
+            spec: &atlasmesh::study::PopulationSpec,
             mesh: bool,
         ) -> PyResult<RustAtlas<D>> {
-            // Read and cleaned as the command line reads a population (islands dropped); a
-            // CSV of 3D points holds one shape or several, as `build --no-mesh` reads it.
-            let mut shapes: Vec<Shape<D>> = Vec::new();
+            // The population value the command line reads: a file as `build` reads it (a CSV
+            // holds one shape or several), arrays and label maps as `fit` takes them; cleaned
+            // (islands dropped), cut and registered as the command line does.
+            let mut loaded: Vec<(Shape<D>, Vec<String>)> = Vec::new();
             for (k, o) in list.iter().enumerate() {
-                match o.extract::<PathBuf>() {
-                    Ok(p)
-                        if D == 3
-                            && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) =>
-                    {
-                        let sets = atlasmesh::study::load_point_sets(&[p], &Default::default())
-                            .map_err(to_py)?;
-                        shapes.extend(sets.into_iter().map(Shape::into_dim::<D>));
+                let file = o
+                    .extract::<PathBuf>()
+                    .ok()
+                    .filter(|_| o.extract::<PyRef<'_, crate::read::LabelMap>>().is_err());
+                match file {
+                    Some(p) => loaded.extend(
+                        atlasmesh::study::PopulationSpec {
+                            shapes: vec![p],
+                            ..spec.clone()
+                        }
+                        .load::<D>()
+                        .map_err(to_py)?,
+                    ),
+                    None => {
+                        let s = subject_of::<D>(&o, k)?;
+                        loaded.push((s.shape, s.warnings));
                     }
-                    _ => shapes.push(subject_of::<D>(&o, k)?.shape),
                 }
             }
-            py.detach(|| {
-                let shapes = if register {
-                    let r = atlasmesh::study::register_population(
-                        &shapes,
-                        atlasmesh::study::Template::Nearest,
-                        &atlasmesh::register::RegisterParams::for_dimension(D),
-                        0,
-                        &atlasmesh::study::Silent,
-                    )?;
-                    r.shapes
-                } else {
-                    shapes
-                };
-                let atlas = if mesh {
-                    atlasmesh::study::atlas_of(&shapes, None, params)?
-                } else {
-                    RustAtlas::build_model(&shapes, &params.atlas)?
-                };
-                Ok(atlas)
-            })
-            .map_err(to_py)
+            let (atlas, warnings) = py
+                .detach(|| {
+                    let mut population = atlasmesh::study::Population::new(loaded, spec)?;
+                    let c = population.corresponded(spec, 0, &atlasmesh::study::Silent)?;
+                    let atlas = if mesh {
+                        let mut atlas = atlasmesh::study::atlas_of(
+                            &c.shapes,
+                            population.meshes.as_deref(),
+                            params,
+                        )?;
+                        atlasmesh::study::put_on_cut(
+                            &mut atlas,
+                            &atlasmesh::study::cut_facets(&c.shapes, &population.inputs),
+                        )?;
+                        atlas
+                    } else {
+                        RustAtlas::build_model(&c.shapes, &params.atlas)?
+                    };
+                    let mut warnings: Vec<String> = population
+                        .warnings()
+                        .map(|(n, w)| format!("{n}: {w}"))
+                        .collect();
+                    warnings.extend(population.notes.iter().cloned());
+                    Ok((atlas, warnings))
+                })
+                .map_err(to_py)?;
+            // What the command line says on stderr, as Python warnings.
+            for w in warnings {
+                let text = std::ffi::CString::new(w.replace('\0', " ")).unwrap_or_default();
+                PyErr::warn(
+                    py,
+                    &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+                    &text,
+                    1,
+                )?;
+            }
+            Ok(atlas)
         }
         let inner = if dim == 3 {
-            Inner::Three(context(go::<3>(py, shapes, &params, register, mesh)?)?)
+            Inner::Three(context(go::<3>(py, shapes, &params, &spec, mesh)?)?)
         } else {
-            Inner::Two(context(go::<2>(py, shapes, &params, register, mesh)?)?)
+            Inner::Two(context(go::<2>(py, shapes, &params, &spec, mesh)?)?)
         };
         Ok(Atlas { inner })
     }

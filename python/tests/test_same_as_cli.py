@@ -1,7 +1,8 @@
 """One engine under both faces: the same subjects through the command line (`atlasmesh fit`)
 and through Python (`Atlas.fit`) give the same weights, the same mesh and the same warnings;
 femurs in correspondence, and raw VerSe vertebrae (one with a floating island) with an atlas
-built by registration."""
+built by registration. The same population through `atlasmesh build` and `Atlas.build` gives
+the same atlas file, byte for byte."""
 
 import json
 import os
@@ -62,6 +63,27 @@ def assert_same(atlas, subjects, tmp_path):
     return by_name
 
 
+def cli_build(args, out):
+    """`atlasmesh build ARGS --out OUT`, which must succeed."""
+    run = subprocess.run(
+        [command_line(), "build", "--quiet", "--out", str(out)] + [str(a) for a in args],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+
+
+def test_a_csv_of_many_outlines_makes_the_atlas_the_command_line_makes(data, tmp_path):
+    csv = data / "imm-hands-2d/hands_long.csv"
+    cli_build(["--shapes", csv, "--open", "--modes", 5], tmp_path / "cli.safetensors")
+    atlas = atlasmesh.Atlas.build([str(csv)], modes=5, closed=False)
+    # The 40 hands of the one file: 39 modes of variance.
+    assert len(atlas.cumulative_variance) == 39
+    atlas.save(str(tmp_path / "py.safetensors"))
+    assert (tmp_path / "py.safetensors").read_bytes() == (tmp_path / "cli.safetensors").read_bytes()
+
+
 def test_femurs_through_cli_and_python_are_the_same(data, femur_atlas, tmp_path):
     femurs = data / "knee-distal-femur-synthetic-3d/femur"
     subjects = [femurs / f"S{k:03d}_Femur.ply" for k in (31, 32, 33)]
@@ -75,6 +97,10 @@ def test_vertebrae_through_cli_and_python_are_the_same(data, tmp_path):
     held = [f for f in files if f.stem.startswith(("sub-verse010", "sub-verse013", "sub-verse016"))]
     training = [str(f) for f in files if f not in held]
     atlas = atlasmesh.Atlas.build(training, register=True)
+    # The command line's build of the same shapes: the same atlas file.
+    cli_build(["--register", "--shapes"] + training, tmp_path / "cli.safetensors")
+    atlas.save(str(tmp_path / "py.safetensors"))
+    assert (tmp_path / "py.safetensors").read_bytes() == (tmp_path / "cli.safetensors").read_bytes()
     by_name = assert_same(atlas, held, tmp_path)
     # sub-verse010 carries a 14-vertex island: dropped, with a warning in both reports.
     island = by_name["sub-verse010_segment_20"]

@@ -70,7 +70,7 @@ pub fn atlas_of<const D: usize>(
 /// An atlas of a population put on a common cut: the facets of the mean's cap
 /// ([`super::cut_facets`]; empty for none) kept, and the mean mesh's face on the cut made the
 /// `CUT` node set and surface ([`crate::mesh::mark_cut_face`]).
-pub(crate) fn put_on_cut<const D: usize>(atlas: &mut Atlas<D>, cut_facets: &[usize]) -> Result<()> {
+pub fn put_on_cut<const D: usize>(atlas: &mut Atlas<D>, cut_facets: &[usize]) -> Result<()> {
     if !cut_facets.is_empty() {
         atlas.cut_facets = cut_facets.to_vec();
         if atlas.has_mesh() {

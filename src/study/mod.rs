@@ -10,6 +10,7 @@
 //! | `params` | [`RunParams`]: every parameter of a run, and their ranges |
 //! | `progress` | [`Progress`]: the callback through which long work reports progress |
 //! | `population` | loading outlines and surfaces, landmarks, registration to a template |
+//! | `population_spec` | [`PopulationSpec`] read into a [`Population`]: one value for every face |
 //! | `common_cut` | [`cut_population`]: a population cut by a common plane, each closed by a cap |
 //! | `build` | the atlas of a population, written with its mean mesh |
 //! | `sets` | sets and decks on the atlas's mean mesh |
@@ -44,6 +45,7 @@ mod mesh_file;
 mod model_page;
 mod params;
 mod population;
+mod population_spec;
 mod progress;
 mod register_pair;
 mod report_files;
@@ -69,6 +71,7 @@ pub use leave_one_out::*;
 pub use mesh_file::*;
 pub use params::*;
 pub use population::*;
+pub use population_spec::*;
 pub use progress::{Progress, Silent};
 pub use register_pair::{PairRegistration, register_pair};
 pub use report_files::BatchFacts;

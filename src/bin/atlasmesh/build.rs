@@ -1,7 +1,7 @@
 //! `atlasmesh build`: an atlas (shape model and mean mesh) from a population, saved.
 
 use crate::args::{PopArgs, RunArgs};
-use crate::population::{Population, corresponded, outlines_and_params, surfaces_and_params};
+use crate::population::{Read, corresponded, read};
 use crate::terminal::Terminal;
 use atlasmesh::study::{self, Progress};
 use clap::Args;
@@ -47,27 +47,26 @@ pub fn run(mut a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
     }
     a.pop.expand()?;
     if study::inputs_are_surfaces(&a.pop.shapes)? {
-        build(
-            &a,
-            surfaces_and_params(&a.pop, &a.run, a.no_mesh, term)?,
-            term,
-        )
+        build(&a, read::<3>(&a.pop, &a.run, a.no_mesh, term)?, term)
     } else {
-        build(&a, outlines_and_params(&a.pop, &a.run, term)?, term)
+        build(&a, read::<2>(&a.pop, &a.run, false, term)?, term)
     }
 }
 
 /// `atlasmesh build` on shapes of either dimension.
-fn build<const D: usize>(a: &BuildArgs, pop: Population<D>, term: &Terminal) -> anyhow::Result<()> {
-    let Population {
-        shapes,
-        mut inputs,
+fn build<const D: usize>(a: &BuildArgs, mut pop: Read<D>, term: &Terminal) -> anyhow::Result<()> {
+    let (shapes, template) = corresponded(&mut pop, 0, term)?;
+    let Read {
+        population:
+            atlasmesh::study::Population {
+                inputs,
+                meshes,
+                landmark_ids,
+                ..
+            },
         params,
-        meshes,
-        landmark_ids,
-        as_read: _,
+        ..
     } = pop;
-    let (shapes, template) = corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, 0, term)?;
     let meshes = meshes.as_deref();
     let params = &params;
     let step = if a.no_mesh {

@@ -1,7 +1,7 @@
 //! `atlasmesh loo`: the leave-one-out experiment (section 6.1).
 
 use crate::args::{PopArgs, RunArgs, dataset_name};
-use crate::population::{Population, corresponded, outlines_and_params, surfaces_and_params};
+use crate::population::{Read, corresponded, read};
 use crate::summary::{failures, print_summary};
 use crate::terminal::Terminal;
 use atlasmesh::report::Report;
@@ -28,26 +28,29 @@ pub struct LooArgs {
 pub fn run(mut a: LooArgs, term: &Terminal) -> anyhow::Result<()> {
     a.pop.expand()?;
     let r = if study::inputs_are_surfaces(&a.pop.shapes)? {
-        loo(&a, surfaces_and_params(&a.pop, &a.run, false, term)?, term)?
+        loo(&a, read::<3>(&a.pop, &a.run, false, term)?, term)?
     } else {
-        loo(&a, outlines_and_params(&a.pop, &a.run, term)?, term)?
+        loo(&a, read::<2>(&a.pop, &a.run, false, term)?, term)?
     };
     print_summary(&r, &a.out);
     failures(&r)
 }
 
 /// Leave-one-out on shapes of either dimension.
-fn loo<const D: usize>(a: &LooArgs, pop: Population<D>, term: &Terminal) -> anyhow::Result<Report> {
-    let Population {
-        shapes,
-        mut inputs,
+fn loo<const D: usize>(a: &LooArgs, mut pop: Read<D>, term: &Terminal) -> anyhow::Result<Report> {
+    let (corresponded, template) = corresponded(&mut pop, a.jobs, term)?;
+    let Read {
+        population:
+            study::Population {
+                shapes,
+                inputs,
+                meshes,
+                as_read,
+                ..
+            },
         params,
-        meshes,
-        landmark_ids,
-        as_read,
+        ..
     } = pop;
-    let (corresponded, template) =
-        corresponded(&a.pop, &shapes, &landmark_ids, &mut inputs, a.jobs, term)?;
     Ok(study::leave_one_out_of(
         study::Folds {
             corresponded: &corresponded,

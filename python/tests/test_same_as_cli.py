@@ -108,3 +108,35 @@ def test_vertebrae_through_cli_and_python_are_the_same(data, tmp_path):
     # And as a Python warning of the fit.
     with pytest.warns(UserWarning, match="floating component"):
         atlas.fit(str(held[0]))
+
+
+def test_femurs_cut_by_a_plane_make_the_atlas_of_cut_bones_the_command_line_makes(data, tmp_path):
+    """Six femurs whose shafts a field of view cut (their triangles beyond a plane across the
+    longest axis removed, written by meshio): `Atlas.build` puts them on a common cut as
+    `atlasmesh build` does, says so, and makes the same atlas file, with the cut face a set."""
+    meshio = pytest.importorskip("meshio")
+    femurs = data / "knee-distal-femur-synthetic-3d/femur"
+    files = []
+    for k in range(1, 7):
+        m = meshio.read(femurs / f"S{k:03d}_Femur.ply")
+        tri = m.cells_dict["triangle"]
+        axis = int(np.argmax(np.ptp(m.points, axis=0)))
+        # The shaft is the end with the smaller cross-section: cut 25 % of the length off it.
+        lo, hi = m.points[:, axis].min(), m.points[:, axis].max()
+        x = m.points[:, axis]
+        width = lambda sel: np.ptp(m.points[sel][:, (axis + 1) % 3])
+        shaft_high = width(x > hi - 0.1 * (hi - lo)) < width(x < lo + 0.1 * (hi - lo))
+        plane = hi - 0.25 * (hi - lo) if shaft_high else lo + 0.25 * (hi - lo)
+        keep = (x[tri] < plane).all(axis=1) if shaft_high else (x[tri] > plane).all(axis=1)
+        used = np.unique(tri[keep])
+        renumber = np.full(len(m.points), -1)
+        renumber[used] = np.arange(len(used))
+        out = tmp_path / f"cut{k}.ply"
+        meshio.write(out, meshio.Mesh(m.points[used], [("triangle", renumber[tri[keep]])]))
+        files.append(str(out))
+    cli_build(["--register", "--shapes"] + files, tmp_path / "cli.safetensors")
+    with pytest.warns(UserWarning, match="cut: every shape cut"):
+        atlas = atlasmesh.Atlas.build(files, register=True)
+    assert "CUT" in atlas.mean_mesh.sets["nodes"] and "CUT" in atlas.mean_mesh.sets["surfaces"]
+    atlas.save(str(tmp_path / "py.safetensors"))
+    assert (tmp_path / "py.safetensors").read_bytes() == (tmp_path / "cli.safetensors").read_bytes()

@@ -331,6 +331,13 @@ fn flat_cut_face<const D: usize>(
     let Some(rp) = &params.repair else {
         return Ok(None);
     };
+    // First the interior alone, the boundary (the flat face with it) held where it is; then,
+    // if that is not enough, the boundary sliding on the subject and the face flattened again.
+    let mut inner = flat.clone();
+    let (_, q) = repair_with_quality(&mut inner, None, rp, &quality)?;
+    if summarize(&q).scaled_jacobian_min >= bound {
+        return Ok(Some((inner, q)));
+    }
     repair_with_quality(&mut flat, Some(index), rp, &quality)?;
     if crate::mesh::flatten_cut_face(&mut flat).is_none() {
         return Ok(None);

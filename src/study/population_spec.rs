@@ -176,14 +176,13 @@ impl PopulationSpec {
             return Ok(None);
         }
         let file = [PathBuf::from(name)];
-        let t: Shape<D> = if D == 3 {
+        let mut t: Shape<D> = if D == 3 {
             load_surfaces(&file, &self.labels)?.remove(0).into_dim()
         } else {
             load_outlines_raw(&file, &self.outlines)?
                 .remove(0)
                 .into_dim()
         };
-        let mut t = t;
         let mut warning = None;
         if let Some(l) = self
             .registration

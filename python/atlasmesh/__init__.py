@@ -17,6 +17,7 @@ from ._atlasmesh import (  # noqa: F401
     Mesh,
     NotConvergedError,
     __version__,
+    leave_one_out as _leave_one_out,
     map_materials,
     read_label_surface,
     read_shapes,
@@ -170,6 +171,15 @@ _fit_many_any.__doc__ = _fit_many.__doc__
 _build_any.__doc__ = (_build.__doc__ or "") + (
     "\n\nShapes may also be PyVista PolyData or meshio Meshes (triangles; lines in 2D)."
 )
+def leave_one_out(shapes, out, *args, **kwargs):
+    return _leave_one_out(_shapes(shapes), out, *args, **kwargs)
+
+
+leave_one_out.__doc__ = (_leave_one_out.__doc__ or "") + (
+    "\n\nShapes may also be PyVista PolyData or meshio Meshes (triangles; lines in 2D)."
+)
+
+
 def _explained_variance_ratio(self):
     """Each mode's share of the population's variance, as scikit-learn's
     ``explained_variance_ratio_``: the steps of ``cumulative_variance``."""
@@ -188,6 +198,7 @@ __all__ = [
     "LabelMap",
     "read_label_surface",
     "map_materials",
+    "leave_one_out",
     "FitResult",
     "Mesh",
     "Error",

@@ -237,6 +237,23 @@ def map_materials(
     E), `volume` (mm³); `materials` (each group's E), `poisson`, and `summary` (the figures
     and checks of report.json). The checks' findings are warnings too."""
 
+def leave_one_out(
+    shapes: List[ShapeLike],
+    out: Union[str, PathLike],
+    modes: Optional[int] = None,
+    variance: float = 0.985,
+    element_size: Union[str, float] = "auto",
+    register: bool = False,
+    cut: Optional[str] = None,
+    closed: bool = True,
+    plots: bool = False,
+    jobs: Optional[int] = None,
+) -> Dict[str, Any]:
+    """The paper's leave-one-out (section 6.1) as `atlasmesh loo` runs it: for each shape the
+    atlas of the others, its fit, the morphed and repaired mesh and the measures, written into
+    `out` (pictures with plots=True). Shapes are read as Atlas.build reads them. Returns the
+    report (report.json as a dict); islands dropped and the cut come as UserWarnings."""
+
 def read_shapes(
     path: Union[str, PathLike], closed: bool = True, resample: Optional[int] = None
 ) -> List[Tuple[str, FloatArray, IntArray]]:

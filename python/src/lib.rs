@@ -9,8 +9,10 @@
 mod args;
 mod arrays;
 mod errors;
+mod leave_one_out;
 mod materials;
 mod model;
+mod population;
 mod read;
 mod result;
 
@@ -26,6 +28,7 @@ fn _atlasmesh(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read::read_shapes, m)?)?;
     m.add_function(wrap_pyfunction!(read::read_label_surface, m)?)?;
     m.add_function(wrap_pyfunction!(materials::map_materials, m)?)?;
+    m.add_function(wrap_pyfunction!(leave_one_out::leave_one_out, m)?)?;
     m.add_class::<read::LabelMap>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

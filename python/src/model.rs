@@ -63,7 +63,7 @@ type Reduced<'py> = (Bound<'py, PyAny>, (usize, Bound<'py, pyo3::types::PyBytes>
 /// A subject from `(points, facets)` arrays or a file path, read and cleaned as the command
 /// line reads it ([`atlasmesh::study::read_subjects`], [`atlasmesh::study::prepare_subject`]);
 /// a surface given as arrays is checked and oriented as a surface file is.
-fn subject_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Subject<D>> {
+pub(crate) fn subject_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Subject<D>> {
     if let Ok(map) = obj.extract::<PyRef<'_, crate::read::LabelMap>>() {
         let reading = atlasmesh::study::SubjectReading {
             labels: map.reading()?,
@@ -107,7 +107,7 @@ fn subject_of<const D: usize>(obj: &Bound<'_, PyAny>, k: usize) -> PyResult<Subj
 }
 
 /// The dimension of `(points, facets)` or a file.
-fn dimension_of(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+pub(crate) fn dimension_of(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
     if obj.extract::<PyRef<'_, crate::read::LabelMap>>().is_ok() {
         return Ok(3);
     }
@@ -296,7 +296,7 @@ impl Atlas {
     /// cut) comes as Python warnings.
     #[staticmethod]
     #[pyo3(signature = (shapes, modes=None, variance=None, element_size=None, register=false, mesh=true, cut=None, closed=true))]
-    #[allow(clippy::too_many_arguments, clippy::too_many_lines)]
+    #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
         shapes: &Bound<'_, PyList>,
@@ -312,46 +312,8 @@ impl Atlas {
             return Err(crate::errors::BadInputError::new_err("no shape given"));
         }
         let dim = dimension_of(&shapes.get_item(0)?)?;
-        let mut params = RunParams {
-            plots: false,
-            ..RunParams::default()
-        };
-        params.atlas.modes = match (modes, variance) {
-            (Some(m), _) => {
-                atlasmesh::model::ModeSelection::Count(args::size(m, "modes", 1, 100_000)?)
-            }
-            (None, Some(v)) => {
-                atlasmesh::model::ModeSelection::Variance(args::real(v, "variance")?)
-            }
-            (None, None) => atlasmesh::model::ModeSelection::Variance(0.985),
-        };
-        params.element_size = match element_size {
-            None => atlasmesh::mesh::ElementSize::Auto,
-            // A string ("auto", "2", "1.5%") or a length as a number.
-            Some(e) => match e.extract::<String>() {
-                Ok(t) => t.parse(),
-                Err(_) => args::real(e, "element_size")?.to_string().parse(),
-            }
-            .map_err(|m: String| {
-                crate::errors::BadInputError::new_err(format!("element_size: {m}"))
-            })?,
-        };
-        let cut: atlasmesh::study::CutChoice = match cut {
-            None => atlasmesh::study::CutChoice::WhenOpen,
-            Some(c) => c.parse().map_err(|e: atlasmesh::Error| {
-                crate::errors::BadInputError::new_err(format!("cut: {e}"))
-            })?,
-        };
-        let spec = atlasmesh::study::PopulationSpec {
-            outlines: atlasmesh::study::PopulationOptions {
-                closed,
-                ..Default::default()
-            },
-            point_sets: !mesh,
-            cut,
-            registration: register.then(Default::default),
-            ..Default::default()
-        };
+        let params = crate::population::run_params(modes, variance, element_size)?;
+        let spec = crate::population::spec(register, cut, closed, !mesh)?;
         fn go<const D: usize>(
             py: Python<'_>,
             list: &Bound<'_, PyList>,
@@ -359,30 +321,7 @@ impl Atlas {
             spec: &atlasmesh::study::PopulationSpec,
             mesh: bool,
         ) -> PyResult<RustAtlas<D>> {
-            // The population value the command line reads: a file as `build` reads it (a CSV
-            // holds one shape or several), arrays and label maps as `fit` takes them; cleaned
-            // (islands dropped), cut and registered as the command line does.
-            let mut loaded: Vec<(Shape<D>, Vec<String>)> = Vec::new();
-            for (k, o) in list.iter().enumerate() {
-                let file = o
-                    .extract::<PathBuf>()
-                    .ok()
-                    .filter(|_| o.extract::<PyRef<'_, crate::read::LabelMap>>().is_err());
-                match file {
-                    Some(p) => loaded.extend(
-                        atlasmesh::study::PopulationSpec {
-                            shapes: vec![p],
-                            ..spec.clone()
-                        }
-                        .load::<D>()
-                        .map_err(to_py)?,
-                    ),
-                    None => {
-                        let s = subject_of::<D>(&o, k)?;
-                        loaded.push((s.shape, s.warnings));
-                    }
-                }
-            }
+            let loaded = crate::population::loaded::<D>(list, spec)?;
             let (atlas, warnings) = py
                 .detach(|| {
                     let mut population = atlasmesh::study::Population::new(loaded, spec)?;
@@ -409,16 +348,7 @@ impl Atlas {
                     Ok((atlas, warnings))
                 })
                 .map_err(to_py)?;
-            // What the command line says on stderr, as Python warnings.
-            for w in warnings {
-                let text = std::ffi::CString::new(w.replace('\0', " ")).unwrap_or_default();
-                PyErr::warn(
-                    py,
-                    &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-                    &text,
-                    1,
-                )?;
-            }
+            crate::population::warn_all(py, warnings)?;
             Ok(atlas)
         }
         let inner = if dim == 3 {

@@ -140,3 +140,32 @@ def test_femurs_cut_by_a_plane_make_the_atlas_of_cut_bones_the_command_line_make
     assert "CUT" in atlas.mean_mesh.sets["nodes"] and "CUT" in atlas.mean_mesh.sets["surfaces"]
     atlas.save(str(tmp_path / "py.safetensors"))
     assert (tmp_path / "py.safetensors").read_bytes() == (tmp_path / "cli.safetensors").read_bytes()
+
+
+def test_a_leave_one_out_from_python_is_the_command_lines(data, tmp_path):
+    """`atlasmesh.leave_one_out` and `atlasmesh loo` on the 40 hands (one CSV, open outlines,
+    5 modes): the same subjects with the same measures (times aside) and mesh files."""
+    csv = data / "imm-hands-2d/hands_long.csv"
+    run = subprocess.run(
+        [command_line(), "loo", "--quiet", "--no-plots", "--shapes", str(csv), "--open"]
+        + ["--modes", "5", "--out", str(tmp_path / "cli")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    cli = json.loads((tmp_path / "cli" / "report.json").read_text())
+    py = atlasmesh.leave_one_out([str(csv)], tmp_path / "py", modes=5, closed=False)
+    assert py == json.loads((tmp_path / "py" / "report.json").read_text())
+    assert len(py["subjects"]) == 40 and not py.get("failed")
+    timing = ("seconds", "heap_peak_mb")
+    for a, b in zip(cli["subjects"], py["subjects"]):
+        assert a["name"] == b["name"]
+        for k in a:
+            if not any(t in k for t in timing):
+                assert a[k] == b[k], (a["name"], k)
+        # The same mesh file, byte for byte.
+        mesh = f"{b['name']}_mesh.vtu"
+        assert (tmp_path / "py" / mesh).read_bytes() == (tmp_path / "cli" / mesh).read_bytes()
+    with pytest.raises(atlasmesh.BadInputError, match="jobs"):
+        atlasmesh.leave_one_out([str(csv)], tmp_path / "bad", jobs=10**9)

@@ -14,6 +14,7 @@ use crate::model::{Atlas, ModeSelection};
 use crate::report::{FailedSubject, Report, SubjectReport};
 use rayon::prelude::*;
 use std::path::Path;
+use std::sync::Arc;
 
 /// What the report of a leave-one-out says about its population.
 #[derive(Clone, Debug, Default)]
@@ -37,19 +38,7 @@ pub fn leave_one_out<const D: usize>(
     jobs: usize,
     progress: &dyn Progress,
 ) -> Result<Report> {
-    leave_one_out_of(
-        Folds {
-            corresponded: shapes,
-            subjects: shapes,
-            meshes: None,
-            population: &Default::default(),
-        },
-        dataset,
-        params,
-        out,
-        jobs,
-        progress,
-    )
+    leave_one_out_of(Folds::of(shapes), dataset, params, out, jobs, progress)
 }
 
 /// The folds of a leave-one-out: the atlas of fold `k` is built from `corresponded` without
@@ -136,10 +125,10 @@ struct Variant {
 }
 
 impl Variant {
-    /// The atlas `built` cut to this variant's modes.
-    fn atlas<const D: usize>(&self, built: &Atlas<D>) -> Result<Atlas<D>> {
+    /// The atlas `built` cut to this variant's modes (`built` itself when not cut).
+    fn atlas<const D: usize>(&self, built: &Arc<Atlas<D>>) -> Result<Arc<Atlas<D>>> {
         match self.modes {
-            Some(m) => built.truncate(m),
+            Some(m) => Ok(Arc::new(built.truncate(m)?)),
             None => Ok(built.clone()),
         }
     }
@@ -170,7 +159,7 @@ fn run_folds<const D: usize>(
     // The full atlas, for the variance figures and to check the population once.
     let step = "atlas of all shapes (GPA, PCA, mesh of the mean)";
     progress.step_started(step);
-    let full = atlas_of(shapes, meshes, params)?;
+    let full = Arc::new(atlas_of(shapes, meshes, params)?);
     progress.step_finished(step);
     // A population put on a common cut: every fold's atlas keeps the cap and the CUT face.
     let cut = super::cut_facets(shapes, &population.inputs);
@@ -225,7 +214,7 @@ fn run_folds<const D: usize>(
     for ((v, reports), failed) in variants.iter().zip(reports).zip(failed) {
         out.push(finish_report(
             &v.out,
-            &v.atlas(&full)?,
+            &*v.atlas(&full)?,
             None,
             reports,
             &v.params,
@@ -241,6 +230,25 @@ fn run_folds<const D: usize>(
         )?);
     }
     Ok(out)
+}
+
+/// No population facts (shapes given in correspondence, as read).
+static NO_FACTS: PopulationFacts = PopulationFacts {
+    inputs: Vec::new(),
+    template: None,
+};
+
+impl<'a, const D: usize> Folds<'a, D> {
+    /// The folds of `shapes` in correspondence, each fitted as it is, with the automatic mesh
+    /// and no facts of a reading.
+    pub fn of(shapes: &'a [Shape<D>]) -> Self {
+        Folds {
+            corresponded: shapes,
+            subjects: shapes,
+            meshes: None,
+            population: &NO_FACTS,
+        }
+    }
 }
 
 impl<const D: usize> Folds<'_, D> {
@@ -296,6 +304,9 @@ fn fold<const D: usize>(
         .map(|m| (0..m.len()).filter(others).map(|i| m[i].clone()).collect());
     let mut built = atlas_of(&training, training_meshes.as_deref(), params)?;
     super::build::put_on_cut(&mut built, cut_facets)?;
+    let built = Arc::new(built);
+    // The morph depends on the mean and its mesh only: one for every number of modes.
+    let morpher = built.morpher(&params.morph)?;
     let atlas_seconds = t0.elapsed().as_secs_f64();
     let subject = &folds.subjects[k];
     // A bone the field of view cut (open where the image ends), fitted as `fit` takes a label
@@ -305,9 +316,8 @@ fn fold<const D: usize>(
         .iter()
         .map(|v| {
             let t1 = std::time::Instant::now();
-            let atlas = std::sync::Arc::new(v.atlas(&built)?);
+            let atlas = v.atlas(&built)?;
             let fitter = Fitter::new(atlas.clone());
-            let morpher = atlas.morpher(&v.params.morph)?;
             let mut partial = v.params.clone();
             partial.fit.partial = true;
             let params = if cut { &partial } else { &v.params };

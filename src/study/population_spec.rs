@@ -256,15 +256,17 @@ impl<const D: usize> Population<D> {
     /// Puts a population of surfaces on the common cut `spec.cut` asks for (see
     /// [`CutChoice`]; never for point sets by default), keeping the shapes as read.
     fn put_on_cut(&mut self, spec: &PopulationSpec) -> Result<()> {
-        let mut shapes: Vec<Shape<3>> = self.shapes.iter().map(|s| s.clone().into_dim()).collect();
+        let open = |s: &Shape<D>| is_cut_by_a_plane(&s.clone().into_dim::<3>());
         let cut = match spec.cut {
             CutChoice::Never => return Ok(()),
             CutChoice::Always(c) => c,
-            CutChoice::WhenOpen if !spec.point_sets && shapes.iter().any(is_cut_by_a_plane) => {
+            CutChoice::WhenOpen if !spec.point_sets && self.shapes.iter().any(open) => {
                 CutSpec::Auto
             }
             CutChoice::WhenOpen => return Ok(()),
         };
+        // (the shapes as read are kept: the clone only when they are cut)
+        let mut shapes: Vec<Shape<3>> = self.shapes.iter().map(|s| s.clone().into_dim()).collect();
         let length = cut_population(&mut shapes, &mut self.inputs, &cut)?;
         self.notes.push(format!(
             "cut: every shape cut {length:.4} from its far end and closed by a flat cap{}",

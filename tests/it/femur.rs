@@ -29,12 +29,7 @@ fn femur_leave_one_out_with_15_and_5_modes() {
     };
     // Each fold's atlas and mean mesh built once, cut to 15 and to 5 modes.
     let reports = atlasmesh::study::leave_one_out_by_modes(
-        atlasmesh::study::Folds {
-            corresponded: &shapes,
-            subjects: &shapes,
-            meshes: None,
-            population: &Default::default(),
-        },
+        atlasmesh::study::Folds::of(&shapes),
         "femur",
         &params,
         &[15, 5],

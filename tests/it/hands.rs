@@ -253,12 +253,7 @@ fn a_leave_one_out_by_modes_is_the_runs_one_at_a_time() {
     };
     let out = common::temp_dir("hands-loo-by-modes");
     let both = atlasmesh::study::leave_one_out_by_modes(
-        atlasmesh::study::Folds {
-            corresponded: &shapes,
-            subjects: &shapes,
-            meshes: None,
-            population: &Default::default(),
-        },
+        atlasmesh::study::Folds::of(&shapes),
         "imm-hands-2d",
         &params,
         &[6, 3],

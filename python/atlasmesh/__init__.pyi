@@ -154,6 +154,10 @@ class Atlas:
         mesh: bool = True,
         cut: Optional[str] = None,
         closed: bool = True,
+        landmarks: Optional[Union[str, PathLike, List[Union[str, PathLike]]]] = None,
+        template: Optional[Union[str, PathLike]] = None,
+        template_landmarks: Optional[Union[str, PathLike]] = None,
+        template_mesh: Optional[Union[str, PathLike, List[Union[str, PathLike]]]] = None,
     ) -> "Atlas":
         """An atlas of shapes (files, (points, facets) pairs, LabelMaps, PyVista PolyData or
         meshio Meshes), read, cleaned, cut and registered as `atlasmesh build` does (a CSV file
@@ -162,8 +166,13 @@ class Atlas:
         (element_size a length in the shapes' unit, a share "1.5%", or "auto");
         register=True when the shapes are not in correspondence (FFD registration, eq. 2);
         cut as --cut ("auto", "S:60", "none"; by default when a surface is open where a plane
-        cut it); closed=False for open outlines (--open). What the command line says on
-        stderr (an island dropped, the cut) comes as a UserWarning."""
+        cut it); closed=False for open outlines (--open); landmarks: landmark files (one
+        CSV for all shapes, or one file per shape in their order) guiding the registration and
+        the fit (--landmarks); template: the registration's template, a shape's name or a
+        surface file outside the population (--template), with its template_landmarks;
+        template_mesh: 3D, a volume mesh of the first shape (or one per shape) instead of the
+        automatic mesh (--template-mesh). What the command line says on stderr (an island
+        dropped, the cut) comes as a UserWarning."""
     def save(self, path: Union[str, PathLike]) -> None: ...
     @property
     def dimension(self) -> int: ...
@@ -248,11 +257,16 @@ def leave_one_out(
     closed: bool = True,
     plots: bool = False,
     jobs: Optional[int] = None,
+    landmarks: Optional[Union[str, PathLike, List[Union[str, PathLike]]]] = None,
+    template: Optional[Union[str, PathLike]] = None,
+    template_landmarks: Optional[Union[str, PathLike]] = None,
+    template_mesh: Optional[Union[str, PathLike, List[Union[str, PathLike]]]] = None,
 ) -> Dict[str, Any]:
     """The paper's leave-one-out (section 6.1) as `atlasmesh loo` runs it: for each shape the
     atlas of the others, its fit, the morphed and repaired mesh and the measures, written into
-    `out` (pictures with plots=True). Shapes are read as Atlas.build reads them. Returns the
-    report (report.json as a dict); islands dropped and the cut come as UserWarnings."""
+    `out` (pictures with plots=True). Shapes, landmarks and templates are read as Atlas.build
+    reads them. Returns the report (report.json as a dict; its "failed" list empty when no
+    subject failed); islands dropped and the cut come as UserWarnings."""
 
 def read_shapes(
     path: Union[str, PathLike], closed: bool = True, resample: Optional[int] = None

@@ -3,7 +3,7 @@
 
 use crate::errors::{BadInputError, to_py};
 use crate::model::dimension_of;
-use crate::population::{loaded, run_params, spec, warn_all};
+use crate::population::{Correspondence, loaded, run_params, spec, warn_all};
 use atlasmesh::study::{self, PopulationSpec, RunParams};
 use pyo3::prelude::*;
 use pyo3::types::PyList;
@@ -13,9 +13,10 @@ use std::path::{Path, PathBuf};
 /// meshio shapes, read as `Atlas.build` reads them): for each shape the atlas of the others,
 /// its fit, the morphed and repaired mesh and the measures, written into `out` as
 /// `atlasmesh loo` writes them (pictures with `plots=True`). Returns the report (`report.json`
-/// as a dict); what the command line says on stderr comes as `UserWarning`s.
+/// as a dict); what the command line says on stderr comes as `UserWarning`s. `landmarks`,
+/// `template`, `template_landmarks` and `template_mesh` as `Atlas.build` takes them.
 #[pyfunction]
-#[pyo3(signature = (shapes, out, modes=None, variance=None, element_size=None, register=false, cut=None, closed=true, plots=false, jobs=None))]
+#[pyo3(signature = (shapes, out, modes=None, variance=None, element_size=None, register=false, cut=None, closed=true, plots=false, jobs=None, landmarks=None, template=None, template_landmarks=None, template_mesh=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn leave_one_out(
     py: Python<'_>,
@@ -29,6 +30,10 @@ pub fn leave_one_out(
     closed: bool,
     plots: bool,
     jobs: Option<&Bound<'_, PyAny>>,
+    landmarks: Option<&Bound<'_, PyAny>>,
+    template: Option<&Bound<'_, PyAny>>,
+    template_landmarks: Option<&Bound<'_, PyAny>>,
+    template_mesh: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
     if shapes.is_empty() {
         return Err(BadInputError::new_err("no shape given"));
@@ -37,7 +42,13 @@ pub fn leave_one_out(
     let dim = dimension_of(&shapes.get_item(0)?)?;
     let mut params = run_params(modes, variance, element_size)?;
     params.plots = plots;
-    let spec = spec(register, cut, closed, false)?;
+    let with = Correspondence {
+        landmarks,
+        template,
+        template_landmarks,
+        template_mesh,
+    };
+    let spec = spec(register, cut, closed, false, &with)?;
     let (json, warnings) = if dim == 3 {
         run::<3>(py, shapes, &params, &spec, &out, jobs)?
     } else {

@@ -291,11 +291,16 @@ impl Atlas {
     /// alone. `register=True` brings raw shapes into correspondence first (FFD registration
     /// of a template, eq. 1-2). `cut`: surfaces put on a common cut as the command line's
     /// `--cut` (`"auto"`, `"S:60"`, `"none"`; by default when a shape is open where a plane
-    /// cut it). `closed=False`: outlines in CSV and text files are open (`--open`). Files are
-    /// read as `atlasmesh build` reads them; what it says on stderr (an island dropped, the
-    /// cut) comes as Python warnings.
+    /// cut it). `closed=False`: outlines in CSV and text files are open (`--open`).
+    /// `landmarks`: landmark files (one CSV for all shapes, or one file per shape in their
+    /// order: Scalismo JSON, Slicer markups, `.pts`, CSV), which guide the registration and
+    /// the fit; `template`: the registration's template, a shape's name or a surface file
+    /// outside the population, with its `template_landmarks`; `template_mesh`: 3D, your own
+    /// volume mesh of the first shape (or one per shape) instead of the automatic mesh. Files
+    /// are read as `atlasmesh build` reads them; what it says on stderr (an island dropped,
+    /// the cut) comes as Python warnings.
     #[staticmethod]
-    #[pyo3(signature = (shapes, modes=None, variance=None, element_size=None, register=false, mesh=true, cut=None, closed=true))]
+    #[pyo3(signature = (shapes, modes=None, variance=None, element_size=None, register=false, mesh=true, cut=None, closed=true, landmarks=None, template=None, template_landmarks=None, template_mesh=None))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -307,13 +312,23 @@ impl Atlas {
         mesh: bool,
         cut: Option<&str>,
         closed: bool,
+        landmarks: Option<&Bound<'_, PyAny>>,
+        template: Option<&Bound<'_, PyAny>>,
+        template_landmarks: Option<&Bound<'_, PyAny>>,
+        template_mesh: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         if shapes.is_empty() {
             return Err(crate::errors::BadInputError::new_err("no shape given"));
         }
         let dim = dimension_of(&shapes.get_item(0)?)?;
         let params = crate::population::run_params(modes, variance, element_size)?;
-        let spec = crate::population::spec(register, cut, closed, !mesh)?;
+        let with = crate::population::Correspondence {
+            landmarks,
+            template,
+            template_landmarks,
+            template_mesh,
+        };
+        let spec = crate::population::spec(register, cut, closed, !mesh, &with)?;
         fn go<const D: usize>(
             py: Python<'_>,
             list: &Bound<'_, PyList>,
@@ -326,20 +341,7 @@ impl Atlas {
                 .detach(|| {
                     let mut population = atlasmesh::study::Population::new(loaded, spec)?;
                     let c = population.corresponded(spec, 0, &atlasmesh::study::Silent)?;
-                    let atlas = if mesh {
-                        let mut atlas = atlasmesh::study::atlas_of(
-                            &c.shapes,
-                            population.meshes.as_deref(),
-                            params,
-                        )?;
-                        atlasmesh::study::put_on_cut(
-                            &mut atlas,
-                            &atlasmesh::study::cut_facets(&c.shapes, &population.inputs),
-                        )?;
-                        atlas
-                    } else {
-                        RustAtlas::build_model(&c.shapes, &params.atlas)?
-                    };
+                    let atlas = population.atlas(&c.shapes, params, mesh)?;
                     let mut warnings: Vec<String> = population
                         .warnings()
                         .map(|(n, w)| format!("{n}: {w}"))

@@ -37,13 +37,52 @@ pub(crate) fn run_params(
     Ok(params)
 }
 
-/// The population's spec from Python's `register`, `cut` (as `--cut`), `closed` and
-/// `point_sets` (a model without a mesh).
+/// The files that bring shapes into correspondence, as Python gives them (each a path, or a
+/// list of paths where several are taken): the command line's `--landmarks`, `--template`,
+/// `--template-landmarks` and `--template-mesh`.
+pub(crate) struct Correspondence<'a, 'py> {
+    /// Landmark files: one CSV for all shapes, or one file per shape in their order.
+    pub landmarks: Option<&'a Bound<'py, PyAny>>,
+    /// The registration's template: a shape's name or a shape file outside the population.
+    pub template: Option<&'a Bound<'py, PyAny>>,
+    /// The landmarks of a template file.
+    pub template_landmarks: Option<&'a Bound<'py, PyAny>>,
+    /// 3D: template volume meshes, one per shape (or one for the first).
+    pub template_mesh: Option<&'a Bound<'py, PyAny>>,
+}
+
+/// `obj` as paths: one path (`str`, `os.PathLike`) or a list or tuple of them; `name` is the
+/// argument's name in the error.
+fn paths(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<PathBuf>> {
+    if let Ok(p) = obj.extract::<PathBuf>() {
+        return Ok(vec![p]);
+    }
+    let bad = || {
+        BadInputError::new_err(format!(
+            "{name}: a path or a list of paths, not a {}",
+            obj.get_type()
+                .name()
+                .map_or_else(|_| "?".into(), |n| n.to_string())
+        ))
+    };
+    if obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(bad());
+    }
+    let items = obj.try_iter().map_err(|_| bad())?;
+    items
+        .map(|i| i.and_then(|i| i.extract::<PathBuf>()).map_err(|_| bad()))
+        .collect()
+}
+
+/// The population's spec from Python's `register`, `cut` (as `--cut`), `closed`,
+/// `point_sets` (a model without a mesh) and the files that bring shapes into correspondence;
+/// a template without `register` is refused as the command line refuses it.
 pub(crate) fn spec(
     register: bool,
     cut: Option<&str>,
     closed: bool,
     point_sets: bool,
+    with: &Correspondence<'_, '_>,
 ) -> PyResult<PopulationSpec> {
     let cut: CutChoice = match cut {
         None => CutChoice::WhenOpen,
@@ -51,14 +90,47 @@ pub(crate) fn spec(
             .parse()
             .map_err(|e: atlasmesh::Error| BadInputError::new_err(format!("cut: {e}")))?,
     };
+    let template = with
+        .template
+        .map(|t| match paths(t, "template")?.as_slice() {
+            [one] => Ok(one.to_string_lossy().into_owned()),
+            _ => Err(BadInputError::new_err(
+                "template: one shape's name or one shape file",
+            )),
+        })
+        .transpose()?;
+    let template_landmarks = with
+        .template_landmarks
+        .map(|t| match paths(t, "template_landmarks")?.as_slice() {
+            [one] => Ok(one.clone()),
+            _ => Err(BadInputError::new_err("template_landmarks: one file")),
+        })
+        .transpose()?;
+    if !register && template.is_some() {
+        return Err(BadInputError::new_err(
+            "template= chooses the registration's template: it needs register=True",
+        ));
+    }
+    if template.is_none() && template_landmarks.is_some() {
+        return Err(BadInputError::new_err(
+            "template_landmarks= are the landmarks of a template file: it needs template=",
+        ));
+    }
+    let list = |o: Option<&Bound<'_, PyAny>>, name| o.map_or(Ok(Vec::new()), |o| paths(o, name));
     Ok(PopulationSpec {
+        landmarks: list(with.landmarks, "landmarks")?,
+        template_meshes: list(with.template_mesh, "template_mesh")?,
         outlines: PopulationOptions {
             closed,
             ..Default::default()
         },
         point_sets,
         cut,
-        registration: register.then(Default::default),
+        registration: register.then(|| atlasmesh::study::RegistrationSpec {
+            template,
+            template_landmarks,
+            ..Default::default()
+        }),
         ..Default::default()
     })
 }

@@ -407,8 +407,9 @@ pub struct Report {
     pub subjects: Vec<SubjectReport>,
     /// Figures over all subjects.
     pub summary: Summary,
-    /// Batch fit: the subjects that failed, with the reason.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// The subjects that failed, with the reason (a batch fit, a leave-one-out); always
+    /// written, empty when none failed.
+    #[serde(default)]
     pub failed: Vec<FailedSubject>,
     /// Batch fit: the shard (`I/N`) this report covers.
     #[serde(default, skip_serializing_if = "Option::is_none")]

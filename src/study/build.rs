@@ -93,7 +93,7 @@ pub fn build<const D: usize>(
 
 /// Names the atlas's landmarks by `ids` (the ids of the population's landmark files, one per
 /// landmark; otherwise they stay unnamed and are paired by order).
-fn name_landmarks<const D: usize>(atlas: &mut Atlas<D>, ids: &[String]) {
+pub(super) fn name_landmarks<const D: usize>(atlas: &mut Atlas<D>, ids: &[String]) {
     if ids.len() == atlas.landmarks.len() {
         atlas.landmark_ids = ids.to_vec();
     }

@@ -6,6 +6,7 @@
 use super::Progress;
 use super::common_cut::{CutSpec, cut_population, is_cut_by_a_plane};
 use super::label_map::LabelReading;
+use super::params::RunParams;
 use super::population::{
     LandmarkPairing, PopulationOptions, Template, attach_landmarks, attach_landmarks_paired,
     clean_population, correspond, load_outlines_raw, load_point_sets, load_population,
@@ -14,6 +15,7 @@ use super::population::{
 use crate::error::{Error, Result};
 use crate::geometry::Shape;
 use crate::mesh::FeMesh;
+use crate::model::Atlas;
 use crate::register::RegisterParams;
 
 use crate::report::InputReport;
@@ -116,6 +118,29 @@ pub struct Population<const D: usize> {
     /// What the reading did that a user should hear of, besides each shape's warnings (in
     /// `inputs`): the common cut.
     pub notes: Vec<String>,
+}
+
+impl<const D: usize> Population<D> {
+    /// The atlas of this population once its shapes are in correspondence (`shapes`,
+    /// [`Population::corresponded`]), in memory: GPA, PCA and, with `mesh`, the mean mesh
+    /// (the population's template meshes if it has them) with the common cut's face as the
+    /// `CUT` set; the landmarks named by the population's ids. The atlas `build` writes
+    /// (Python's `Atlas.build` gives it).
+    ///
+    /// # Errors
+    /// As [`super::atlas_of`] and [`Atlas::build_model`].
+    pub fn atlas(&self, shapes: &[Shape<D>], params: &RunParams, mesh: bool) -> Result<Atlas<D>> {
+        let mut atlas = if mesh {
+            super::atlas_of(shapes, self.meshes.as_deref(), params)?
+        } else {
+            Atlas::build_model(shapes, &params.atlas)?
+        };
+        super::build::name_landmarks(&mut atlas, &self.landmark_ids);
+        if mesh {
+            super::put_on_cut(&mut atlas, &super::cut_facets(shapes, &self.inputs))?;
+        }
+        Ok(atlas)
+    }
 }
 
 impl PopulationSpec {

@@ -38,6 +38,8 @@ fn demo_writes_meshes_report_and_plots() {
     assert_eq!(r["summary"]["subjects"], 6);
     assert_eq!(r["summary"]["meshes_valid"], 6);
     assert_eq!(r["summary"]["succeeded"], 6);
+    // The schema is the same whether or not a subject failed: `failed` is always there.
+    assert_eq!(r["failed"], serde_json::json!([]));
     assert_eq!(r["dimension"], 2);
     for f in [
         "cumulative_variance.png",

@@ -65,9 +65,7 @@ fn paths(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<PathBuf>> {
                 .map_or_else(|_| "?".into(), |n| n.to_string())
         ))
     };
-    if obj.is_instance_of::<pyo3::types::PyString>() {
-        return Err(bad());
-    }
+    // (A `str` is one path above: it is never taken as a list of characters.)
     let items = obj.try_iter().map_err(|_| bad())?;
     items
         .map(|i| i.and_then(|i| i.extract::<PathBuf>()).map_err(|_| bad()))

@@ -614,16 +614,12 @@ fn smooth(
         l.sort_unstable();
         l.dedup();
     }
-    let worst = |mesh: &FeMesh<3>, v: usize| -> f64 {
-        incident[v]
-            .iter()
-            .map(|&e| {
-                let el = mesh.element(e);
-                let sj = element_quality_at(ElementKind::Hex8, el, &mesh.nodes).scaled_jacobian_min;
-                sj.min(EDGE_RATIO_WEIGHT / edge_ratio(ElementKind::Hex8, el, &mesh.nodes))
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
+    let FeMesh {
+        nodes,
+        connectivity,
+        ..
+    } = mesh;
+    let mut q = SmoothingQuality::new(connectivity, &incident, nodes);
     for _ in 0..passes {
         for v in 0..nn {
             if neighbours[v].is_empty() {
@@ -631,63 +627,134 @@ fn smooth(
             }
             let mut target = [0.0; 3];
             for &u in &neighbours[v] {
-                target = add(target, mesh.nodes[u]);
+                target = add(target, nodes[u]);
             }
             target = scale(target, 1.0 / neighbours[v].len() as f64);
             if on_surface[v] {
                 target = surface.closest(&target).point;
             }
-            let before = worst(mesh, v);
-            let old = mesh.nodes[v];
-            mesh.nodes[v] = target;
-            if worst(mesh, v) < before {
-                mesh.nodes[v] = old;
+            let before = q.worst(v);
+            let old = nodes[v];
+            nodes[v] = target;
+            if q.worst_at(nodes, v) < before {
+                nodes[v] = old;
+            } else {
+                q.keep(v);
             }
         }
         // Nodes around poor elements: a pattern search on the worst incident scaled Jacobian
         // (steps along the axes, shrinking), surface nodes kept on the surface.
         for v in 0..nn {
-            let mut best = worst(mesh, v);
-            if best >= POOR || neighbours[v].is_empty() {
-                continue;
+            if q.worst(v) < POOR && !neighbours[v].is_empty() {
+                pattern_search(v, nodes, &mut q, on_surface[v].then_some(surface), h);
             }
-            for step in [0.5 * h, 0.25 * h, 0.12 * h, 0.06 * h, 0.03 * h] {
-                let mut improved = true;
-                let mut rounds = 0;
-                while improved && rounds < 20 {
-                    improved = false;
-                    rounds += 1;
-                    let start = mesh.nodes[v];
-                    for dir in 0..27 {
-                        if dir == 13 {
-                            continue;
-                        }
-                        {
-                            let o = [
-                                (dir % 3) as f64 - 1.0,
-                                ((dir / 3) % 3) as f64 - 1.0,
-                                (dir / 9) as f64 - 1.0,
-                            ];
-                            let mut p = start;
-                            for d in 0..3 {
-                                p[d] += o[d] * step;
-                            }
-                            if on_surface[v] {
-                                p = surface.closest(&p).point;
-                            }
-                            let old = mesh.nodes[v];
-                            mesh.nodes[v] = p;
-                            let w = worst(mesh, v);
-                            if w > best + 1e-9 {
-                                best = w;
-                                improved = true;
-                            } else {
-                                mesh.nodes[v] = old;
-                            }
-                        }
-                    }
+        }
+    }
+}
+
+/// The pattern search of [`smooth`] at node `v`: steps of shrinking length along the axes and
+/// diagonals, each kept when it raises the worst quality of the node's elements; on the
+/// surface (when given) each trial goes to its closest point.
+fn pattern_search(
+    v: usize,
+    nodes: &mut [Point<3>],
+    q: &mut SmoothingQuality<'_>,
+    surface: Option<&ClosestPointIndex<3>>,
+    h: f64,
+) {
+    let mut best = q.worst(v);
+    for step in [0.5 * h, 0.25 * h, 0.12 * h, 0.06 * h, 0.03 * h] {
+        let mut improved = true;
+        let mut rounds = 0;
+        while improved && rounds < 20 {
+            improved = false;
+            rounds += 1;
+            let start = nodes[v];
+            for dir in 0..27 {
+                if dir == 13 {
+                    continue;
+                }
+                let o = [
+                    (dir % 3) as f64 - 1.0,
+                    ((dir / 3) % 3) as f64 - 1.0,
+                    (dir / 9) as f64 - 1.0,
+                ];
+                let mut p = start;
+                for d in 0..3 {
+                    p[d] += o[d] * step;
+                }
+                if let Some(surface) = surface {
+                    p = surface.closest(&p).point;
+                }
+                let old = nodes[v];
+                nodes[v] = p;
+                let w = q.worst_at(nodes, v);
+                if w > best + 1e-9 {
+                    best = w;
+                    improved = true;
+                    q.keep(v);
+                } else {
+                    nodes[v] = old;
                 }
             }
+        }
+    }
+}
+
+/// Every hexahedron's quality for [`smooth`] (the smaller of its scaled Jacobian and
+/// [`EDGE_RATIO_WEIGHT`] over its edge ratio), kept up to date as nodes move: a node's worst
+/// before a move is read, and only a trial position's elements are computed (kept when the
+/// move is). The same moves as computing both, with a third of the corner evaluations.
+struct SmoothingQuality<'a> {
+    connectivity: &'a [usize],
+    incident: &'a [Vec<usize>],
+    cached: Vec<f64>,
+    /// The qualities of the last trial's elements, in the order of `incident[v]`.
+    trial: Vec<f64>,
+}
+
+impl<'a> SmoothingQuality<'a> {
+    fn new(connectivity: &'a [usize], incident: &'a [Vec<usize>], nodes: &[Point<3>]) -> Self {
+        let mut q = SmoothingQuality {
+            connectivity,
+            incident,
+            cached: Vec::new(),
+            trial: Vec::new(),
+        };
+        q.cached = (0..connectivity.len() / 8)
+            .map(|e| q.of(nodes, e))
+            .collect();
+        q
+    }
+
+    fn of(&self, nodes: &[Point<3>], e: usize) -> f64 {
+        let el = &self.connectivity[e * 8..e * 8 + 8];
+        let sj = element_quality_at(ElementKind::Hex8, el, nodes).scaled_jacobian_min;
+        sj.min(EDGE_RATIO_WEIGHT / edge_ratio(ElementKind::Hex8, el, nodes))
+    }
+
+    /// The worst quality of node `v`'s elements as kept.
+    fn worst(&self, v: usize) -> f64 {
+        self.incident[v]
+            .iter()
+            .map(|&e| self.cached[e])
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The worst quality of node `v`'s elements at `nodes` (a trial position of `v`).
+    fn worst_at(&mut self, nodes: &[Point<3>], v: usize) -> f64 {
+        let mut trial = std::mem::take(&mut self.trial);
+        trial.clear();
+        trial.extend(self.incident[v].iter().map(|&e| self.of(nodes, e)));
+        let worst = trial.iter().copied().fold(f64::INFINITY, f64::min);
+        self.trial = trial;
+        worst
+    }
+
+    /// Keeps the last trial of node `v` (its elements' qualities as [`Self::worst_at`] found).
+    fn keep(&mut self, v: usize) {
+        for (&e, &q) in self.incident[v].iter().zip(&self.trial) {
+            self.cached[e] = q;
         }
     }
 }

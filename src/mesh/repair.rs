@@ -320,6 +320,13 @@ impl<'a, const D: usize> Repairer<'a, D> {
     ) -> usize {
         let mut ring = 1;
         let mut sweeps = 0;
+        // A node's relaxation depends only on the nodes of its elements: one that stayed put
+        // stays put again until one of them moves, and is skipped (the same result, without
+        // its trials). `stamp[m]`: the clock when node m last moved; `settled[n]`: the clock
+        // when node n's relaxation last left it in place (0: never).
+        let mut clock = 1u64;
+        let mut stamp = vec![0u64; nodes.len()];
+        let mut settled = vec![0u64; nodes.len()];
         for sweep in 0..max_sweeps {
             sweeps = sweep + 1;
             let bad: Vec<usize> = (0..q.len()).filter(|&e| q[e] < self.bound).collect();
@@ -329,10 +336,21 @@ impl<'a, const D: usize> Repairer<'a, D> {
             let worst_before = bad.iter().map(|&e| q[e]).fold(f64::INFINITY, f64::min);
             let mut gained = false;
             for n in self.active_nodes(&bad, ring, q) {
+                if settled[n] != 0
+                    && self.incident[n]
+                        .iter()
+                        .all(|&e| self.element(e).iter().all(|&m| stamp[m] <= settled[n]))
+                {
+                    continue;
+                }
                 let x0 = nodes[n];
                 let bx = self.relax(n, nodes);
                 nodes[n] = bx;
-                if bx != x0 {
+                if bx == x0 {
+                    settled[n] = clock;
+                } else {
+                    clock += 1;
+                    stamp[n] = clock;
                     moved[n] = true;
                     gained = true;
                     for &e in &self.incident[n] {

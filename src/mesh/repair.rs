@@ -142,6 +142,11 @@ fn cube_root(x: f64) -> f64 {
 /// `Σ_corners exp(-KAPPA (sj - bound))`, inverted corners) over the corners that depend on
 /// the node (`corners`: element and corner), plus `fixed`, the same over the corners of its
 /// elements that do not.
+///
+/// With `against`, the score of the best position so far: `None` as soon as the corners
+/// summed show that the position cannot be [`better`] (the penalty, a sum of positive terms,
+/// only grows as corners are added, the worst only falls and the inverted corners only
+/// rise), without the remaining corners; otherwise the whole score, the same as without.
 fn score<const D: usize>(
     kind: ElementKind,
     conn: &[usize],
@@ -149,9 +154,15 @@ fn score<const D: usize>(
     nodes: &[Point<D>],
     bound: f64,
     fixed: (f64, f64, usize),
-) -> (f64, f64, usize) {
+    against: Option<(f64, f64, usize)>,
+) -> Option<(f64, f64, usize)> {
     let k = kind.nodes();
     let (mut worst, mut penalty, mut inverted) = fixed;
+    // The penalty at or above which a position is not better (see `better`).
+    let (limit, inverted_max, worst_min) = match against {
+        Some(b) => (b.1 * (1.0 - 1e-6), b.2, b.0),
+        None => (f64::INFINITY, usize::MAX, f64::NEG_INFINITY),
+    };
     for &(e, c) in corners {
         let el = &conn[e * k..(e + 1) * k];
         let (j, sj, edges) = corner_with_edges(kind, el, nodes, c);
@@ -160,8 +171,11 @@ fn score<const D: usize>(
         if j <= 0.0 {
             inverted += 1;
         }
+        if penalty >= limit || inverted > inverted_max || (worst <= 0.0 && worst < worst_min) {
+            return None;
+        }
     }
-    (worst, penalty, inverted)
+    Some((worst, penalty, inverted))
 }
 
 /// Whether `a` improves on `b`: a lower penalty (the sum over all corners of the mesh falls
@@ -430,9 +444,14 @@ impl<'a, const D: usize> Repairer<'a, D> {
     fn relax(&self, n: usize, nodes: &mut [Point<D>]) -> Point<D> {
         let x0 = nodes[n];
         let (moving, fixed) = self.corners_of(n, nodes);
-        let score_at =
-            |nodes: &[Point<D>]| score(self.kind, &self.conn, &moving, nodes, self.bound, fixed);
-        let mut best = score_at(nodes);
+        let score_at = |nodes: &[Point<D>], against| {
+            score(
+                self.kind, &self.conn, &moving, nodes, self.bound, fixed, against,
+            )
+        };
+        let Some(mut best) = score_at(nodes, None) else {
+            return x0;
+        };
         let mut bx = x0;
         let nb = self.neighbours(n);
         let median_edge = self.boundary.median_edge;
@@ -454,8 +473,10 @@ impl<'a, const D: usize> Repairer<'a, D> {
         let mut trial = |p: Point<D>, nodes: &mut [Point<D>]| {
             let p = self.place(n, p);
             nodes[n] = p;
-            let s = score_at(nodes);
-            if better(s, best) && ratio_cap.is_none_or(|c| self.edge_ratio_around(n, nodes) <= c) {
+            let s = score_at(nodes, Some(best)).filter(|&s| better(s, best));
+            if let Some(s) = s
+                && ratio_cap.is_none_or(|c| self.edge_ratio_around(n, nodes) <= c)
+            {
                 best = s;
                 bx = p;
                 true

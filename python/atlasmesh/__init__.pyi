@@ -75,6 +75,11 @@ class Mesh:
         """{"nodes": {...}, "elements": {...}, "surfaces": {name: (n, 2) element, face}}."""
     def write(self, path: Union[str, PathLike]) -> None:
         """Writes .vtu, .vtk, .inp, .msh or .feb (by extension), with the sets."""
+    def write_deck(self, deck: Union[str, PathLike], path: Union[str, PathLike]) -> None:
+        """Writes a solver deck built around the atlas's mean mesh (an .inp or .feb started
+        from `atlasmesh convert ATLAS mean.inp`, materials and steps added) with this mesh's
+        node coordinates to path (the deck's extension), as --deck does; the deck's elements
+        must be this mesh's."""
     def to_meshio(self) -> Any:
         """The mesh as a meshio.Mesh."""
     def to_pyvista(self) -> Any:
@@ -173,6 +178,11 @@ class Atlas:
         template_mesh: 3D, a volume mesh of the first shape (or one per shape) instead of the
         automatic mesh (--template-mesh). What the command line says on stderr (an island
         dropped, the cut) comes as a UserWarning."""
+    def with_sets(self, sets: Union[str, PathLike, Dict[str, Any]]) -> "Atlas":
+        """This atlas with node sets, element sets and surfaces on its mean mesh, carried to
+        every fitted mesh (--sets): a sets TOML file or a dict of its tables, e.g.
+        {"node_set": [{"name": "DISTAL", "half_space": {"axis": "longest", "below": 0.1}}]}.
+        A set of an existing name is replaced; save and pickling keep them."""
     def save(self, path: Union[str, PathLike]) -> None: ...
     @property
     def dimension(self) -> int: ...

@@ -46,6 +46,42 @@ fn context<const D: usize>(atlas: RustAtlas<D>) -> PyResult<RunContext<D>> {
     RunContext::new(atlas, params, Default::default()).map_err(to_py)
 }
 
+/// The sets of a `sets` argument: a sets TOML file's path or a dict of its tables (checked
+/// as the file is).
+fn sets_config(obj: &Bound<'_, PyAny>) -> PyResult<atlasmesh::mesh::SetsConfig> {
+    if let Ok(d) = obj.cast::<pyo3::types::PyDict>() {
+        let json: String = obj
+            .py()
+            .import("json")?
+            .call_method1("dumps", (d,))
+            .map_err(|e| {
+                crate::errors::BadInputError::new_err(format!(
+                    "sets: not a dict of TOML tables ({})",
+                    e.value(obj.py())
+                ))
+            })?
+            .extract()?;
+        return atlasmesh::mesh::SetsConfig::from_json(std::path::Path::new("sets"), &json)
+            .map_err(to_py);
+    }
+    let path: PathBuf = obj.extract().map_err(|_| {
+        crate::errors::BadInputError::new_err("sets: a TOML file's path or a dict expected")
+    })?;
+    atlasmesh::mesh::SetsConfig::read(&path).map_err(to_py)
+}
+
+/// The run of a copy of `ctx`'s atlas with `sets` on its mean mesh.
+fn with_sets<const D: usize>(
+    ctx: &RunContext<D>,
+    sets: atlasmesh::mesh::SetsConfig,
+) -> PyResult<RunContext<D>> {
+    let params = RunParams {
+        sets: Some(sets),
+        ..ctx.params.clone()
+    };
+    RunContext::new((*ctx.atlas).clone(), params, Default::default()).map_err(to_py)
+}
+
 /// The most float64 values one returned array holds (512 MiB).
 const MAX_ARRAY_VALUES: usize = 1 << 26;
 
@@ -357,6 +393,25 @@ impl Atlas {
             Inner::Three(context(go::<3>(py, shapes, &params, &spec, mesh)?)?)
         } else {
             Inner::Two(context(go::<2>(py, shapes, &params, &spec, mesh)?)?)
+        };
+        Ok(Atlas { inner })
+    }
+
+    /// This atlas with named node sets, element sets and surfaces on its mean mesh, carried
+    /// to every fitted mesh and written with it (the command line's `--sets`): `sets` is a
+    /// sets TOML file's path or a dict of its tables (`{"node_set": [{"name": "DISTAL",
+    /// "half_space": {"axis": "longest", "below": 0.1}}]}`), checked as the file is. A set
+    /// of a name the mesh has is replaced. The atlas's `save` and pickling keep them.
+    fn with_sets(&self, sets: &Bound<'_, PyAny>) -> PyResult<Atlas> {
+        let config = sets_config(sets)?;
+        if !each!(&self.inner, a, D => a.atlas.has_mesh()) {
+            return Err(crate::errors::BadInputError::new_err(
+                "sets: the atlas has no mean mesh (built with mesh=False)",
+            ));
+        }
+        let inner = match &self.inner {
+            Inner::Two(a) => Inner::Two(with_sets(a, config)?),
+            Inner::Three(a) => Inner::Three(with_sets(a, config)?),
         };
         Ok(Atlas { inner })
     }

@@ -354,6 +354,44 @@ impl Mesh {
         .map_err(crate::errors::to_py)
     }
 
+    /// Writes a solver deck built around the atlas's mean mesh with this mesh's node
+    /// coordinates (the command line's `--deck`): `deck` is an Abaqus/CalculiX `.inp` or an
+    /// FEBio `.feb` started from `atlasmesh convert ATLAS mean.inp` (or `mean.feb`), its
+    /// materials, sets and steps added; everything but the nodes' coordinates is copied.
+    /// `path` takes the deck's extension. The deck's elements must be this mesh's (a fitted
+    /// mesh has those of the mean mesh).
+    fn write_deck(&self, deck: std::path::PathBuf, path: std::path::PathBuf) -> PyResult<()> {
+        use crate::errors::{BadInputError, to_py};
+        let d = atlasmesh::formats::Deck::read(&deck).map_err(to_py)?;
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if ext.as_deref() != Some(d.extension()) {
+            return Err(BadInputError::new_err(format!(
+                "{}: a .{} deck is written to a .{} file",
+                path.display(),
+                d.extension(),
+                d.extension()
+            )));
+        }
+        fn go<const D: usize>(
+            m: &Mesh,
+            d: &atlasmesh::formats::Deck,
+            deck: &std::path::Path,
+            path: &std::path::Path,
+        ) -> atlasmesh::Result<()> {
+            let mesh = m.fe_mesh::<D>();
+            atlasmesh::study::check_deck_mesh(&mesh, "this mesh", d, deck)?;
+            atlasmesh::formats::write_atomic(path, d.with_nodes(&mesh.nodes)?.as_bytes())
+        }
+        if self.dim == 3 {
+            go::<3>(self, &d, &deck, &path)
+        } else {
+            go::<2>(self, &d, &deck, &path)
+        }
+        .map_err(to_py)
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Mesh({} nodes, {} {} elements)",

@@ -236,3 +236,113 @@ def test_bad_correspondence_arguments_are_refused_by_name(kwargs, message, tmp_p
     with pytest.raises(atlasmesh.BadInputError, match=message):
         atlasmesh.leave_one_out(shapes, str(tmp_path / "out"), **kwargs)
     assert not (tmp_path / "out").exists()
+
+
+SETS = """
+[[node_set]]
+name = "FIXED"
+half_space = { axis = "longest", above = 0.97 }
+[[node_set]]
+name = "LOAD"
+half_space = { axis = "longest", below = 0.03 }
+[[element_set]]
+name = "SHAFT"
+half_space = { axis = "longest", above = 0.6 }
+[[surface]]
+name = "DISTAL"
+facing = { direction = [0, 0, -1], angle = 45 }
+half_space = { axis = "longest", below = 0.2 }
+"""
+
+STEP = """*MATERIAL, NAME=TISSUE
+*ELASTIC
+17000., 0.3
+*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE
+*STEP
+*STATIC
+*BOUNDARY
+FIXED, 1, 3, 0.
+*CLOAD
+LOAD, 3, -1.
+*END STEP
+"""
+
+
+def test_sets_and_a_deck_from_python_are_the_command_lines(data, femur_atlas, tmp_path):
+    """`Atlas.with_sets` (a TOML file or a dict of its tables) and `Mesh.write_deck` write the
+    files `atlasmesh fit --sets --deck --format inp` writes, byte for byte; bad sets and decks
+    are refused by name."""
+    sets = tmp_path / "sets.toml"
+    sets.write_text(SETS)
+    saved = tmp_path / "atlas.safetensors"
+    femur_atlas.save(str(saved))
+    mean = tmp_path / "mean.inp"
+    run = subprocess.run(
+        [command_line(), "convert", str(saved), str(mean), "--sets", str(sets)],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    deck = tmp_path / "deck.inp"
+    deck.write_text(mean.read_text() + STEP)
+    subject = data / "knee-distal-femur-synthetic-3d/femur/S031_Femur.ply"
+    out = tmp_path / "out"
+    run = subprocess.run(
+        [command_line(), "fit", "--atlas", str(saved), "--subject", str(subject), "--sets", str(sets),
+         "--deck", str(deck), "--format", "inp", "--no-plots", "--quiet", "--out", str(out)],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    cli = out / "S031_Femur"
+
+    atlas = femur_atlas.with_sets(str(sets))
+    assert femur_atlas.mean_mesh.sets["nodes"] == {}, "the atlas it came from is unchanged"
+    tables = {
+        "node_set": [
+            {"name": "FIXED", "half_space": {"axis": "longest", "above": 0.97}},
+            {"name": "LOAD", "half_space": {"axis": "longest", "below": 0.03}},
+        ],
+        "element_set": [{"name": "SHAFT", "half_space": {"axis": "longest", "above": 0.6}}],
+        "surface": [
+            {
+                "name": "DISTAL",
+                "facing": {"direction": [0, 0, -1], "angle": 45},
+                "half_space": {"axis": "longest", "below": 0.2},
+            }
+        ],
+    }
+    from_dict = femur_atlas.with_sets(tables).mean_mesh.sets
+    for kind in ("nodes", "elements", "surfaces"):
+        a, b = atlas.mean_mesh.sets[kind], from_dict[kind]
+        assert sorted(a) == sorted(b) and all(np.array_equal(a[k], b[k]) for k in a), kind
+    assert sorted(atlas.mean_mesh.sets["nodes"]) == ["FIXED", "LOAD"]
+    assert all(len(v) > 0 for kind in ("nodes", "elements", "surfaces") for v in from_dict[kind].values())
+
+    r = atlas.fit(str(subject))
+    # (Written under the command line's names: the heading names the file.)
+    py = tmp_path / "py"
+    py.mkdir()
+    r.mesh.write(str(py / "S031_Femur_mesh.inp"))
+    assert (py / "S031_Femur_mesh.inp").read_bytes() == (cli / "S031_Femur_mesh.inp").read_bytes()
+    r.mesh.write_deck(str(deck), str(py / "S031_Femur_deck.inp"))
+    written = (py / "S031_Femur_deck.inp").read_bytes()
+    assert written == (cli / "S031_Femur_deck.inp").read_bytes()
+    assert written.endswith(STEP.encode()), "the deck's material and step copied"
+    # The sets survive the atlas file and pickling.
+    import pickle
+
+    again = pickle.loads(pickle.dumps(atlas))
+    assert sorted(again.mean_mesh.sets["elements"]) == ["SHAFT"]
+
+    with pytest.raises(atlasmesh.BadInputError, match="sets: a TOML file's path or a dict"):
+        femur_atlas.with_sets(42)
+    with pytest.raises(atlasmesh.BadInputError, match="give at least one of"):
+        femur_atlas.with_sets({"node_set": [{"name": "X"}]})
+    with pytest.raises(atlasmesh.Error, match="unknown field"):
+        femur_atlas.with_sets({"node_sets": []})
+    with pytest.raises(atlasmesh.BadInputError, match=r"a \.inp deck is written to a \.inp file"):
+        r.mesh.write_deck(str(deck), str(tmp_path / "x.feb"))
+    cube = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+    other = atlasmesh.Mesh(np.array(cube, float), np.arange(8).reshape(1, 8))
+    with pytest.raises(atlasmesh.Error, match="is not this mesh"):
+        other.write_deck(str(deck), str(tmp_path / "y.inp"))
+    assert not (tmp_path / "x.feb").exists() and not (tmp_path / "y.inp").exists()

@@ -137,7 +137,21 @@ impl SetsConfig {
     /// Parses and checks the text of a sets file (`path` only names the file in messages;
     /// [`SetsConfig::read`] reads the file).
     pub fn parse(path: &Path, text: &str) -> Result<Self> {
-        let mut c: SetsConfig = toml::from_str(text).map_err(|e| Error::toml(path, text, &e))?;
+        let c: SetsConfig = toml::from_str(text).map_err(|e| Error::toml(path, text, &e))?;
+        c.checked(path)
+    }
+
+    /// The tables of a sets file given as JSON (`[[node_set]]` as `"node_set": [...]`, and
+    /// so on), checked as [`SetsConfig::parse`] checks a file; `name` names them in messages.
+    pub fn from_json(name: &Path, json: &str) -> Result<Self> {
+        let c: SetsConfig =
+            serde_json::from_str(json).map_err(|e| Error::parse(name, 0, e.to_string()))?;
+        c.checked(name)
+    }
+
+    /// `self` read from `path`, with its names, numbers and selectors checked.
+    fn checked(mut self, path: &Path) -> Result<Self> {
+        let c = &mut self;
         c.source = path.to_path_buf();
         let mut names = std::collections::HashSet::new();
         for (kind, s) in c.all() {
@@ -221,7 +235,7 @@ impl SetsConfig {
                 ));
             }
         }
-        Ok(c)
+        Ok(self)
     }
 
     fn all(&self) -> impl Iterator<Item = (&'static str, &SetSpec)> {

@@ -2,6 +2,7 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::Point;
+use crate::mesh::FeMesh;
 use crate::model::Atlas;
 use std::path::Path;
 
@@ -23,22 +24,34 @@ pub fn check_deck<const D: usize>(
     deck: &crate::formats::Deck,
     path: &Path,
 ) -> Result<()> {
+    check_deck_mesh(&atlas.mesh, "the atlas's mean mesh", deck, path)
+}
+
+/// Checks that a deck's mesh has the elements and node count of `mesh` (`what` names it in
+/// the error): a subject's morphed mesh has those of the atlas's mean mesh, so that the
+/// deck's copy with the subject's node coordinates is the subject's model.
+pub fn check_deck_mesh<const D: usize>(
+    mesh: &FeMesh<D>,
+    what: &str,
+    deck: &crate::formats::Deck,
+    path: &Path,
+) -> Result<()> {
     let deck = deck.mesh();
-    if deck.nodes.len() != atlas.mesh.nodes.len()
-        || deck.kind != atlas.mesh.kind
-        || deck.connectivity != atlas.mesh.connectivity
+    if deck.nodes.len() != mesh.nodes.len()
+        || deck.kind != mesh.kind
+        || deck.connectivity != mesh.connectivity
     {
         return Err(Error::parse(
             path,
             0,
             format!(
-                "the deck's mesh ({} nodes, {} {} elements) is not the atlas's mean mesh ({} nodes, {} {} elements); start the deck from `atlasmesh convert ATLAS mean.inp` (or `mean.feb`)",
+                "the deck's mesh ({} nodes, {} {} elements) is not {what} ({} nodes, {} {} elements); start the deck from `atlasmesh convert ATLAS mean.inp` (or `mean.feb`)",
                 deck.nodes.len(),
                 deck.num_elements(),
                 deck.kind.name(),
-                atlas.mesh.nodes.len(),
-                atlas.mesh.num_elements(),
-                atlas.mesh.kind.name()
+                mesh.nodes.len(),
+                mesh.num_elements(),
+                mesh.kind.name()
             ),
         ));
     }

@@ -37,6 +37,8 @@ TMPDIR=$(mktemp -d "${TMPDIR:-/tmp}/atlasmesh-fuzz-run.XXXXXX")
 export TMPDIR
 trap 'rm -rf "$TMPDIR"' EXIT
 export RUSTC_BOOTSTRAP=1
+# Line tables in the targets, for the stacks of the crashes they find.
+export CARGO_PROFILE_RELEASE_DEBUG=1
 if cargo fuzz --version >/dev/null 2>&1; then
     cargo fuzz build -O >/dev/null 2>&1 || cargo fuzz build -O
     fuzz() { cargo fuzz run -O "$1" "$2" "$3" -- "${@:4}"; }

@@ -26,7 +26,9 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
             let mut mesh = atlasmesh::mesh::HexMesh::block(1);
             let d = file.image.dims;
             for p in &mut mesh.nodes {
-                *p = file.image.world(std::array::from_fn(|k| p[k] * (d[k] as f64 - 1.0)));
+                *p = file
+                    .image
+                    .world(std::array::from_fn(|k| p[k] * (d[k] as f64 - 1.0)));
             }
             let recipe = atlasmesh::materials::MaterialRecipe::default().law();
             if let Ok(r) = recipe {

@@ -233,7 +233,10 @@ class Atlas:
         grid: int = 20,
         alpha: float = 50.0,
         jobs: int = 0,
-    ) -> List[Union[FitResult, Error]]: ...
+        mesh: bool = True,
+    ) -> List[Union[FitResult, Error]]:
+        """Fits every subject as fit does, in parallel on jobs threads (0: every core): a
+        FitResult or the exception of each, in order; mesh=False for the fits alone."""
 
 def read_label_surface(
     path: Union[str, PathLike],

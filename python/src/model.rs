@@ -263,24 +263,37 @@ fn result<const D: usize>(
     fit_result(py, &ctx.atlas, &o.fit, Some(mesh), report)
 }
 
-/// The fit alone (Algorithm 1, eq. 5-8, projected onto the subject), without the morph: its
-/// weights, pose and surface, and its measures (`e_d`, `iterations`, `converged`,
-/// `fit_seconds`; `rms_distance` and `rms_distance_relative` computed when first read).
-fn fit_only<const D: usize>(
+/// A subject's fit alone (Algorithm 1, eq. 5-8, projected onto the subject; no morph): the
+/// subject, the fit, its seconds and the subject's closest-point index (kept for the two-way
+/// distance asked later).
+type FitAlone<const D: usize> = (
+    Shape<D>,
+    atlasmesh::fit::FitResult<D>,
+    f64,
+    atlasmesh::geometry::ClosestPointIndex<D>,
+);
+
+/// The fit of `subject` alone (Algorithm 1; see [`FitAlone`]).
+fn fit_alone<const D: usize>(
+    ctx: &RunContext<D>,
+    subject: &Subject<D>,
+    params: &RunParams,
+) -> atlasmesh::Result<FitAlone<D>> {
+    let shape = subject.shape.clone();
+    let index = atlasmesh::geometry::ClosestPointIndex::from_shape(&shape);
+    let start = std::time::Instant::now();
+    let fit = ctx.fitter()?.fit(&shape, &index, &params.fit)?;
+    Ok((shape, fit, start.elapsed().as_secs_f64(), index))
+}
+
+/// The Python result of a fit alone: its weights, pose and surface, and its measures (`e_d`,
+/// `iterations`, `converged`, `fit_seconds`; `rms_distance` and `rms_distance_relative`
+/// computed when first read).
+fn fit_alone_result<const D: usize>(
     py: Python<'_>,
     ctx: &RunContext<D>,
-    subject: Subject<D>,
-    params: &RunParams,
+    (shape, fit, seconds, index): FitAlone<D>,
 ) -> PyResult<FitResult> {
-    let shape = subject.shape;
-    let (fit, seconds, index) = py
-        .detach(|| -> atlasmesh::Result<_> {
-            let index = atlasmesh::geometry::ClosestPointIndex::from_shape(&shape);
-            let start = std::time::Instant::now();
-            let fit = ctx.fitter()?.fit(&shape, &index, &params.fit)?;
-            Ok((fit, start.elapsed().as_secs_f64(), index))
-        })
-        .map_err(to_py)?;
     let report = serde_json::json!({
         "name": shape.name,
         "e_d": fit.e_d_history.last().copied().unwrap_or(f64::NAN),
@@ -637,7 +650,8 @@ impl Atlas {
                 None => subject_of::<D>(subject, 0)?,
             };
             if !mesh {
-                return fit_only(py, a, subject, &params);
+                let alone = py.detach(|| fit_alone(a, &subject, &params)).map_err(to_py)?;
+                return fit_alone_result(py, a, alone);
             }
             let (o, report) = py.detach(|| fit_one(a, &subject, &params)).map_err(to_py)?;
             result(py, a, o, report)
@@ -646,8 +660,10 @@ impl Atlas {
 
     /// Fits every subject of `subjects` (as `fit` takes them) in parallel on `jobs` threads
     /// (0: every core), the GIL released: a list with a `FitResult` or the exception (an
-    /// `atlasmesh.Error`) of each, in order.
-    #[pyo3(signature = (subjects, partial=false, grid=None, alpha=None, jobs=None))]
+    /// `atlasmesh.Error`) of each, in order. `mesh=False`: the fits alone, as `fit` makes
+    /// them.
+    #[pyo3(signature = (subjects, partial=false, grid=None, alpha=None, jobs=None, mesh=true))]
+    #[allow(clippy::too_many_arguments)]
     fn fit_many(
         &self,
         py: Python<'_>,
@@ -656,6 +672,7 @@ impl Atlas {
         grid: Option<&Bound<'_, PyAny>>,
         alpha: Option<&Bound<'_, PyAny>>,
         jobs: Option<&Bound<'_, PyAny>>,
+        mesh: bool,
     ) -> PyResult<Vec<Py<PyAny>>> {
         let (grid, alpha) = morph_args(grid, alpha)?;
         // 0: every core.
@@ -674,18 +691,23 @@ impl Atlas {
                 .enumerate()
                 .map(|(k, o)| subject_of::<D>(&o, k))
                 .collect();
-            let outcomes: Vec<atlasmesh::Result<(atlasmesh::study::SubjectOutcome<D>, String)>> =
-                py.detach(|| {
-                    pool.install(|| {
-                        shapes
-                            .par_iter()
-                            .map(|s| match s {
-                                Ok(s) => fit_one(a, s, &params),
-                                Err(_) => Err(atlasmesh::Error::Parameter(String::new())),
-                            })
-                            .collect()
-                    })
-                });
+            // (A fit with its mesh, or alone.)
+            type Outcome<const D: usize> = Result<
+                (atlasmesh::study::SubjectOutcome<D>, String),
+                FitAlone<D>,
+            >;
+            let outcomes: Vec<atlasmesh::Result<Outcome<D>>> = py.detach(|| {
+                pool.install(|| {
+                    shapes
+                        .par_iter()
+                        .map(|s| match s {
+                            Ok(s) if mesh => fit_one(a, s, &params).map(Ok),
+                            Ok(s) => fit_alone(a, s, &params).map(Err),
+                            Err(_) => Err(atlasmesh::Error::Parameter(String::new())),
+                        })
+                        .collect()
+                })
+            });
             shapes
                 .into_iter()
                 .zip(outcomes)
@@ -693,8 +715,11 @@ impl Atlas {
                     Ok(match (s, o) {
                         (Err(e), _) => e.into_value(py).into_any(),
                         (Ok(_), Err(e)) => to_py(e).into_value(py).into_any(),
-                        (Ok(_), Ok((o, report))) => {
+                        (Ok(_), Ok(Ok((o, report)))) => {
                             Py::new(py, result(py, a, o, report)?)?.into_any()
+                        }
+                        (Ok(_), Ok(Err(alone))) => {
+                            Py::new(py, fit_alone_result(py, a, alone)?)?.into_any()
                         }
                     })
                 })

@@ -111,6 +111,17 @@ def test_errors_are_one_family_with_the_message():
     assert isinstance(results[0], atlasmesh.FitResult)
     assert isinstance(results[1], atlasmesh.BadInputError)
     assert isinstance(results[2], atlasmesh.FitResult)
+    # mesh=False: the fits alone, in parallel, as fit makes them (the same weights and
+    # distance, no mesh); the failing subject still its exception.
+    alone = atlas.fit_many([shapes[1], (bad, shapes[0][1]), shapes[2]], mesh=False)
+    assert isinstance(alone[1], atlasmesh.BadInputError)
+    for k, shape in ((0, shapes[1]), (2, shapes[2])):
+        one = atlas.fit(*shape, mesh=False)
+        assert alone[k].mesh is None
+        assert np.array_equal(alone[k].weights, one.weights)
+        assert alone[k].rms_distance == one.rms_distance
+        # The fit comes before the morph: the same weights as with the mesh.
+        assert np.array_equal(alone[k].weights, results[k].weights)
     # The command line's bounds, before any memory is taken or thread started.
     with pytest.raises(atlasmesh.BadInputError, match="MB"):
         atlas.sample(10**6)

@@ -238,34 +238,10 @@ def test_bad_correspondence_arguments_are_refused_by_name(kwargs, message, tmp_p
     assert not (tmp_path / "out").exists()
 
 
-SETS = """
-[[node_set]]
-name = "FIXED"
-half_space = { axis = "longest", above = 0.97 }
-[[node_set]]
-name = "LOAD"
-half_space = { axis = "longest", below = 0.03 }
-[[element_set]]
-name = "SHAFT"
-half_space = { axis = "longest", above = 0.6 }
-[[surface]]
-name = "DISTAL"
-facing = { direction = [0, 0, -1], angle = 45 }
-half_space = { axis = "longest", below = 0.2 }
-"""
-
-STEP = """*MATERIAL, NAME=TISSUE
-*ELASTIC
-17000., 0.3
-*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE
-*STEP
-*STATIC
-*BOUNDARY
-FIXED, 1, 3, 0.
-*CLOAD
-LOAD, 3, -1.
-*END STEP
-"""
+# The femurs' sets and a CalculiX step, as the command line's solver tests use them.
+FIXTURES = pathlib.Path(__file__).resolve().parents[2] / "tests" / "fixtures"
+SETS = (FIXTURES / "femur_sets.toml").read_text()
+STEP = (FIXTURES / "ccx_step.inp").read_text()
 
 
 def test_sets_and_a_deck_from_python_are_the_command_lines(data, femur_atlas, tmp_path):
@@ -327,6 +303,15 @@ def test_sets_and_a_deck_from_python_are_the_command_lines(data, femur_atlas, tm
     written = (py / "S031_Femur_deck.inp").read_bytes()
     assert written == (cli / "S031_Femur_deck.inp").read_bytes()
     assert written.endswith(STEP.encode()), "the deck's material and step copied"
+    # As meshio reads them: the subject's nodes and elements, the sets on the same nodes.
+    meshio = pytest.importorskip("meshio")
+    for f in ("S031_Femur_mesh.inp", "S031_Femur_deck.inp"):
+        back = meshio.read(py / f)
+        scale = np.abs(r.mesh.nodes).max()
+        assert np.abs(back.points - r.mesh.nodes).max() <= 1e-9 * scale, f
+        assert np.array_equal(np.concatenate([c.data for c in back.cells]), r.mesh.elements), f
+        for name in ("FIXED", "LOAD"):
+            assert np.array_equal(np.sort(back.point_sets[name]), np.sort(r.mesh.sets["nodes"][name])), (f, name)
     # The sets survive the atlas file and pickling.
     import pickle
 

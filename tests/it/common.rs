@@ -266,20 +266,8 @@ pub fn tool(program: &str, what: &str) -> bool {
 
 /// A CalculiX step around a mesh deck: bone-like elasticity, `FIXED` clamped, a unit force
 /// along -z on every node of `LOAD`, displacements of `LOAD` printed to the `.dat` file.
-pub const CCX_STEP: &str = "*MATERIAL, NAME=TISSUE
-*ELASTIC
-17000., 0.3
-*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE
-*STEP
-*STATIC
-*BOUNDARY
-FIXED, 1, 3, 0.
-*CLOAD
-LOAD, 3, -1.
-*NODE PRINT, NSET=LOAD
-U
-*END STEP
-";
+/// (tests/fixtures/ccx_step.inp, which the Python tests read too.)
+pub const CCX_STEP: &str = include_str!("../fixtures/ccx_step.inp");
 
 /// Runs ccx on `deck` (a `.inp` path) in its folder; returns the displacements it printed.
 pub fn solve(deck: &std::path::Path) -> Vec<[f64; 3]> {

@@ -22,21 +22,8 @@ fn atlasmesh(args: &[&str]) {
     );
 }
 
-const SETS: &str = r#"
-[[node_set]]
-name = "FIXED"
-half_space = { axis = "longest", above = 0.97 }
-[[node_set]]
-name = "LOAD"
-half_space = { axis = "longest", below = 0.03 }
-[[element_set]]
-name = "SHAFT"
-half_space = { axis = "longest", above = 0.6 }
-[[surface]]
-name = "DISTAL"
-facing = { direction = [0, 0, -1], angle = 45 }
-half_space = { axis = "longest", below = 0.2 }
-"#;
+/// The femurs' sets (tests/fixtures/femur_sets.toml, which the Python tests read too).
+const SETS: &str = include_str!("../fixtures/femur_sets.toml");
 
 /// The sets of a `.feb` file, read with string matching (no FEBio reader in atlasmesh).
 fn feb_sets(path: &Path) -> MeshSets {

@@ -274,12 +274,15 @@ def leave_one_out(
     template: Optional[Union[str, PathLike]] = None,
     template_landmarks: Optional[Union[str, PathLike]] = None,
     template_mesh: Optional[Union[str, PathLike, List[Union[str, PathLike]]]] = None,
+    folds: Optional[int] = None,
 ) -> Dict[str, Any]:
     """The paper's leave-one-out (section 6.1) as `atlasmesh loo` runs it: for each shape the
     atlas of the others, its fit, the morphed and repaired mesh and the measures, written into
     `out` (pictures with plots=True). Shapes, landmarks and templates are read as Atlas.build
     reads them. Returns the report (report.json as a dict; its "failed" list empty when no
-    subject failed); islands dropped and the cut come as UserWarnings."""
+    subject failed); islands dropped and the cut come as UserWarnings. folds=K: a k-fold
+    cross-validation as `atlasmesh loo --folds K` runs it (K consecutive groups, each fitted
+    with the atlas of the others; each subject's "fold" in the report)."""
 
 def read_shapes(
     path: Union[str, PathLike], closed: bool = True, resample: Optional[int] = None

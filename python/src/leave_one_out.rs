@@ -14,9 +14,11 @@ use std::path::{Path, PathBuf};
 /// its fit, the morphed and repaired mesh and the measures, written into `out` as
 /// `atlasmesh loo` writes them (pictures with `plots=True`). Returns the report (`report.json`
 /// as a dict); what the command line says on stderr comes as `UserWarning`s. `landmarks`,
-/// `template`, `template_landmarks` and `template_mesh` as `Atlas.build` takes them.
+/// `template`, `template_landmarks` and `template_mesh` as `Atlas.build` takes them. With
+/// `folds=K`, a k-fold cross-validation as `atlasmesh loo --folds K` runs it: the shapes in K
+/// consecutive groups, each fitted with the atlas of the others.
 #[pyfunction]
-#[pyo3(signature = (shapes, out, modes=None, variance=None, element_size=None, register=false, cut=None, closed=true, plots=false, jobs=None, landmarks=None, template=None, template_landmarks=None, template_mesh=None))]
+#[pyo3(signature = (shapes, out, modes=None, variance=None, element_size=None, register=false, cut=None, closed=true, plots=false, jobs=None, landmarks=None, template=None, template_landmarks=None, template_mesh=None, folds=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn leave_one_out(
     py: Python<'_>,
@@ -34,11 +36,15 @@ pub fn leave_one_out(
     template: Option<&Bound<'_, PyAny>>,
     template_landmarks: Option<&Bound<'_, PyAny>>,
     template_mesh: Option<&Bound<'_, PyAny>>,
+    folds: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
     if shapes.is_empty() {
         return Err(BadInputError::new_err("no shape given"));
     }
     let jobs = jobs.map_or(Ok(0), |j| crate::args::size(j, "jobs", 0, 1024))?;
+    let folds = folds
+        .map(|k| crate::args::size(k, "folds", 2, 1_000_000))
+        .transpose()?;
     let dim = dimension_of(&shapes.get_item(0)?)?;
     let mut params = run_params(modes, variance, element_size)?;
     params.plots = plots;
@@ -50,15 +56,16 @@ pub fn leave_one_out(
     };
     let spec = spec(register, cut, closed, false, &with)?;
     let (json, warnings) = if dim == 3 {
-        run::<3>(py, shapes, &params, &spec, &out, jobs)?
+        run::<3>(py, shapes, &params, &spec, &out, jobs, folds)?
     } else {
-        run::<2>(py, shapes, &params, &spec, &out, jobs)?
+        run::<2>(py, shapes, &params, &spec, &out, jobs, folds)?
     };
     warn_all(py, warnings)?;
     Ok(py.import("json")?.call_method1("loads", (json,))?.unbind())
 }
 
-/// The leave-one-out in dimension `D`: the report as JSON, and the population's warnings.
+/// The leave-one-out (with `folds`, the k-fold cross-validation) in dimension `D`: the report
+/// as JSON, and the population's warnings.
 fn run<const D: usize>(
     py: Python<'_>,
     list: &Bound<'_, PyList>,
@@ -66,6 +73,7 @@ fn run<const D: usize>(
     spec: &PopulationSpec,
     out: &Path,
     jobs: usize,
+    folds: Option<usize>,
 ) -> PyResult<(String, Vec<String>)> {
     let loaded = loaded::<D>(list, spec)?;
     py.detach(|| -> atlasmesh::Result<(String, Vec<String>)> {
@@ -76,23 +84,22 @@ fn run<const D: usize>(
             .map(|(n, w)| format!("{n}: {w}"))
             .collect();
         warnings.extend(population.notes.iter().cloned());
-        let report = study::leave_one_out_of(
-            study::Folds {
-                corresponded: &c.shapes,
-                // Shapes put on a common cut are fitted as read, as `loo` fits them.
-                subjects: population.as_read.as_deref().unwrap_or(&population.shapes),
-                meshes: population.meshes.as_deref(),
-                population: &study::PopulationFacts {
-                    inputs: population.inputs.clone(),
-                    template: c.template.clone(),
-                },
-            },
-            "leave-one-out",
-            params,
-            out,
-            jobs,
-            &study::Silent,
-        )?;
+        let facts = study::PopulationFacts {
+            inputs: population.inputs.clone(),
+            template: c.template.clone(),
+        };
+        let each = study::Folds {
+            corresponded: &c.shapes,
+            // Shapes put on a common cut are fitted as read, as `loo` fits them.
+            subjects: population.as_read.as_deref().unwrap_or(&population.shapes),
+            meshes: population.meshes.as_deref(),
+            population: &facts,
+        };
+        let (dataset, silent) = ("leave-one-out", &study::Silent);
+        let report = match folds {
+            Some(k) => study::cross_validation(each, k, dataset, params, out, jobs, silent)?,
+            None => study::leave_one_out_of(each, dataset, params, out, jobs, silent)?,
+        };
         let json = serde_json::to_string(&report)
             .map_err(|e| atlasmesh::Error::Numerical(format!("the report as JSON: {e}")))?;
         Ok((json, warnings))

@@ -142,22 +142,30 @@ def test_femurs_cut_by_a_plane_make_the_atlas_of_cut_bones_the_command_line_make
     assert (tmp_path / "py.safetensors").read_bytes() == (tmp_path / "cli.safetensors").read_bytes()
 
 
-def test_a_leave_one_out_from_python_is_the_command_lines(data, tmp_path):
+@pytest.mark.parametrize("folds", [None, 5])
+def test_a_leave_one_out_from_python_is_the_command_lines(data, tmp_path, folds):
     """`atlasmesh.leave_one_out` and `atlasmesh loo` on the 40 hands (one CSV, open outlines,
-    5 modes): the same subjects with the same measures (times aside) and mesh files."""
+    5 modes), and both with 5 folds: the same subjects with the same measures (times aside)
+    and mesh files."""
     csv = data / "imm-hands-2d/hands_long.csv"
+    k = [] if folds is None else ["--folds", str(folds)]
     run = subprocess.run(
         [command_line(), "loo", "--quiet", "--no-plots", "--shapes", str(csv), "--open"]
-        + ["--modes", "5", "--out", str(tmp_path / "cli")],
+        + ["--modes", "5", "--out", str(tmp_path / "cli")] + k,
         capture_output=True,
         text=True,
         timeout=600,
     )
     assert run.returncode == 0, run.stderr
     cli = json.loads((tmp_path / "cli" / "report.json").read_text())
-    py = atlasmesh.leave_one_out([str(csv)], tmp_path / "py", modes=5, closed=False)
+    py = atlasmesh.leave_one_out([str(csv)], tmp_path / "py", modes=5, closed=False, folds=folds)
     assert py == json.loads((tmp_path / "py" / "report.json").read_text())
     assert len(py["subjects"]) == 40 and py["failed"] == []
+    assert py.get("folds") == folds
+    # Each subject's fold: 8 consecutive hands a fold.
+    assert [s.get("fold") for s in py["subjects"]] == [
+        None if folds is None else int(s["name"]) // 8 + 1 for s in py["subjects"]
+    ]
     timing = ("seconds", "heap_peak_mb")
     for a, b in zip(cli["subjects"], py["subjects"]):
         assert a["name"] == b["name"]
@@ -169,6 +177,9 @@ def test_a_leave_one_out_from_python_is_the_command_lines(data, tmp_path):
         assert (tmp_path / "py" / mesh).read_bytes() == (tmp_path / "cli" / mesh).read_bytes()
     with pytest.raises(atlasmesh.BadInputError, match="jobs"):
         atlasmesh.leave_one_out([str(csv)], tmp_path / "bad", jobs=10**9)
+    for bad in (1, 41, True, 2.5):
+        with pytest.raises(atlasmesh.BadInputError, match="folds"):
+            atlasmesh.leave_one_out([str(csv)], tmp_path / "bad", folds=bad)
 
 
 def test_vertebrae_with_landmarks_and_a_reference_template_make_the_command_lines_atlas(data, tmp_path):

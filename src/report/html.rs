@@ -138,7 +138,10 @@ fn title(report: &Report) -> String {
                 .file_name()
                 .map_or_else(|| a.file.clone(), |f| f.to_string_lossy().into_owned())
         ),
-        None => format!("atlasmesh leave-one-out: {}", of("shape")),
+        None => match report.folds {
+            Some(k) => format!("atlasmesh {k}-fold cross-validation: {}", of("shape")),
+            None => format!("atlasmesh leave-one-out: {}", of("shape")),
+        },
     }
 }
 

@@ -158,6 +158,10 @@ pub struct SubjectReport {
     /// The fit's pose (eq. 5): the atlas's reference frame to the subject's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<Pose>,
+    /// The fold that held the subject out in a k-fold cross-validation (1 to the number of
+    /// folds; absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fold: Option<usize>,
     /// Output files of this subject, relative to the report.
     pub files: Vec<String>,
 }
@@ -419,6 +423,10 @@ pub struct Report {
     /// The atlas file a fit used (a leave-one-out builds its own).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub atlas: Option<AtlasSource>,
+    /// The number of folds of a k-fold cross-validation (absent for a leave-one-out and a
+    /// fit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub folds: Option<usize>,
     /// The peak of the process's resident memory when the report was written (MB, 10⁶
     /// bytes): what a scheduler must give the run (of merged reports, the largest).
     #[serde(default, skip_serializing_if = "Option::is_none")]

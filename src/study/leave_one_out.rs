@@ -72,8 +72,86 @@ pub fn leave_one_out_of<const D: usize>(
         params: params.clone(),
         out: out.to_path_buf(),
     };
-    let mut reports = run_folds(folds, dataset, params, &[variant], jobs, progress)?;
+    let groups: Vec<Vec<usize>> = (0..folds.corresponded.len()).map(|k| vec![k]).collect();
+    let mut reports = run_folds(
+        folds,
+        &groups,
+        None,
+        dataset,
+        params,
+        &[variant],
+        jobs,
+        progress,
+    )?;
     Ok(reports.remove(0))
+}
+
+/// K-fold cross-validation over `folds` (see [`Folds`]): the shapes split into `k`
+/// consecutive groups in their order ([`fold_groups`], as scikit-learn's `KFold` without
+/// shuffling), and for each group the atlas of the other groups' shapes (GPA, PCA, the mesh
+/// of its mean), with every shape of the group fitted, morphed, repaired, measured and written
+/// as [`leave_one_out_of`] does. Each subject's report names its fold (`fold`, 1 to `k`) and
+/// the report the number of folds; `k` equal to the number of shapes is the leave-one-out.
+///
+/// # Errors
+/// [`Error::Parameter`] for `k` below 2 or above the number of shapes, or folds that leave
+/// fewer than 3 shapes to an atlas; otherwise as [`leave_one_out_of`].
+pub fn cross_validation<const D: usize>(
+    folds: Folds<'_, D>,
+    k: usize,
+    dataset: &str,
+    params: &RunParams,
+    out: &Path,
+    jobs: usize,
+    progress: &dyn Progress,
+) -> Result<Report> {
+    let groups = fold_groups(folds.corresponded.len(), k)?;
+    let variant = Variant {
+        modes: None,
+        params: params.clone(),
+        out: out.to_path_buf(),
+    };
+    let mut reports = run_folds(
+        folds,
+        &groups,
+        Some(k),
+        dataset,
+        params,
+        &[variant],
+        jobs,
+        progress,
+    )?;
+    Ok(reports.remove(0))
+}
+
+/// The shapes `0..n` in `k` consecutive groups, the first `n % k` one shape larger than the
+/// others (scikit-learn's `KFold` without shuffling).
+///
+/// # Errors
+/// [`Error::Parameter`] for `k` below 2 or above `n`, or groups that leave fewer than 3 of the
+/// `n` shapes to the atlas of another.
+pub fn fold_groups(n: usize, k: usize) -> Result<Vec<Vec<usize>>> {
+    if k < 2 || k > n {
+        return Err(Error::Parameter(format!(
+            "{k} folds: between 2 and the number of shapes ({n}) expected"
+        )));
+    }
+    let (size, larger) = (n / k, n % k);
+    let left = n - size - usize::from(larger > 0);
+    if left < 3 {
+        return Err(Error::Parameter(format!(
+            "{k} folds of {n} shapes leave {left} shapes to an atlas; at least 3 are needed: \
+             take more folds"
+        )));
+    }
+    let mut start = 0;
+    Ok((0..k)
+        .map(|f| {
+            let len = size + usize::from(f < larger);
+            start += len;
+            (start - len..start).collect()
+        })
+        .collect())
 }
 
 /// The leave-one-out at several numbers of modes (section 6.1's generalization with 15 and 5
@@ -113,7 +191,10 @@ pub fn leave_one_out_by_modes<const D: usize>(
             }
         })
         .collect();
-    run_folds(folds, dataset, &base, &variants, jobs, progress)
+    let groups: Vec<Vec<usize>> = (0..folds.corresponded.len()).map(|k| vec![k]).collect();
+    run_folds(
+        folds, &groups, None, dataset, &base, &variants, jobs, progress,
+    )
 }
 
 /// One report of a leave-one-out: the number of modes its atlases are cut to (`None`: as
@@ -134,10 +215,15 @@ impl Variant {
     }
 }
 
-/// The folds run once, each fold's atlas built with `params` and cut to every variant's
-/// modes; one report per variant.
+/// The folds run once (`groups`: the shapes each leaves out; a fold of every shape for the
+/// leave-one-out; `k_fold`: their number in a k-fold cross-validation), each fold's atlas built
+/// with `params` and cut to every variant's modes; one report per variant, its subjects in the
+/// shapes' order.
+#[allow(clippy::too_many_arguments)]
 fn run_folds<const D: usize>(
     folds: Folds<'_, D>,
+    groups: &[Vec<usize>],
+    k_fold: Option<usize>,
     dataset: &str,
     params: &RunParams,
     variants: &[Variant],
@@ -163,45 +249,36 @@ fn run_folds<const D: usize>(
     progress.step_finished(step);
     // A population put on a common cut: every fold's atlas keeps the cap and the CUT face.
     let cut = super::cut_facets(shapes, &population.inputs);
-    let label = "leave-one-out";
+    let label = match k_fold {
+        Some(k) => format!("{k}-fold cross-validation"),
+        None => "leave-one-out".to_string(),
+    };
+    let label = label.as_str();
     progress.items_started(label, shapes.len());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()
         .map_err(|e| Error::Parameter(format!("--jobs: {e}")))?;
-    let results: Vec<Result<Vec<Result<SubjectReport>>>> = pool.install(|| {
-        (0..shapes.len())
-            .into_par_iter()
-            .map(|k| {
-                let r = fold(&folds, k, &cut, params, variants);
-                progress.item_done(label, &subjects[k].name);
+    let results: Vec<Result<Vec<FoldSubject>>> = pool.install(|| {
+        groups
+            .par_iter()
+            .enumerate()
+            .map(|(g, held)| {
+                let fold_number = k_fold.map(|_| g + 1);
+                let r = fold(&folds, held, fold_number, &cut, params, variants, &|k| {
+                    progress.item_done(label, &subjects[k].name);
+                });
+                if r.is_err() {
+                    for &k in held {
+                        progress.item_done(label, &subjects[k].name);
+                    }
+                }
                 r
             })
             .collect()
     });
     progress.items_finished(label);
-    // A fold that fails (a subject outside the model, a refused mesh) is recorded with its
-    // reason and the experiment goes on.
-    let mut reports = vec![Vec::new(); variants.len()];
-    let mut failed = vec![Vec::new(); variants.len()];
-    for (k, r) in results.into_iter().enumerate() {
-        let name = &subjects[k].name;
-        match r {
-            Ok(each) => {
-                for (i, r) in each.into_iter().enumerate() {
-                    match r {
-                        Ok(s) => reports[i].push(s),
-                        Err(e) => failed[i].push(FailedSubject::new(name, "", &e)),
-                    }
-                }
-            }
-            Err(e) => {
-                for f in &mut failed {
-                    f.push(FailedSubject::new(name, "", &e));
-                }
-            }
-        }
-    }
+    let (reports, failed) = by_variant(groups, results, subjects, variants.len());
     // Compactness, generalization and specificity of the population's model, for the HTML
     // report (up to 10 modes, 200 random instances).
     let measures = if params.plots {
@@ -225,11 +302,62 @@ fn run_folds<const D: usize>(
                 failed,
                 inputs: population.inputs.clone(),
                 template: population.template.clone(),
+                folds: k_fold,
                 ..Default::default()
             },
         )?);
     }
     Ok(out)
+}
+
+/// The folds' results (one per group of `groups`) as each variant's reports and failures, the
+/// subjects in the shapes' order. A fold that fails (a subject outside the model, a refused
+/// mesh) is recorded with its reason and the experiment goes on; a fold whose atlas failed
+/// fails each of its shapes.
+fn by_variant<const D: usize>(
+    groups: &[Vec<usize>],
+    results: Vec<Result<Vec<FoldSubject>>>,
+    subjects: &[Shape<D>],
+    variants: usize,
+) -> (Vec<Vec<SubjectReport>>, Vec<Vec<FailedSubject>>) {
+    type Fitted = std::result::Result<Vec<Result<SubjectReport>>, FailedSubject>;
+    let mut each_subject: Vec<Option<Fitted>> = (0..subjects.len()).map(|_| None).collect();
+    for (held, r) in groups.iter().zip(results) {
+        match r {
+            Ok(fitted) => {
+                for (k, each) in held.iter().zip(fitted) {
+                    each_subject[*k] = Some(Ok(each));
+                }
+            }
+            Err(e) => {
+                for &k in held {
+                    each_subject[k] = Some(Err(FailedSubject::new(&subjects[k].name, "", &e)));
+                }
+            }
+        }
+    }
+    let mut reports = vec![Vec::new(); variants];
+    let mut failed = vec![Vec::new(); variants];
+    for (k, r) in each_subject.into_iter().enumerate() {
+        let name = &subjects[k].name;
+        match r {
+            Some(Ok(each)) => {
+                for (i, r) in each.into_iter().enumerate() {
+                    match r {
+                        Ok(s) => reports[i].push(s),
+                        Err(e) => failed[i].push(FailedSubject::new(name, "", &e)),
+                    }
+                }
+            }
+            Some(Err(why)) => {
+                for f in &mut failed {
+                    f.push(why.clone());
+                }
+            }
+            None => {}
+        }
+    }
+    (reports, failed)
 }
 
 /// No population facts (shapes given in correspondence, as read).
@@ -282,57 +410,78 @@ impl<const D: usize> Folds<'_, D> {
     }
 }
 
-/// Fold `k` of a leave-one-out: the atlas of the other shapes (GPA, PCA, mesh of the mean; on
-/// the population's common cut, `cut_facets`) built with `params`, then for each of `variants`
-/// that atlas cut to its modes and the held-out subject fitted, morphed, repaired, measured
-/// and written into its folder. The outer error: the atlas failed (every variant's fold).
+/// What a fold gives each shape it holds out: a report per variant, or why that variant
+/// failed.
+type FoldSubject = Vec<Result<SubjectReport>>;
+
+/// The fold that holds out the shapes `held` (their indices; numbered `fold_number` in a
+/// k-fold cross-validation): the atlas of the other shapes (GPA, PCA, mesh of the mean; on the
+/// population's common cut, `cut_facets`) built with `params`, then for each held-out subject
+/// (in parallel) and each of `variants`, that atlas cut to the variant's modes and the subject
+/// fitted, morphed, repaired, measured and written into its folder; `done(k)` as each subject
+/// `k` is. The outer error: the atlas failed (every subject and variant of the fold). A
+/// subject's `seconds` take its share of the fold's atlas.
 fn fold<const D: usize>(
     folds: &Folds<'_, D>,
-    k: usize,
+    held: &[usize],
+    fold_number: Option<usize>,
     cut_facets: &[usize],
     params: &RunParams,
     variants: &[Variant],
-) -> Result<Vec<Result<SubjectReport>>> {
+    done: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<FoldSubject>> {
     let t0 = std::time::Instant::now();
-    let others = |i: &usize| *i != k;
     let training: Vec<Shape<D>> = (0..folds.corresponded.len())
-        .filter(others)
+        .filter(|i| !held.contains(i))
         .map(|i| folds.corresponded[i].clone())
         .collect();
-    let training_meshes: Option<Vec<FeMesh<D>>> = folds
-        .meshes
-        .map(|m| (0..m.len()).filter(others).map(|i| m[i].clone()).collect());
+    let training_meshes: Option<Vec<FeMesh<D>>> = folds.meshes.map(|m| {
+        (0..m.len())
+            .filter(|i| !held.contains(i))
+            .map(|i| m[i].clone())
+            .collect()
+    });
     let mut built = atlas_of(&training, training_meshes.as_deref(), params)?;
     super::build::put_on_cut(&mut built, cut_facets)?;
     let built = Arc::new(built);
     // The morph depends on the mean and its mesh only: one for every number of modes.
     let morpher = built.morpher(&params.morph)?;
-    let atlas_seconds = t0.elapsed().as_secs_f64();
-    let subject = &folds.subjects[k];
-    // A bone the field of view cut (open where the image ends), fitted as `fit` takes a label
-    // map's: on the part it has.
-    let cut = !cut_facets.is_empty() && D == 3 && super::is_open(&subject.clone().into_dim::<3>());
-    Ok(variants
-        .iter()
-        .map(|v| {
-            let t1 = std::time::Instant::now();
-            let atlas = v.atlas(&built)?;
-            let fitter = Fitter::new(atlas.clone());
-            let mut partial = v.params.clone();
-            partial.fit.partial = true;
-            let params = if cut { &partial } else { &v.params };
-            let mut report = process_subject(
-                &atlas,
-                &fitter,
-                &morpher,
-                subject,
-                &v.out,
-                params,
-                "report.html",
-            )?;
-            // The fold's whole cost: its atlas too.
-            report.seconds = atlas_seconds + t1.elapsed().as_secs_f64();
-            Ok(report)
+    let atlas_seconds = t0.elapsed().as_secs_f64() / held.len() as f64;
+    Ok(held
+        .par_iter()
+        .map(|&k| {
+            let subject = &folds.subjects[k];
+            // A bone the field of view cut (open where the image ends), fitted as `fit` takes a
+            // label map's: on the part it has.
+            let cut = !cut_facets.is_empty()
+                && D == 3
+                && super::is_open(&subject.clone().into_dim::<3>());
+            let each = variants
+                .iter()
+                .map(|v| {
+                    let t1 = std::time::Instant::now();
+                    let atlas = v.atlas(&built)?;
+                    let fitter = Fitter::new(atlas.clone());
+                    let mut partial = v.params.clone();
+                    partial.fit.partial = true;
+                    let params = if cut { &partial } else { &v.params };
+                    let mut report = process_subject(
+                        &atlas,
+                        &fitter,
+                        &morpher,
+                        subject,
+                        &v.out,
+                        params,
+                        "report.html",
+                    )?;
+                    // The fold's whole cost: its atlas too (a share of it in a k-fold).
+                    report.seconds = atlas_seconds + t1.elapsed().as_secs_f64();
+                    report.fold = fold_number;
+                    Ok(report)
+                })
+                .collect();
+            done(k);
+            each
         })
         .collect())
 }

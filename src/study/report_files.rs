@@ -32,6 +32,8 @@ pub struct BatchFacts {
     pub template: Option<String>,
     /// The atlas file of a fit.
     pub atlas: Option<crate::report::AtlasSource>,
+    /// The number of folds of a k-fold cross-validation (`None`: a leave-one-out, or a fit).
+    pub folds: Option<usize>,
 }
 
 /// Writes `report.json`, `scores.csv` and the overview `report.html`; with plots, the
@@ -55,6 +57,7 @@ pub(crate) fn finish_report<const D: usize>(
         inputs,
         template,
         atlas,
+        folds,
     } = batch;
     let m = atlas_for_variance.num_modes();
     if params.plots {
@@ -94,6 +97,7 @@ pub(crate) fn finish_report<const D: usize>(
         subjects,
         atlasmesh_version: env!("CARGO_PKG_VERSION").to_string(),
         atlas,
+        folds,
         resident_peak_mb: super::run::resident_peak_mb(),
     };
     report.write(&out.join("report.json"))?;

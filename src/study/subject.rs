@@ -139,6 +139,7 @@ pub fn fit_subject<const D: usize>(
         e_d_history: fit.e_d_history.clone(),
         sd: atlas.in_sd(&fit.weights),
         pose: Some(crate::report::Pose::of(&fit.similarity)),
+        fold: None,
         files: Vec::new(),
     };
     report.failed_checks = failed_checks(&report, delivered.finite, params);

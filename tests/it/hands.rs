@@ -305,3 +305,188 @@ fn a_leave_one_out_by_modes_is_the_runs_one_at_a_time() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A k-fold cross-validation of 12 hands (1001 points, 3 modes) in 3 folds: consecutive
+/// groups of 4, each subject numbered with its fold; each subject's figures are those of the
+/// leave-one-out of its fold's training shapes and itself (whose last fold trains on exactly
+/// those shapes), to the last bit; and 12 folds of 12 shapes are the leave-one-out.
+#[test]
+fn a_k_fold_cross_validation_fits_each_group_with_the_atlas_of_the_others() {
+    let Some(data) =
+        common::data_dir("a_k_fold_cross_validation_fits_each_group_with_the_atlas_of_the_others")
+    else {
+        return;
+    };
+    let shapes: Vec<_> = common::hands(&data, Some(1001))
+        .into_iter()
+        .take(12)
+        .collect();
+    let mut params = RunParams {
+        plots: false,
+        ..Default::default()
+    };
+    params.atlas.modes = ModeSelection::Count(3);
+    let same = |a: &atlasmesh::report::SubjectReport, b: &atlasmesh::report::SubjectReport| {
+        let bits = |x: f64, y: f64| x.to_bits() == y.to_bits();
+        assert_eq!(a.name, b.name);
+        assert!(
+            bits(a.rms_distance, b.rms_distance)
+                && bits(a.mesh_rms_distance, b.mesh_rms_distance)
+                && bits(a.scaled_jacobian_min, b.scaled_jacobian_min)
+                && a.sd == b.sd,
+            "{}: fit {} / {}, mesh {} / {}, quality {} / {}",
+            a.name,
+            a.rms_distance,
+            b.rms_distance,
+            a.mesh_rms_distance,
+            b.mesh_rms_distance,
+            a.scaled_jacobian_min,
+            b.scaled_jacobian_min
+        );
+    };
+    let out = common::temp_dir("hands-k-fold");
+    let r = atlasmesh::study::cross_validation(
+        atlasmesh::study::Folds::of(&shapes),
+        3,
+        "imm-hands-2d",
+        &params,
+        &out,
+        0,
+        &atlasmesh::study::Silent,
+    )
+    .unwrap();
+    assert_eq!(r.folds, Some(3));
+    assert_eq!(r.subjects.len(), 12, "{:?}", r.failed);
+    let folds: Vec<Option<usize>> = r.subjects.iter().map(|s| s.fold).collect();
+    let expected: Vec<Option<usize>> = (0..12).map(|k| Some(k / 4 + 1)).collect();
+    assert_eq!(folds, expected);
+    // Every success read back from its file and agreeing with it (fewer training shapes than
+    // a leave-one-out's: a hand may miss its bound).
+    assert_eq!(
+        common::assert_delivered(&r, &out, &shapes),
+        r.summary.succeeded
+    );
+    assert!(r.summary.succeeded >= 10, "{:?}", r.summary);
+    let written: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(written["folds"], 3);
+    assert_eq!(written["subjects"][5]["fold"], 2);
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(page.contains("3-fold cross-validation: 12 shapes"));
+    // Subject k of fold g against the leave-one-out of the other folds' shapes and k.
+    for k in [0, 5, 11] {
+        let mut population: Vec<_> = (0..12)
+            .filter(|i| i / 4 != k / 4)
+            .map(|i| shapes[i].clone())
+            .collect();
+        population.push(shapes[k].clone());
+        let alone = common::temp_dir("hands-k-fold-as-loo");
+        let one = leave_one_out(
+            &population,
+            "imm-hands-2d",
+            &params,
+            &alone,
+            0,
+            &atlasmesh::study::Silent,
+        )
+        .unwrap();
+        same(&r.subjects[k], one.subjects.last().unwrap());
+        let _ = std::fs::remove_dir_all(&alone);
+    }
+    // As many folds as shapes: the leave-one-out, its subjects numbered 1 to 12.
+    let all = common::temp_dir("hands-12-fold");
+    let twelve = atlasmesh::study::cross_validation(
+        atlasmesh::study::Folds::of(&shapes),
+        12,
+        "imm-hands-2d",
+        &params,
+        &all,
+        0,
+        &atlasmesh::study::Silent,
+    )
+    .unwrap();
+    let loo = common::temp_dir("hands-12-loo");
+    let plain = leave_one_out(
+        &shapes,
+        "imm-hands-2d",
+        &params,
+        &loo,
+        0,
+        &atlasmesh::study::Silent,
+    )
+    .unwrap();
+    assert_eq!(plain.folds, None);
+    assert!(plain.subjects.iter().all(|s| s.fold.is_none()));
+    for (i, (a, b)) in twelve.subjects.iter().zip(&plain.subjects).enumerate() {
+        assert_eq!(a.fold, Some(i + 1));
+        same(a, b);
+    }
+    // Folds that leave too few shapes to an atlas, or too few or too many folds: refused.
+    for k in [0, 1, 13] {
+        let e = atlasmesh::study::fold_groups(12, k)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("between 2 and the number of shapes (12)"), "{e}");
+    }
+    let e = atlasmesh::study::fold_groups(5, 2).unwrap_err().to_string();
+    assert!(e.contains("leave 2 shapes to an atlas"), "{e}");
+    for d in [out, all, loo] {
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}
+
+/// `loo --folds 5` on the 40 hands of one CSV: 5 folds of 8 consecutive shapes, each subject's
+/// fold in `report.json` and the title of `report.html`; `--folds` of 1 or of more folds than
+/// shapes refused with the reason, and nothing written.
+#[test]
+fn the_command_lines_k_fold_cross_validation() {
+    let Some(data) = common::data_dir("the_command_lines_k_fold_cross_validation") else {
+        return;
+    };
+    let csv = data
+        .join("imm-hands-2d/hands_long.csv")
+        .display()
+        .to_string();
+    let out = common::temp_dir("hands-cli-k-fold");
+    let run = |folds: &str, dir: &std::path::Path| {
+        common::atlasmesh(&[
+            "loo",
+            "--no-plots",
+            "--open",
+            "--modes",
+            "5",
+            "--shapes",
+            &csv,
+            "--folds",
+            folds,
+            "--out",
+            &dir.display().to_string(),
+        ])
+    };
+    let o = run("5", &out.join("five"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: atlasmesh::report::Report =
+        serde_json::from_slice(&std::fs::read(out.join("five/report.json")).unwrap()).unwrap();
+    assert_eq!(r.folds, Some(5));
+    assert_eq!(r.subjects.len() + r.failed.len(), 40);
+    for s in &r.subjects {
+        let k: usize = s.name.parse().unwrap();
+        assert_eq!(s.fold, Some(k / 8 + 1), "{}", s.name);
+    }
+    let page = std::fs::read_to_string(out.join("five/report.html")).unwrap();
+    assert!(page.contains("5-fold cross-validation: 40 shapes"));
+    for (folds, why) in [
+        ("1", "a whole number from 2"),
+        ("41", "between 2 and the number of shapes (40)"),
+    ] {
+        let dir = out.join(format!("refused-{folds}"));
+        let o = run(folds, &dir);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(why),
+            "--folds {folds}: {err}"
+        );
+        assert!(!dir.join("report.json").exists());
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,4 +1,4 @@
-//! `atlasmesh loo`: the leave-one-out experiment (section 6.1).
+//! `atlasmesh loo`: the leave-one-out experiment (section 6.1), or a k-fold cross-validation.
 
 use crate::args::{PopArgs, RunArgs, dataset_name};
 use crate::population::{Read, corresponded, read};
@@ -19,6 +19,10 @@ pub struct LooArgs {
     /// Output folder (report.json, meshes, plots).
     #[arg(long)]
     out: PathBuf,
+    /// K-fold cross-validation instead of the leave-one-out: the shapes split into K
+    /// consecutive groups in the order given, each group fitted with the atlas of the others.
+    #[arg(long, value_name = "K", value_parser = crate::args::count::<2, 1_000_000>)]
+    folds: Option<usize>,
     /// Worker threads (0 = all cores).
     #[arg(long, default_value_t = 0, value_parser = crate::args::count::<0, 1024>)]
     jobs: usize,
@@ -51,18 +55,17 @@ fn loo<const D: usize>(a: &LooArgs, mut pop: Read<D>, term: &Terminal) -> anyhow
         params,
         ..
     } = pop;
-    Ok(study::leave_one_out_of(
-        study::Folds {
-            corresponded: &corresponded,
-            // Shapes put on a common cut are fitted as read (a bone the field of view cut).
-            subjects: as_read.as_deref().unwrap_or(&shapes),
-            meshes: meshes.as_deref(),
-            population: &study::PopulationFacts { inputs, template },
-        },
-        &dataset_name(&a.pop.shapes),
-        &params,
-        Path::new(&a.out),
-        a.jobs,
-        term,
-    )?)
+    let facts = study::PopulationFacts { inputs, template };
+    let folds = study::Folds {
+        corresponded: &corresponded,
+        // Shapes put on a common cut are fitted as read (a bone the field of view cut).
+        subjects: as_read.as_deref().unwrap_or(&shapes),
+        meshes: meshes.as_deref(),
+        population: &facts,
+    };
+    let (dataset, out) = (dataset_name(&a.pop.shapes), Path::new(&a.out));
+    Ok(match a.folds {
+        Some(k) => study::cross_validation(folds, k, &dataset, &params, out, a.jobs, term)?,
+        None => study::leave_one_out_of(folds, &dataset, &params, out, a.jobs, term)?,
+    })
 }

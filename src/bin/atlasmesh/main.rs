@@ -38,7 +38,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Leave-one-out experiment: for each shape, atlas from the others, fit, morph, measure.
+    /// Leave-one-out experiment: for each shape, atlas from the others, fit, morph, measure (--folds K: k-fold cross-validation)
     Loo(loo::LooArgs),
     /// Build an atlas (shape model + mean mesh) and save it.
     Build(build::BuildArgs),

@@ -28,3 +28,4 @@ mod repair;
 mod solver;
 mod spine_benchmark;
 mod vertebrae;
+mod workflow;

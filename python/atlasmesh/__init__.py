@@ -126,6 +126,7 @@ def _planar(points):
 
 
 _fit, _fit_many, _build = Atlas.fit, Atlas.fit_many, Atlas.build
+_fit_study = Atlas.fit_study
 
 
 def _shapes(shapes, dimension=None):
@@ -160,6 +161,10 @@ def _fit_many_any(self, subjects, *args, **kwargs):
     return results
 
 
+def _fit_study_any(self, subjects, out, *args, **kwargs):
+    return _fit_study(self, _shapes(subjects, self.dimension), out, *args, **kwargs)
+
+
 def _build_any(shapes, *args, **kwargs):
     return _build(_shapes(shapes), *args, **kwargs)
 
@@ -168,6 +173,9 @@ _fit_any.__doc__ = (_fit.__doc__ or "") + (
     "\n\nThe subject may also be a PyVista PolyData or a meshio Mesh (triangles; lines in 2D)."
 )
 _fit_many_any.__doc__ = _fit_many.__doc__
+_fit_study_any.__doc__ = (_fit_study.__doc__ or "") + (
+    "\n\nSubjects may also be PyVista PolyData or meshio Meshes (triangles; lines in 2D)."
+)
 _build_any.__doc__ = (_build.__doc__ or "") + (
     "\n\nShapes may also be PyVista PolyData or meshio Meshes (triangles; lines in 2D)."
 )
@@ -191,6 +199,7 @@ def _explained_variance_ratio(self):
 Atlas.explained_variance_ratio = property(_explained_variance_ratio)
 Atlas.fit = _fit_any
 Atlas.fit_many = _fit_many_any
+Atlas.fit_study = _fit_study_any
 Atlas.build = staticmethod(_build_any)
 
 __all__ = [

@@ -237,6 +237,23 @@ class Atlas:
     ) -> List[Union[FitResult, Error]]:
         """Fits every subject as fit does, in parallel on jobs threads (0: every core): a
         FitResult or the exception of each, in order; mesh=False for the fits alone."""
+    def fit_study(
+        self,
+        subjects: List[ShapeLike],
+        out: Union[str, PathLike],
+        partial: bool = False,
+        grid: int = 20,
+        alpha: float = 50.0,
+        jobs: int = 0,
+        plots: bool = True,
+        resume: bool = True,
+    ) -> Dict[str, Any]:
+        """Fits the subjects and writes what `atlasmesh fit` writes into out: each subject's
+        mesh, fitted surface, pictures and page (plots=False: none), report.json, scores.csv
+        and the overview report.html. Returns the report (report.json as a dict; failed
+        subjects in its "failed" list with the reason). Paths (files, folders, .list files)
+        get a folder each, out/NAME/, as on the command line, and a subject complete there is
+        skipped (resume=False: fitted again); arrays and shapes are written flat into out."""
 
 def read_label_surface(
     path: Union[str, PathLike],

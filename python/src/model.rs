@@ -324,9 +324,20 @@ impl Atlas {
     /// Loads an atlas written by `atlasmesh build` or `Atlas.save`.
     #[staticmethod]
     fn load(path: PathBuf) -> PyResult<Self> {
+        // The file and its checksum kept: a study's report names them, as `fit`'s does.
+        let file = path.display().to_string();
+        let crc = atlasmesh::study::batch::file_crc32(&path).map_err(to_py)?;
         let inner = match atlasmesh::formats::atlas_dimension(&path).map_err(to_py)? {
-            3 => Inner::Three(context(RustAtlas::load(&path).map_err(to_py)?)?),
-            _ => Inner::Two(context(RustAtlas::load(&path).map_err(to_py)?)?),
+            3 => {
+                let mut ctx = context(RustAtlas::load(&path).map_err(to_py)?)?;
+                (ctx.atlas_file, ctx.atlas_crc) = (file, crc);
+                Inner::Three(ctx)
+            }
+            _ => {
+                let mut ctx = context(RustAtlas::load(&path).map_err(to_py)?)?;
+                (ctx.atlas_file, ctx.atlas_crc) = (file, crc);
+                Inner::Two(ctx)
+            }
         };
         Ok(Atlas { inner })
     }
@@ -725,6 +736,86 @@ impl Atlas {
                 })
                 .collect()
         })
+    }
+
+    /// Fits `subjects` and writes what `atlasmesh fit` writes into `out`: each subject's mesh,
+    /// fitted surface, pictures and page (`plots=False`: no pictures and pages), `report.json`,
+    /// `scores.csv` and the overview `report.html`; returns the report (`report.json` as a
+    /// dict; a subject that failed is in its `failed` list with the reason). Subjects given
+    /// as paths (files, folders, `.list` files) get a folder each, `out/NAME/`, as on the
+    /// command line, and a subject already complete there is skipped (`resume=False` fits it
+    /// again); subjects given as arrays or shapes are written flat into `out`. `jobs` threads
+    /// (0 or None: every core); the GIL is released while it runs.
+    #[pyo3(signature = (subjects, out, partial=false, grid=None, alpha=None, jobs=None, plots=true, resume=true))]
+    #[allow(clippy::too_many_arguments)]
+    fn fit_study(
+        &self,
+        py: Python<'_>,
+        subjects: &Bound<'_, PyList>,
+        out: PathBuf,
+        partial: bool,
+        grid: Option<&Bound<'_, PyAny>>,
+        alpha: Option<&Bound<'_, PyAny>>,
+        jobs: Option<&Bound<'_, PyAny>>,
+        plots: bool,
+        resume: bool,
+    ) -> PyResult<Py<PyAny>> {
+        let (grid, alpha) = morph_args(grid, alpha)?;
+        let jobs = jobs
+            .map(|j| args::size(j, "jobs", 0, 1024))
+            .transpose()?
+            .unwrap_or(0);
+        if subjects.is_empty() {
+            return Err(crate::errors::BadInputError::new_err("no subject given"));
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(jobs)
+            .build()
+            .map_err(|e| crate::errors::Error::new_err(format!("thread pool: {e}")))?;
+        // Paths only (not label maps, which carry their label): the command line's batch.
+        let paths: Option<Vec<PathBuf>> = subjects
+            .iter()
+            .map(|o| {
+                if o.extract::<PyRef<'_, crate::read::LabelMap>>().is_ok() {
+                    None
+                } else {
+                    o.extract::<PathBuf>().ok()
+                }
+            })
+            .collect();
+        let json = each!(&self.inner, a, D => {
+            let mut params = call_params(a, partial, grid, alpha)?;
+            params.plots = plots;
+            let place = atlasmesh::study::RunPlace { out, resume, shard: None };
+            let ctx = a.with_place(params, place).map_err(to_py)?;
+            let silent = &atlasmesh::study::Silent;
+            let report = match &paths {
+                Some(paths) => {
+                    let files = atlasmesh::study::batch::subject_files(paths).map_err(to_py)?;
+                    atlasmesh::study::batch::check_folder_names(&files).map_err(to_py)?;
+                    let name = atlasmesh::study::dataset_name(&files);
+                    py.detach(|| {
+                        pool.install(|| {
+                            atlasmesh::study::fit_batch(&ctx, &files, &Default::default(), &name, silent)
+                        })
+                    })
+                }
+                None => {
+                    let shapes = subjects
+                        .iter()
+                        .enumerate()
+                        .map(|(k, o)| subject_of::<D>(&o, k))
+                        .collect::<PyResult<Vec<Subject<D>>>>()?;
+                    py.detach(|| {
+                        pool.install(|| atlasmesh::study::fit_shapes(&ctx, &shapes, "arrays", silent))
+                    })
+                }
+            }
+            .map_err(to_py)?;
+            serde_json::to_string(&report)
+                .map_err(|e| crate::errors::Error::new_err(format!("the report as JSON: {e}")))?
+        });
+        Ok(py.import("json")?.call_method1("loads", (json,))?.unbind())
     }
 
     fn __repr__(&self) -> String {

@@ -90,6 +90,61 @@ def test_femurs_through_cli_and_python_are_the_same(data, femur_atlas, tmp_path)
     assert_same(femur_atlas, subjects, tmp_path)
 
 
+def test_a_study_from_python_is_the_command_lines_fit(data, femur_atlas, tmp_path):
+    """`Atlas.fit_study` of three femur files with the atlas saved and loaded, and `atlasmesh
+    fit` of them with default options: the same report (times aside), the same mesh files
+    byte for byte, a page for each; run again, every subject is resumed; arrays are written
+    flat; a file that cannot be read is in `failed` with its reason."""
+    femurs = data / "knee-distal-femur-synthetic-3d/femur"
+    subjects = [str(femurs / f"S{k:03d}_Femur.ply") for k in (31, 32, 33)]
+    saved = tmp_path / "atlas.safetensors"
+    femur_atlas.save(str(saved))
+    run = subprocess.run(
+        [command_line(), "fit", "--atlas", str(saved), "--out", str(tmp_path / "cli"), "--quiet"]
+        + ["--subject"] + subjects,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    cli = json.loads((tmp_path / "cli" / "report.json").read_text())
+    atlas = atlasmesh.Atlas.load(str(saved))
+    py = atlas.fit_study(subjects, tmp_path / "py")
+    assert py == json.loads((tmp_path / "py" / "report.json").read_text())
+    timing = ("seconds", "heap_peak_mb", "resident_peak_mb")
+    for key in cli:
+        if key not in ("subjects", "summary") and not any(t in key for t in timing):
+            assert py[key] == cli[key], key
+    assert py["atlas"]["file"] == str(saved) and py["failed"] == []
+    assert len(py["subjects"]) == 3
+    for a, b in zip(cli["subjects"], py["subjects"]):
+        assert a["name"] == b["name"]
+        for k in a:
+            if not any(t in k for t in timing):
+                assert a[k] == b[k], (a["name"], k)
+        name = b["name"]
+        mesh = f"{name}/{name}_mesh.vtu"
+        assert (tmp_path / "py" / mesh).read_bytes() == (tmp_path / "cli" / mesh).read_bytes()
+        assert (tmp_path / "py" / name / f"{name}.html").is_file()
+    assert (tmp_path / "py" / "report.html").is_file() and (tmp_path / "py" / "scores.csv").is_file()
+    again = atlas.fit_study(subjects, tmp_path / "py")
+    assert again["summary"]["resumed"] == 3 and len(again["subjects"]) == 3
+    # Arrays (as meshio reads a subject), written flat, no pictures; an unreadable file failed.
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(subjects[0])
+    bad = tmp_path / "broken.ply"
+    bad.write_text("ply\nformat ascii 1.0\nelement vertex 3\n")
+    flat = atlas.fit_study([(m.points, m.cells_dict["triangle"])], tmp_path / "arrays", plots=False)
+    assert [s["name"] for s in flat["subjects"]] == ["shape0"]
+    assert (tmp_path / "arrays" / "shape0_mesh.vtu").is_file()
+    assert not list((tmp_path / "arrays").glob("*.png"))
+    mixed = atlas.fit_study([subjects[1], str(bad)], tmp_path / "mixed", plots=False)
+    assert [s["name"] for s in mixed["subjects"]] == ["S032_Femur"]
+    assert [f["name"] for f in mixed["failed"]] == ["broken"] and "broken.ply" in mixed["failed"][0]["error"]
+    with pytest.raises(atlasmesh.BadInputError):
+        atlas.fit_study([], tmp_path / "none")
+
+
 def test_vertebrae_through_cli_and_python_are_the_same(data, tmp_path):
     raw = data / "verse-L1-vertebrae-3d/raw"
     files = sorted(raw.glob("sub-verse*_segment_20.ply"))

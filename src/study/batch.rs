@@ -112,6 +112,24 @@ pub fn file_crc32(path: &Path) -> Result<u32> {
     Ok(crc32fast::hash(&bytes))
 }
 
+/// The data set's name in reports: the files, or for more than three their folder and count.
+pub fn dataset_name(paths: &[PathBuf]) -> String {
+    if paths.len() <= 3 {
+        return paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" ");
+    }
+    let parent = |p: &PathBuf| p.parent().map(|d| d.to_path_buf()).unwrap_or_default();
+    let first = parent(&paths[0]);
+    if paths.iter().all(|p| parent(p) == first) {
+        format!("{} ({} files)", first.display(), paths.len())
+    } else {
+        format!("{} files ({} ...)", paths.len(), paths[0].display())
+    }
+}
+
 /// The folder name of a subject (its name with path-unsafe characters replaced).
 pub fn folder_name(name: &str) -> String {
     crate::study::file_name(name)

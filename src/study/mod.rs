@@ -59,7 +59,7 @@ mod voxel_model;
 mod write_subject;
 
 pub use baselines::*;
-pub use batch::{fit_batch, fit_shapes};
+pub use batch::{dataset_name, fit_batch, fit_shapes};
 pub use build::*;
 pub use common_cut::*;
 pub use ct_materials::*;

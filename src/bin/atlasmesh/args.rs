@@ -256,23 +256,7 @@ impl RunArgs {
     }
 }
 
-/// The data set's name in reports: the files, or for more than three their folder and count.
-pub fn dataset_name(paths: &[PathBuf]) -> String {
-    if paths.len() <= 3 {
-        return paths
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(" ");
-    }
-    let parent = |p: &PathBuf| p.parent().map(|d| d.to_path_buf()).unwrap_or_default();
-    let first = parent(&paths[0]);
-    if paths.iter().all(|p| parent(p) == first) {
-        format!("{} ({} files)", first.display(), paths.len())
-    } else {
-        format!("{} files ({} ...)", paths.len(), paths[0].display())
-    }
-}
+pub use atlasmesh::study::dataset_name;
 
 pub fn apply_pop(p: &mut RunParams, pop: &PopArgs) {
     p.atlas.modes = match (pop.modes, pop.variance) {

@@ -89,6 +89,26 @@ impl<const D: usize> RunContext<D> {
         Ok(ctx)
     }
 
+    /// A run of the same atlas (shared, with its sets as applied; its file and checksum
+    /// kept) with other `params` (validated) and its outputs in `place`; its fitter and morph
+    /// made anew on first use.
+    ///
+    /// # Errors
+    /// [`Error::Parameter`] for a parameter out of its range ([`RunParams::validate`]).
+    pub fn with_place(&self, mut params: RunParams, place: RunPlace) -> Result<Self> {
+        params.validate(D)?;
+        params.atlas = self.atlas.params;
+        Ok(RunContext {
+            atlas: self.atlas.clone(),
+            atlas_file: self.atlas_file.clone(),
+            atlas_crc: self.atlas_crc,
+            params,
+            place,
+            fitter: OnceLock::new(),
+            morpher: Mutex::new(None),
+        })
+    }
+
     /// The item loop's settings for units recorded in `record`.
     pub fn looping(&self, record: &'static str) -> Looping<'_> {
         Looping {

@@ -445,11 +445,37 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, columns: Columns) 
         s.inverted_elements,
         sparkline(&s.e_d_history)
     );
-    // Its files, linked (relative to the report's folder).
+    // Its files, linked (relative to the report's folder), each shown by what follows the
+    // subject's name (`mesh.vtu`, `fit.vtp`; its page as `page`), named whole in the title:
+    // the table then fits a 1400-pixel window.
     h.push_str("<td class=\"files\">");
+    fn whole(f: &str) -> &str {
+        f.rsplit('/').next().unwrap_or(f)
+    }
+    // (The files' common start: the page's name, `NAME.html`, or else the subject's name.)
+    let base = s
+        .files
+        .iter()
+        .find(|f| f.ends_with(".html"))
+        .map_or(s.name.as_str(), |f| whole(f).trim_end_matches(".html"));
     for f in s.files.iter().filter(|f| !f.ends_with(".png")) {
-        let short = f.rsplit('/').next().unwrap_or(f);
-        let _ = write!(h, "<a href=\"{}\">{}</a> ", escape(f), escape(short));
+        let whole = whole(f);
+        let short = if whole.ends_with(".html") {
+            "page"
+        } else {
+            whole
+                .strip_prefix(base)
+                .and_then(|r| r.strip_prefix('_'))
+                .filter(|r| !r.is_empty())
+                .unwrap_or(whole)
+        };
+        let _ = write!(
+            h,
+            "<a href=\"{}\" title=\"{}\">{}</a> ",
+            escape(f),
+            escape(whole),
+            escape(short)
+        );
     }
     h.push_str("</td></tr>\n");
 }
@@ -489,7 +515,7 @@ th{background:#f0f0f0;cursor:pointer}td:first-child{text-align:left}\
 .figs{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figcaption{font-size:0.85em;color:#555;max-width:640px}\
 img.fig{max-width:640px;border:1px solid #ddd}img.thumb{height:120px;margin:1px;border:1px solid #ddd}\
 td.pics{white-space:nowrap;text-align:left}.wide{overflow-x:auto;max-width:100%}\
-td.notes{text-align:left;min-width:12em;max-width:28em}td.files{text-align:left;min-width:14em}.meta,.hint{color:#555}pre{font-size:0.8em}\
+td.notes{text-align:left;min-width:12em;max-width:28em}td.notes:empty{min-width:0}td.files{text-align:left;min-width:7em}.meta,.hint{color:#555}pre{font-size:0.8em}\
 .verdict.ok{color:#1a7f37}.verdict.bad{color:#b42318;font-weight:bold}tr[data-focus]{cursor:pointer}\
 tr[data-focus]:hover{background:#f6f0ff}table.measures td{text-align:left}";
 

@@ -320,6 +320,14 @@ fn the_demo_report_opens_in_chromium_and_every_view_draws() {
         for p in &subject_pages {
             let name = p.file_name().unwrap().to_str().unwrap();
             assert!(dom.contains(&format!("href=\"{name}\"")), "{name} linked");
+            // Its files shown by what follows its name (the table fits the window), named
+            // whole in their titles.
+            let stem = name.trim_end_matches(".html");
+            assert!(
+                dom.contains(&format!("title=\"{stem}_mesh.vtu\">mesh.vtu</a>"))
+                    && dom.contains(&format!("title=\"{name}\">page</a>")),
+                "{name}'s files in the index"
+            );
             let page = open(p, 1, 3);
             view_drew(&page, p);
             assert!(page.contains("scaled Jacobian"), "{}", p.display());

@@ -29,6 +29,7 @@
 //! | `voxel_model` | a label map's voxel mesh of several parts, written |
 //! | `solve` | a deck solved by CalculiX, its reactions and the stiffness |
 //! | `register_pair` | one registration, written out |
+//! | `register_batch` | a population registered in stages (a job of the engine) |
 //! | `demo` | the built-in demo |
 
 mod baselines;
@@ -47,6 +48,7 @@ mod params;
 mod population;
 mod population_spec;
 mod progress;
+mod register_batch;
 mod register_pair;
 mod report_files;
 pub mod run;
@@ -73,6 +75,7 @@ pub use params::*;
 pub use population::*;
 pub use population_spec::*;
 pub use progress::{Progress, Silent};
+pub use register_batch::{RegisteredShape, RegistrationRun, register_files};
 pub use register_pair::{PairRegistration, register_pair};
 pub use report_files::BatchFacts;
 pub use run::{RunContext, RunPlace, Shard};

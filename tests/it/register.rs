@@ -520,3 +520,154 @@ fn raw_hands_fit_for_five_resamplings() {
         std::fs::remove_dir_all(&out).ok();
     }
 }
+
+/// The registration in stages: `register --shapes` of 8 femurs to a ninth (the template) in
+/// two shards, each shape into its own folder with its residuals; a shard run again resumes
+/// every shape; `build` of the shapes in correspondence, in the population's order, makes the
+/// atlas file `build --register --template` makes, byte for byte (and from the shards' lists,
+/// in their order, the same model to rounding); a file that cannot be read fails alone
+/// (exit 6), and landmarks are refused with the reason.
+#[test]
+fn a_population_registered_in_shards_makes_the_atlas_of_one_registration() {
+    let Some(data) =
+        common::data_dir("a_population_registered_in_shards_makes_the_atlas_of_one_registration")
+    else {
+        return;
+    };
+    let femurs = data.join("knee-distal-femur-synthetic-3d/femur");
+    let femur = |k: usize| {
+        femurs
+            .join(format!("S{k:03}_Femur.ply"))
+            .display()
+            .to_string()
+    };
+    let template = femur(1);
+    let shapes: Vec<String> = (2..=9).map(femur).collect();
+    let dir = common::temp_dir("register-shards");
+    let s = |p: &std::path::Path| p.display().to_string();
+    let register = |extra: &[String]| {
+        let mut args: Vec<String> = vec!["register".into(), "--template".into(), template.clone()];
+        args.push("--shapes".into());
+        args.extend(shapes.iter().cloned());
+        args.extend(extra.iter().cloned());
+        common::atlasmesh(&args)
+    };
+    for i in 0..2 {
+        let out = dir.join(format!("reg/shard-{i}"));
+        let o = register(&["--shard".into(), format!("{i}/2"), "--out".into(), s(&out)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let run: atlasmesh::study::RegistrationRun =
+            serde_json::from_slice(&std::fs::read(out.join("registration.json")).unwrap()).unwrap();
+        assert_eq!(run.shapes.len(), 4);
+        assert_eq!(run.shard.as_deref(), Some(format!("{i}/2").as_str()));
+        for r in &run.shapes {
+            // Shard i holds the shapes at even (odd) places of the sorted list.
+            let k: usize = r.name[1..4].parse().unwrap();
+            assert_eq!((k - 2) % 2, i, "{}", r.name);
+            assert!(
+                r.residuals.rms_relative < 0.01,
+                "{}: {:?}",
+                r.name,
+                r.residuals
+            );
+            let vtp = out.join(&r.files[0]);
+            let back = atlasmesh::formats::read_surface(&vtp).unwrap();
+            assert_eq!(back.points.len(), 7313, "{}", vtp.display());
+        }
+    }
+    // Run again: every shape of the shard resumed.
+    let o = register(&[
+        "--shard".into(),
+        "0/2".into(),
+        "--out".into(),
+        s(&dir.join("reg/shard-0")),
+    ]);
+    assert!(o.status.success());
+    let again: atlasmesh::study::RegistrationRun =
+        serde_json::from_slice(&std::fs::read(dir.join("reg/shard-0/registration.json")).unwrap())
+            .unwrap();
+    assert_eq!((again.resumed, again.shapes.len()), (4, 4));
+    // The atlas of the shapes in correspondence, in the population's order.
+    let build = |extra: Vec<String>, out: &std::path::Path| {
+        let mut args: Vec<String> = vec!["build".into(), "--shapes".into()];
+        args.extend(extra);
+        args.extend(["--out".into(), s(out)]);
+        let o = common::atlasmesh(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let ordered: Vec<String> = (2..=9)
+        .map(|k| {
+            s(&dir.join(format!(
+                "reg/shard-{}/S{k:03}_Femur/S{k:03}_Femur_registered.vtp",
+                (k - 2) % 2
+            )))
+        })
+        .collect();
+    let staged = build(ordered, &dir.join("staged.safetensors"));
+    let mut args = shapes.clone();
+    args.extend(["--register".into(), "--template".into(), template.clone()]);
+    let direct = build(args, &dir.join("direct.safetensors"));
+    assert!(
+        staged == direct,
+        "the staged atlas differs from build --register's"
+    );
+    // From the shards' lists (another order): the same model to rounding.
+    let lists: Vec<String> = (0..2)
+        .map(|i| s(&dir.join(format!("reg/shard-{i}/registered.list"))))
+        .collect();
+    build(lists, &dir.join("lists.safetensors"));
+    let a = atlasmesh::model::Atlas::<3>::load(&dir.join("lists.safetensors")).unwrap();
+    let b = atlasmesh::model::Atlas::<3>::load(&dir.join("direct.safetensors")).unwrap();
+    let apart = a
+        .mean
+        .iter()
+        .zip(&b.mean)
+        .map(|(p, q)| atlasmesh::geometry::dist2(*p, *q).sqrt())
+        .fold(0.0, f64::max);
+    assert!(apart < 1e-9, "means {apart} apart");
+    for (x, y) in a.eigenvalues.iter().zip(&b.eigenvalues) {
+        assert!((x / y - 1.0).abs() < 1e-9, "eigenvalues {x} and {y}");
+    }
+    // A file that cannot be read fails alone; landmarks are refused.
+    let broken = dir.join("S099_broken.ply");
+    std::fs::write(&broken, "ply\nformat ascii 1.0\nelement vertex 3\n").unwrap();
+    let out = dir.join("with-broken");
+    let o = common::atlasmesh(&[
+        "register",
+        "--template",
+        &template,
+        "--shapes",
+        &shapes[0],
+        &s(&broken),
+        "--out",
+        &s(&out),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(6),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let run: atlasmesh::study::RegistrationRun =
+        serde_json::from_slice(&std::fs::read(out.join("registration.json")).unwrap()).unwrap();
+    assert_eq!(run.shapes.len(), 1);
+    assert_eq!(run.failed[0].name, "S099_broken");
+    let o = common::atlasmesh(&[
+        "register",
+        "--template",
+        &template,
+        "--shapes",
+        &shapes[0],
+        "--landmarks",
+        "a.json",
+        "b.json",
+        "--out",
+        &s(&dir.join("landmarks")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("takes no landmarks"),
+        "{err}"
+    );
+}

@@ -88,7 +88,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Instance(a) => instance::run(a, &term),
         Command::Sample(a) => instance::run_sample(a, &term),
         Command::MergeReports(a) => merge_reports::run(a),
-        Command::Register(a) => register::run(a),
+        Command::Register(a) => register::run(a, &term),
         Command::Quality(a) => quality::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Repair(a) => repair::run(a, &term),

@@ -27,8 +27,8 @@ fn run_workflow(snakemake: &Path, dir: &Path, config: &Path) -> std::process::Ou
     )
 }
 
-/// The workflow on the shared femurs: an atlas of S001-S010 (5 modes, 2 % elements), five
-/// subjects (a `.list` file) in two shards. The merged report holds the five, each with the
+/// The workflow on the shared femurs: S002-S010 registered to S001 in two jobs, their atlas
+/// (5 modes, 2 % elements), five subjects (a `.list` file) in two shards. The merged report holds the five, each with the
 /// same figures as one `atlasmesh fit` of them all with the same atlas (times aside), each in
 /// its shard's folder (subject k of the sorted list in shard k mod 2), `scores.csv` beside it;
 /// run again, the workflow has nothing to do; a bad configuration is refused with its reason.
@@ -51,15 +51,17 @@ fn the_snakemake_workflow_builds_fits_in_shards_and_merges() {
     let dir = common::temp_dir("workflow");
     let subjects: Vec<String> = (11..=15).map(femur).collect();
     std::fs::write(dir.join("subjects.list"), subjects.join("\n")).unwrap();
-    let shapes: Vec<String> = (1..=10).map(|k| format!("\"{}\"", femur(k))).collect();
+    let shapes: Vec<String> = (2..=10).map(|k| format!("\"{}\"", femur(k))).collect();
     let config = dir.join("config.yaml");
     std::fs::write(
         &config,
         format!(
-            "atlasmesh: \"{}\"\nshapes: [{}]\nsubjects: subjects.list\nout: results\nshards: 2\n\
+            "atlasmesh: \"{}\"\nshapes: [{}]\ntemplate: \"{}\"\nregister_shards: 2\n\
+             subjects: subjects.list\nout: results\nshards: 2\n\
              build_options: \"--element-size 2% --modes 5\"\nfit_options: [\"--no-plots\"]\n",
             env!("CARGO_BIN_EXE_atlasmesh"),
-            shapes.join(", ")
+            shapes.join(", "),
+            femur(1)
         ),
     )
     .unwrap();
@@ -67,6 +69,16 @@ fn the_snakemake_workflow_builds_fits_in_shards_and_merges() {
     let log = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{log}");
     let results = dir.join("results");
+    // The registration in two jobs: the nine shapes in correspondence with the template.
+    let mut registered = 0;
+    for i in 0..2 {
+        let list = results.join(format!("registration/shard-{i}/registered.list"));
+        registered += std::fs::read_to_string(&list).unwrap().lines().count();
+    }
+    assert_eq!(registered, 9);
+    let atlas = atlasmesh::model::Atlas::<3>::load(&results.join("atlas.safetensors")).unwrap();
+    let template = atlasmesh::formats::read_surface(Path::new(&femur(1))).unwrap();
+    assert_eq!(atlas.mean.len(), template.points.len());
     let merged: atlasmesh::report::Report =
         serde_json::from_slice(&std::fs::read(results.join("report.json")).unwrap()).unwrap();
     assert_eq!(merged.subjects.len(), 5, "{:?}", merged.failed);

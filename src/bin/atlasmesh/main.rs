@@ -38,7 +38,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Leave-one-out experiment: for each shape, atlas from the others, fit, morph, measure (--folds K: k-fold cross-validation)
+    /// Leave-one-out experiment (or k-fold with --folds): for each shape, atlas from the others, fit, morph, measure
     Loo(loo::LooArgs),
     /// Build an atlas (shape model + mean mesh) and save it.
     Build(build::BuildArgs),

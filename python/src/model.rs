@@ -213,6 +213,18 @@ fn call_params<const D: usize>(
     Ok(p)
 }
 
+/// A pool of `jobs` threads (an argument from Python; None or 0: every core).
+fn thread_pool(jobs: Option<&Bound<'_, PyAny>>) -> PyResult<rayon::ThreadPool> {
+    let jobs = jobs
+        .map(|j| args::size(j, "jobs", 0, 1024))
+        .transpose()?
+        .unwrap_or(0);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| crate::errors::Error::new_err(format!("thread pool: {e}")))
+}
+
 /// The fit of one subject (Algorithm 1, eq. 9, repair), with its report as JSON.
 fn fit_one<const D: usize>(
     ctx: &RunContext<D>,
@@ -686,15 +698,7 @@ impl Atlas {
         mesh: bool,
     ) -> PyResult<Vec<Py<PyAny>>> {
         let (grid, alpha) = morph_args(grid, alpha)?;
-        // 0: every core.
-        let jobs = jobs
-            .map(|j| args::size(j, "jobs", 0, 1024))
-            .transpose()?
-            .unwrap_or(0);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(jobs)
-            .build()
-            .map_err(|e| crate::errors::Error::new_err(format!("thread pool: {e}")))?;
+        let pool = thread_pool(jobs)?;
         each!(&self.inner, a, D => {
             let params = call_params(a, partial, grid, alpha)?;
             let shapes: Vec<PyResult<Subject<D>>> = subjects
@@ -761,17 +765,10 @@ impl Atlas {
         resume: bool,
     ) -> PyResult<Py<PyAny>> {
         let (grid, alpha) = morph_args(grid, alpha)?;
-        let jobs = jobs
-            .map(|j| args::size(j, "jobs", 0, 1024))
-            .transpose()?
-            .unwrap_or(0);
         if subjects.is_empty() {
             return Err(crate::errors::BadInputError::new_err("no subject given"));
         }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(jobs)
-            .build()
-            .map_err(|e| crate::errors::Error::new_err(format!("thread pool: {e}")))?;
+        let pool = thread_pool(jobs)?;
         // Paths only (not label maps, which carry their label): the command line's batch.
         let paths: Option<Vec<PathBuf>> = subjects
             .iter()

@@ -67,23 +67,9 @@ pub fn leave_one_out_of<const D: usize>(
     jobs: usize,
     progress: &dyn Progress,
 ) -> Result<Report> {
-    let variant = Variant {
-        modes: None,
-        params: params.clone(),
-        out: out.to_path_buf(),
-    };
     let groups: Vec<Vec<usize>> = (0..folds.corresponded.len()).map(|k| vec![k]).collect();
-    let mut reports = run_folds(
-        folds,
-        &groups,
-        None,
-        dataset,
-        params,
-        &[variant],
-        jobs,
-        progress,
-    )?;
-    Ok(reports.remove(0))
+    let place = (dataset, out, jobs, progress);
+    one_report(folds, &groups, None, params, place)
 }
 
 /// K-fold cross-validation over `folds` (see [`Folds`]): the shapes split into `k`
@@ -106,6 +92,25 @@ pub fn cross_validation<const D: usize>(
     progress: &dyn Progress,
 ) -> Result<Report> {
     let groups = fold_groups(folds.corresponded.len(), k)?;
+    one_report(
+        folds,
+        &groups,
+        Some(k),
+        params,
+        (dataset, out, jobs, progress),
+    )
+}
+
+/// The folds of `groups` (see [`run_folds`]) with the atlases as built, into one report in
+/// `out`; `place`: the data set's name, `out`, the threads and the progress.
+fn one_report<const D: usize>(
+    folds: Folds<'_, D>,
+    groups: &[Vec<usize>],
+    k_fold: Option<usize>,
+    params: &RunParams,
+    place: (&str, &Path, usize, &dyn Progress),
+) -> Result<Report> {
+    let (dataset, out, jobs, progress) = place;
     let variant = Variant {
         modes: None,
         params: params.clone(),
@@ -113,8 +118,8 @@ pub fn cross_validation<const D: usize>(
     };
     let mut reports = run_folds(
         folds,
-        &groups,
-        Some(k),
+        groups,
+        k_fold,
         dataset,
         params,
         &[variant],

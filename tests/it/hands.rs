@@ -475,6 +475,12 @@ fn the_command_lines_k_fold_cross_validation() {
     }
     let page = std::fs::read_to_string(out.join("five/report.html")).unwrap();
     assert!(page.contains("5-fold cross-validation: 40 shapes"));
+    // Every success read back from its file (by meshio too) and agreeing with it.
+    let hands = common::hands(&data, None);
+    assert_eq!(
+        common::assert_delivered(&r, &out.join("five"), &hands),
+        r.summary.succeeded
+    );
     for (folds, why) in [
         ("1", "a whole number from 2"),
         ("41", "between 2 and the number of shapes (40)"),

@@ -573,6 +573,24 @@ fn a_population_registered_in_shards_makes_the_atlas_of_one_registration() {
             let vtp = out.join(&r.files[0]);
             let back = atlasmesh::formats::read_surface(&vtp).unwrap();
             assert_eq!(back.points.len(), 7313, "{}", vtp.display());
+            // VTK (PyVista) reads the same points and triangles.
+            if let Some(py) = common::python() {
+                let script = "import sys, pyvista as pv\nm = pv.read(sys.argv[1])\n\
+                              print(m.n_points, m.n_cells, *m.points[0])";
+                let o = common::run(
+                    std::process::Command::new(py)
+                        .args(["-c", script])
+                        .arg(&vtp),
+                    common::deadline::PYTHON,
+                );
+                assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+                let v: Vec<f64> = String::from_utf8_lossy(&o.stdout)
+                    .split_whitespace()
+                    .map(|x| x.parse().unwrap())
+                    .collect();
+                assert_eq!((v[0], v[1]), (7313.0, back.facets.len() as f64));
+                assert_eq!(&v[2..], &back.points[0][..]);
+            }
         }
     }
     // Run again: every shape of the shard resumed.

@@ -153,14 +153,20 @@ fn vertebrae_leave_one_out_with_landmarks() {
     std::fs::remove_dir_all(&out).ok();
 }
 
+/// Without landmarks, as a 5-fold cross-validation: each pair of vertebrae (in the order
+/// given) fitted with the atlas of the other eight, to the same figures.
 #[test]
-fn vertebrae_leave_one_out_without_landmarks() {
-    let Some(v) = vertebrae("vertebrae_leave_one_out_without_landmarks") else {
+fn vertebrae_five_fold_without_landmarks() {
+    let Some(v) = vertebrae("vertebrae_five_fold_without_landmarks") else {
         return;
     };
     let out = common::temp_dir("vertebrae-plain");
-    let r = loo(&v, &out, &[]);
-    check("no landmarks", &r, &out, &subjects(&v), None);
+    let r = loo(&v, &out, &["--folds", "5"]);
+    assert_eq!(r.folds, Some(5));
+    let folds: Vec<Option<usize>> = r.subjects.iter().map(|s| s.fold).collect();
+    let expected: Vec<Option<usize>> = (0..10).map(|i| Some(i / 2 + 1)).collect();
+    assert_eq!(folds, expected, "consecutive pairs, in the order given");
+    check("no landmarks, 5 folds", &r, &out, &subjects(&v), None);
     std::fs::remove_dir_all(&out).ok();
 }
 

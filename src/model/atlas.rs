@@ -1,7 +1,10 @@
 //! The statistical atlas: the shape model (mean `S_bar`, modes `Psi`, eigenvalues `Lambda`,
 //! sections 2.2-2.3) and the FE mesh of the mean (section 2.4).
 
-use super::{generalized_procrustes, pca};
+use super::randomized_pca::{RandomizedPcaParams, randomized_pca};
+use super::shape_source::{ShapeSource, for_each_batch, read_checked};
+use super::streamed_procrustes::{generalized_procrustes_streamed, tangent_shape};
+use super::{Pca, generalized_procrustes, pca};
 use crate::error::{Error, Result};
 use crate::geometry::{Point, Shape, Similarity, bounding_box, scale};
 use crate::mesh::FeMesh;
@@ -44,31 +47,95 @@ impl Default for AtlasParams {
 /// and size: the scale is the shapes' mean centroid size over the mean's (the scale GPA
 /// removed); the rotation maps the mean onto the average of its similarity fits `T_i(mean)`
 /// onto every shape (Umeyama; the rotation closest to the average rotation), the translation
-/// the mean's centroid onto their average centroid. Units of the shapes.
-fn data_frame<const D: usize>(mean: &[Point<D>], shapes: &[Shape<D>]) -> Similarity<D> {
-    let fits: Vec<Similarity<D>> = shapes
-        .iter()
-        .map(|s| crate::model::fit_similarity(mean, &s.points, None))
-        .collect();
-    let n = fits.len() as f64;
+/// the mean's centroid onto their average centroid. Units of the shapes; one pass over
+/// `shapes`, `batch` at a time.
+fn data_frame<const D: usize>(
+    mean: &[Point<D>],
+    shapes: &dyn ShapeSource<D>,
+    batch: usize,
+) -> Result<Similarity<D>> {
+    let n = shapes.len() as f64;
     let size = crate::geometry::centroid_size;
-    let scale = shapes.iter().map(|s| size(&s.points)).sum::<f64>() / n / size(mean);
+    let mut sizes = 0.0;
     let mut average = vec![[0.0; D]; mean.len()];
-    for t in &fits {
-        for (a, p) in average.iter_mut().zip(mean) {
-            let q = t.apply(p);
-            for d in 0..D {
-                a[d] += q[d] / n;
+    for_each_batch(shapes, batch, mean.len(), |_, batch| {
+        for s in batch {
+            let t = crate::model::fit_similarity(mean, s, None);
+            sizes += size(s);
+            for (a, p) in average.iter_mut().zip(mean) {
+                let q = t.apply(p);
+                for d in 0..D {
+                    a[d] += q[d] / n;
+                }
             }
         }
-    }
+        Ok(())
+    })?;
+    let scale = sizes / n / size(mean);
     let r = crate::model::fit_similarity(mean, &average, None).r;
-    Similarity::centred(
+    Ok(Similarity::centred(
         scale,
         r,
         &crate::geometry::centroid(mean),
         &crate::geometry::centroid(&average),
-    )
+    ))
+}
+
+/// The number of modes `params` keeps of `p` (section 2.3), a model of `shapes` shapes;
+/// `truncated`: `p` holds only the leading modes (a streamed model), so a share of variance
+/// they do not reach is an error rather than all of them.
+fn modes_kept(p: &Pca, params: &AtlasParams, shapes: usize, truncated: bool) -> Result<usize> {
+    match params.modes {
+        ModeSelection::Count(m) => {
+            if m == 0 || m > p.eigenvalues.len() {
+                return Err(Error::Parameter(format!(
+                    "--modes {m}: the population of {shapes} shapes has {} modes",
+                    p.eigenvalues.len()
+                )));
+            }
+            Ok(m)
+        }
+        ModeSelection::Variance(v) => {
+            if !(v > 0.0 && v <= 1.0) {
+                return Err(Error::Parameter(format!(
+                    "--variance {v} must be in (0, 1]"
+                )));
+            }
+            let m = p.modes_for_variance(v);
+            let reached = p.cumulative_variance().last().copied().unwrap_or(0.0);
+            if truncated && reached < v - 1e-12 {
+                return Err(Error::Parameter(format!(
+                    "--variance {v}: the {} leading modes computed explain {:.4} of the \
+                     variance; ask for more modes (--max-modes) or a number of modes (--modes)",
+                    p.eigenvalues.len(),
+                    reached
+                )));
+            }
+            Ok(m)
+        }
+    }
+}
+
+/// How a streamed atlas ([`Atlas::build_streamed`]) reads and models its population.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StreamParams {
+    /// Shapes read at a time (the memory of a pass: one batch).
+    pub batch: usize,
+    /// With a share of variance to keep ([`ModeSelection::Variance`]): the most modes
+    /// computed; the share must be reached within them.
+    pub max_modes: usize,
+    /// The randomized PCA's oversampling, power iterations and seed.
+    pub pca: RandomizedPcaParams,
+}
+
+impl Default for StreamParams {
+    fn default() -> Self {
+        StreamParams {
+            batch: 256,
+            max_modes: 100,
+            pca: RandomizedPcaParams::default(),
+        }
+    }
 }
 
 /// The empty mesh of a model-only atlas ([`Atlas::build_model`]).
@@ -225,8 +292,8 @@ impl<const D: usize> Atlas<D> {
                 )));
             }
         }
-        let gpa =
-            generalized_procrustes(&shapes.iter().map(|s| s.points.clone()).collect::<Vec<_>>())?;
+        let points: Vec<Vec<Point<D>>> = shapes.iter().map(|s| s.points.clone()).collect();
+        let gpa = generalized_procrustes(&points)?;
         let (lo, hi) = bounding_box(&gpa.mean);
         let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
         let c = 1.0 / ext;
@@ -247,26 +314,7 @@ impl<const D: usize> Atlas<D> {
                 shapes.len()
             )));
         }
-        let m = match params.modes {
-            ModeSelection::Count(m) => {
-                if m == 0 || m > p.eigenvalues.len() {
-                    return Err(Error::Parameter(format!(
-                        "--modes {m}: the population of {} shapes has {} modes",
-                        shapes.len(),
-                        p.eigenvalues.len()
-                    )));
-                }
-                m
-            }
-            ModeSelection::Variance(v) => {
-                if !(v > 0.0 && v <= 1.0) {
-                    return Err(Error::Parameter(format!(
-                        "--variance {v} must be in (0, 1]"
-                    )));
-                }
-                p.modes_for_variance(v)
-            }
-        };
+        let m = modes_kept(&p, params, shapes.len(), false)?;
         let mean_shape = Shape {
             name: "mean".into(),
             points: mean.clone(),
@@ -274,7 +322,7 @@ impl<const D: usize> Atlas<D> {
             landmarks: Vec::new(),
         };
         let mesh = mesher(&mean_shape)?;
-        let frame = data_frame(&mean, shapes);
+        let frame = data_frame(&mean, &points, points.len())?;
         Ok(Atlas {
             mean,
             modes: p.modes.subcols(0, m).to_owned(),
@@ -286,6 +334,97 @@ impl<const D: usize> Atlas<D> {
             mesh,
             params: *params,
             training_shapes: shapes.len(),
+            data_frame: Some(frame),
+            cut_facets: Vec::new(),
+        })
+    }
+
+    /// The atlas of a population read in batches from `source` (files on disk, for a cohort
+    /// larger than the memory), with the FE mesh that `mesher` makes of the mean (given the
+    /// data units per reference unit, the scale of the data frame): GPA in
+    /// passes over the shapes ([`crate::model::generalized_procrustes_streamed`]), the
+    /// leading modes by a randomized PCA in passes ([`crate::model::randomized_pca`]; the
+    /// modes asked, or `stream.max_modes` with a share of variance), the data frame in one
+    /// more pass. `facets` and `landmarks` are the shapes' (they correspond). Memory: the
+    /// mean, one batch and the modes' working matrices (`N·D × 2 l` and `l × n_s`, `l` the
+    /// modes computed plus 10), never the population.
+    ///
+    /// The same model as [`Atlas::build_meshed`] of the same shapes to rounding when the
+    /// modes computed plus the oversampling reach the population's `n_s - 1` modes; within the
+    /// randomized PCA's accuracy otherwise.
+    pub fn build_streamed(
+        source: &dyn ShapeSource<D>,
+        facets: Vec<[usize; D]>,
+        landmarks: Vec<usize>,
+        params: &AtlasParams,
+        stream: &StreamParams,
+        mesher: impl FnOnce(&Shape<D>, f64) -> Result<FeMesh<D>>,
+    ) -> Result<Self> {
+        let n = source.len();
+        if n < 3 {
+            return Err(Error::Population(format!(
+                "{n} shape(s); an atlas needs at least 3 (two give a single mode and no way to check it)"
+            )));
+        }
+        let gpa = generalized_procrustes_streamed(source, stream.batch)?;
+        let (lo, hi) = bounding_box(&gpa.mean);
+        let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+        let c = 1.0 / ext;
+        let mean: Vec<Point<D>> = gpa.mean.iter().map(|p| scale(*p, c)).collect();
+        let mean_shape = Shape {
+            name: "mean".into(),
+            points: mean.clone(),
+            facets: facets.clone(),
+            landmarks: landmarks.clone(),
+        };
+        mean_shape.validate()?;
+        let rows = mean.len() * D;
+        let asked = match params.modes {
+            ModeSelection::Count(m) => m,
+            ModeSelection::Variance(_) => stream.max_modes,
+        }
+        .clamp(1, (n - 1).min(rows));
+        let mut columns = |range: std::ops::Range<usize>| -> Result<Mat<f64>> {
+            let shapes = read_checked(source, range.clone(), mean.len())?;
+            let mut a = Mat::<f64>::zeros(rows, shapes.len());
+            for (j, s) in shapes.iter().enumerate() {
+                let x = tangent_shape(source, range.start + j, s, &gpa.mean)?;
+                for (i, (p, m)) in x.iter().zip(&mean).enumerate() {
+                    for d in 0..D {
+                        a[(i * D + d, j)] = p[d] * c - m[d];
+                    }
+                }
+            }
+            Ok(a)
+        };
+        let p = randomized_pca(n, rows, asked, stream.batch, &stream.pca, &mut columns)?;
+        if p.total_variance.is_nan() || p.total_variance <= 1e-20 * mean.len() as f64 {
+            return Err(Error::Population(format!(
+                "the {n} shapes are identical after alignment (total variance {:.1e}): there \
+                 is no variance to model; give shapes that differ",
+                p.total_variance
+            )));
+        }
+        let m = modes_kept(&p, params, n, true)?;
+        let frame = data_frame(&mean, source, stream.batch)?;
+        let mesh = mesher(
+            &Shape {
+                landmarks: Vec::new(),
+                ..mean_shape
+            },
+            frame.s,
+        )?;
+        Ok(Atlas {
+            mean,
+            modes: p.modes.subcols(0, m).to_owned(),
+            eigenvalues: p.eigenvalues[..m].to_vec(),
+            cumulative_variance: p.cumulative_variance(),
+            facets,
+            landmarks,
+            landmark_ids: Vec::new(),
+            mesh,
+            params: *params,
+            training_shapes: n,
             data_frame: Some(frame),
             cut_facets: Vec::new(),
         })

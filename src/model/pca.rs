@@ -13,12 +13,15 @@ pub struct Pca {
     pub modes: Mat<f64>,
     /// Eigenvalues `lambda_k` of the covariance `Phi Phi^T / (n_s - 1)`, decreasing.
     pub eigenvalues: Vec<f64>,
+    /// The total variance `trace(Phi Phi^T) / (n_s - 1)`: the sum of every eigenvalue, those
+    /// of the modes not computed (a truncated PCA's) included.
+    pub total_variance: f64,
 }
 
 impl Pca {
     /// Cumulative share of the total variance explained by the first `1, 2, …` modes.
     pub fn cumulative_variance(&self) -> Vec<f64> {
-        let total: f64 = self.eigenvalues.iter().sum();
+        let total = self.total_variance;
         let mut acc = 0.0;
         self.eigenvalues
             .iter()
@@ -75,7 +78,12 @@ pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Resu
         ));
     }
     let modes = svd.U().subcols(0, keep).to_owned();
-    Ok(Pca { modes, eigenvalues })
+    let total_variance = eigenvalues.iter().sum();
+    Ok(Pca {
+        modes,
+        eigenvalues,
+        total_variance,
+    })
 }
 
 #[cfg(test)]

@@ -99,6 +99,49 @@ fn optimal_rotation<const D: usize>(h: &[[f64; D]; D]) -> ([[f64; D]; D], f64) {
     (r, trace)
 }
 
+/// `s` centred at the origin and scaled to unit norm (Frobenius, over all points); `None`
+/// when all its points are at one place.
+pub(crate) fn normalized<const D: usize>(s: &[Point<D>]) -> Option<Vec<Point<D>>> {
+    let c = centroid(s);
+    let x: Vec<Point<D>> = s.iter().map(|p| sub(*p, c)).collect();
+    let nrm = x.iter().map(|p| dot(*p, *p)).sum::<f64>().sqrt();
+    (nrm > 0.0).then(|| x.iter().map(|p| scale(*p, 1.0 / nrm)).collect())
+}
+
+/// GPA stops when its mean moves less than this (Frobenius norm; the mean has norm 1).
+pub(crate) const GPA_TOLERANCE: f64 = 1e-12;
+
+/// GPA's iterations at most.
+pub(crate) const GPA_MAX_ITERATIONS: usize = 100;
+
+/// One GPA update of the mean (section 2.2): `sum`, the average of the shapes aligned to the
+/// current mean `mean`, normalized and rotated back to the orientation of `reference` (the
+/// first shape: the mean's orientation stays fixed). Returns the new mean and how far it
+/// moved from `mean`.
+pub(crate) fn next_mean<const D: usize>(
+    sum: &[Point<D>],
+    mean: &[Point<D>],
+    reference: &[Point<D>],
+) -> Result<(Vec<Point<D>>, f64)> {
+    let m = normalized(sum)
+        .ok_or_else(|| Error::Numerical("the Procrustes mean collapsed to a point".into()))?;
+    // Keep the mean's orientation fixed to the reference (rotation only).
+    let t = fit_similarity(&m, reference, None);
+    let rot = Similarity {
+        s: 1.0,
+        r: t.r,
+        t: [0.0; D],
+    };
+    let m: Vec<Point<D>> = m.iter().map(|p| rot.apply(p)).collect();
+    let change: f64 = m
+        .iter()
+        .zip(mean)
+        .map(|(a, b)| crate::geometry::dist2(*a, *b))
+        .sum::<f64>()
+        .sqrt();
+    Ok((m, change))
+}
+
 /// Result of generalized Procrustes analysis.
 #[derive(Clone, Debug)]
 pub struct Gpa<const D: usize> {
@@ -130,12 +173,6 @@ pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Resul
             "shapes have different point counts".into(),
         ));
     }
-    let normalized = |s: &[Point<D>]| -> Option<Vec<Point<D>>> {
-        let c = centroid(s);
-        let x: Vec<Point<D>> = s.iter().map(|p| sub(*p, c)).collect();
-        let nrm = x.iter().map(|p| dot(*p, *p)).sum::<f64>().sqrt();
-        (nrm > 0.0).then(|| x.iter().map(|p| scale(*p, 1.0 / nrm)).collect())
-    };
     let mut x: Vec<Vec<Point<D>>> = Vec::with_capacity(shapes.len());
     for (k, s) in shapes.iter().enumerate() {
         x.push(normalized(s).ok_or_else(|| {
@@ -145,7 +182,7 @@ pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Resul
     let reference = x[0].clone();
     let mut mean = reference.clone();
     let mut iterations = 0;
-    for it in 0..100 {
+    for it in 0..GPA_MAX_ITERATIONS {
         iterations = it + 1;
         for s in x.iter_mut() {
             let t = fit_similarity(s, &mean, None);
@@ -159,24 +196,9 @@ pub fn generalized_procrustes<const D: usize>(shapes: &[Vec<Point<D>>]) -> Resul
                 }
             }
         }
-        let mut m = normalized(&m)
-            .ok_or_else(|| Error::Numerical("the Procrustes mean collapsed to a point".into()))?;
-        // Keep the mean's orientation fixed to the reference (rotation only).
-        let t = fit_similarity(&m, &reference, None);
-        let rot = Similarity {
-            s: 1.0,
-            r: t.r,
-            t: [0.0; D],
-        };
-        m = m.iter().map(|p| rot.apply(p)).collect();
-        let change: f64 = m
-            .iter()
-            .zip(&mean)
-            .map(|(a, b)| crate::geometry::dist2(*a, *b))
-            .sum::<f64>()
-            .sqrt();
+        let (m, change) = next_mean(&m, &mean, &reference)?;
         mean = m;
-        if change < 1e-12 {
+        if change < GPA_TOLERANCE {
             break;
         }
     }

@@ -9,6 +9,7 @@
 //! point `i` of the mean).
 
 use super::Atlas;
+use super::standard_normal::standard_normal;
 use crate::error::{Error, Result};
 use crate::geometry::Point;
 use faer::Mat;
@@ -298,13 +299,4 @@ fn point_covariance<const D: usize>(
         }
     }
     c
-}
-
-/// Standard normal deviate (Box-Muller) from a seeded generator: the draws of the model's
-/// prior (eq. 4, `w ~ N(0, Lambda)`).
-pub(crate) fn standard_normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
-    use rand::RngExt;
-    let u: f64 = rng.random_range(1e-12..1.0);
-    let v: f64 = rng.random_range(0.0..1.0);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
 }

@@ -1,5 +1,5 @@
 use super::*;
-use crate::geometry::Shape;
+use crate::geometry::{Point, Shape};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
@@ -367,4 +367,219 @@ fn atlases_with_an_absurd_scale_or_a_landmark_id_twice_do_not_load() {
         .unwrap()
         .to_string();
     assert!(e.contains("\"tip\" is given twice"), "{e}");
+}
+
+/// `n` closed outlines of 60 points with `modes` deformation modes of decaying size
+/// (harmonics of amplitude `decay^k` times a random normal) and a random pose (rotation,
+/// scale 0.5-2, translation): a population whose spectrum decays as the shared populations'
+/// do.
+fn posed_outlines(n: usize, seed: u64) -> Vec<Vec<Point<2>>> {
+    outlines_with_modes(n, seed, 12, 0.6)
+}
+
+fn outlines_with_modes(n: usize, seed: u64, modes: usize, decay: f64) -> Vec<Vec<Point<2>>> {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let w: Vec<f64> = (0..modes)
+                .map(|k| decay.powi(k as i32) * 0.1 * standard_normal(&mut rng))
+                .collect();
+            let angle = 3.0 * standard_normal(&mut rng);
+            let s = 1.25 + 0.75 * standard_normal(&mut rng).tanh();
+            let shift = [standard_normal(&mut rng), standard_normal(&mut rng)];
+            let mut pose = crate::geometry::Similarity::<2>::planar_rotation(angle);
+            pose.s = s;
+            pose.t = shift;
+            (0..60)
+                .map(|i| {
+                    let t = i as f64 / 60.0 * std::f64::consts::TAU;
+                    let r: f64 = 1.0
+                        + w.iter()
+                            .enumerate()
+                            .map(|(k, a)| a * ((k / 2 + 2) as f64 * t + (k % 2) as f64 * 1.5).cos())
+                            .sum::<f64>();
+                    pose.apply(&[1.4 * r * t.cos(), r * t.sin()])
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The same mode up to its sign: `|a · b|` of two unit columns.
+fn alignment(a: &Mat<f64>, b: &Mat<f64>, k: usize) -> f64 {
+    (0..a.nrows())
+        .map(|r| a[(r, k)] * b[(r, k)])
+        .sum::<f64>()
+        .abs()
+}
+
+/// The streamed GPA gives the in-memory GPA's mean, whatever the batch.
+#[test]
+fn the_streamed_procrustes_mean_is_the_in_memory_one() {
+    let shapes = posed_outlines(40, 3);
+    let dense = generalized_procrustes(&shapes).unwrap();
+    for batch in [1, 7, 64] {
+        let streamed = generalized_procrustes_streamed(&shapes, batch).unwrap();
+        let apart: f64 = dense
+            .mean
+            .iter()
+            .zip(&streamed.mean)
+            .map(|(a, b)| crate::geometry::dist2(*a, *b))
+            .sum::<f64>()
+            .sqrt();
+        assert!(apart < 1e-12, "batch {batch}: means {apart} apart");
+        assert_eq!(streamed.iterations, dense.iterations, "batch {batch}");
+    }
+}
+
+fn model_params(modes: ModeSelection) -> AtlasParams {
+    AtlasParams {
+        modes,
+        element_size: 0.05,
+        smoothing_passes: 2,
+    }
+}
+
+fn streamed(shapes: &Vec<Vec<Point<2>>>, modes: ModeSelection, batch: usize) -> Atlas<2> {
+    let facets = Shape::polyline("s", shapes[0].clone(), true).facets;
+    let stream = StreamParams {
+        batch,
+        ..StreamParams::default()
+    };
+    Atlas::build_streamed(
+        shapes,
+        facets,
+        Vec::new(),
+        &model_params(modes),
+        &stream,
+        |_, _| Ok(atlas::no_mesh()),
+    )
+    .unwrap()
+}
+
+fn in_memory(shapes: &[Vec<Point<2>>], modes: ModeSelection) -> Atlas<2> {
+    let shapes: Vec<Shape<2>> = shapes
+        .iter()
+        .enumerate()
+        .map(|(k, p)| Shape::polyline(format!("s{k}"), p.clone(), true))
+        .collect();
+    Atlas::build_model(&shapes, &model_params(modes)).unwrap()
+}
+
+/// Where the modes asked and the oversampling reach every mode of the population, the
+/// streamed atlas is the in-memory one: mean, eigenvalues, modes (up to their sign),
+/// cumulative variance and data frame, to rounding.
+#[test]
+fn a_streamed_atlas_of_a_small_population_is_the_in_memory_one() {
+    let shapes = posed_outlines(12, 5);
+    let dense = in_memory(&shapes, ModeSelection::Count(6));
+    let s = streamed(&shapes, ModeSelection::Count(6), 5);
+    let apart = |a: &[Point<2>], b: &[Point<2>]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| crate::geometry::dist2(*p, *q))
+            .fold(0.0, f64::max)
+            .sqrt()
+    };
+    assert!(apart(&dense.mean, &s.mean) < 1e-12);
+    for k in 0..6 {
+        let rel = s.eigenvalues[k] / dense.eigenvalues[k] - 1.0;
+        assert!(rel.abs() < 1e-9, "mode {k}: eigenvalue off by {rel}");
+        assert!(
+            alignment(&dense.modes, &s.modes, k) > 1.0 - 1e-9,
+            "mode {k}"
+        );
+    }
+    for (a, b) in dense.cumulative_variance.iter().zip(&s.cumulative_variance) {
+        assert!((a - b).abs() < 1e-9);
+    }
+    let (fd, fs) = (dense.data_frame.unwrap(), s.data_frame.unwrap());
+    assert!((fd.s - fs.s).abs() < 1e-12 * fd.s);
+    let x = [0.3, -0.2];
+    assert!(crate::geometry::dist2(fd.apply(&x), fs.apply(&x)) < 1e-20);
+}
+
+/// With far more shapes and modes than asked (500 shapes of 40 modes decaying by 0.8, 5 modes
+/// asked: 15 directions sampled of 119), the randomized PCA finds the dense PCA's leading
+/// modes: eigenvalues to 1e-9, modes to 1e-9 in their direction, the variance share of each
+/// exact; the same with other batches and seeds.
+#[test]
+fn the_randomized_modes_of_a_large_population_are_the_dense_ones() {
+    let shapes = outlines_with_modes(500, 11, 40, 0.8);
+    let dense = in_memory(&shapes, ModeSelection::Count(5));
+    for (batch, seed) in [(64, 0), (500, 0), (33, 9)] {
+        let facets = Shape::polyline("s", shapes[0].clone(), true).facets;
+        let stream = StreamParams {
+            batch,
+            pca: RandomizedPcaParams {
+                seed,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let s = Atlas::build_streamed(
+            &shapes,
+            facets,
+            Vec::new(),
+            &model_params(ModeSelection::Count(5)),
+            &stream,
+            |_, _| Ok(atlas::no_mesh()),
+        )
+        .unwrap();
+        assert_eq!(s.training_shapes, 500);
+        for k in 0..5 {
+            let rel = s.eigenvalues[k] / dense.eigenvalues[k] - 1.0;
+            assert!(
+                rel.abs() < 1e-9,
+                "batch {batch}, mode {k}: eigenvalue off by {rel}"
+            );
+            let a = alignment(&dense.modes, &s.modes, k);
+            assert!(a > 1.0 - 1e-9, "batch {batch}, mode {k}: |cos| {a}");
+            let share = (s.cumulative_variance[k] - dense.cumulative_variance[k]).abs();
+            assert!(share < 1e-9, "mode {k}: cumulative share off by {share}");
+        }
+    }
+}
+
+/// A share of variance the modes computed do not reach is refused with the way out; a shape
+/// with a NaN or another point count is refused by its name.
+#[test]
+fn a_streamed_atlas_refuses_what_it_cannot_model() {
+    let shapes = posed_outlines(60, 2);
+    let facets = Shape::polyline("s", shapes[0].clone(), true).facets;
+    let stream = StreamParams {
+        max_modes: 2,
+        ..Default::default()
+    };
+    let build = |shapes: &Vec<Vec<Point<2>>>, modes| {
+        Atlas::build_streamed(
+            shapes,
+            facets.clone(),
+            Vec::new(),
+            &model_params(modes),
+            &stream,
+            |_, _| Ok(atlas::no_mesh()),
+        )
+    };
+    let e = build(&shapes, ModeSelection::Variance(0.99))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("--max-modes") && e.contains("2 leading modes"),
+        "{e}"
+    );
+    assert!(build(&shapes, ModeSelection::Variance(0.3)).is_ok());
+    let mut bad = shapes.clone();
+    bad[17][4][1] = f64::NAN;
+    let e = build(&bad, ModeSelection::Count(2))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("shape 17") && e.contains("NaN"), "{e}");
+    let mut bad = shapes.clone();
+    bad[33].pop();
+    let e = build(&bad, ModeSelection::Count(2))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("shape 33") && e.contains("59 points"), "{e}");
 }

@@ -114,20 +114,7 @@ pub fn build_with_meshes<const D: usize>(
     let mut atlas = atlas_of(shapes, meshes, params)?;
     name_landmarks(&mut atlas, landmark_ids);
     put_on_cut(&mut atlas, cut_facets)?;
-    if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        create_dir(dir)?;
-    }
-    atlas.save(atlas_path)?;
-    // The mean mesh and shape beside it in the data's frame and unit.
-    let stem = atlas_path.with_extension("");
-    write_vtu(
-        &PathBuf::from(format!("{}_mean_mesh.vtu", stem.display())),
-        &atlas
-            .mesh
-            .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes)),
-        None,
-    )?;
-    write_mean_shape(&atlas, atlas_path)?;
+    save_with_mean(&atlas, atlas_path)?;
     Ok(atlas)
 }
 
@@ -142,12 +129,28 @@ pub fn build_model<const D: usize>(
 ) -> Result<Atlas<D>> {
     let mut atlas = Atlas::build_model(shapes, &params.atlas)?;
     name_landmarks(&mut atlas, landmark_ids);
+    save_with_mean(&atlas, atlas_path)?;
+    Ok(atlas)
+}
+
+/// Saves `atlas` to `atlas_path` with, beside it in the data's frame and unit, its mean mesh
+/// (`ATLAS_mean_mesh.vtu`, when it has one) and mean shape (`ATLAS_mean.vtp`).
+pub(super) fn save_with_mean<const D: usize>(atlas: &Atlas<D>, atlas_path: &Path) -> Result<()> {
     if let Some(dir) = atlas_path.parent().filter(|p| !p.as_os_str().is_empty()) {
         create_dir(dir)?;
     }
     atlas.save(atlas_path)?;
-    write_mean_shape(&atlas, atlas_path)?;
-    Ok(atlas)
+    if atlas.has_mesh() {
+        let stem = atlas_path.with_extension("");
+        write_vtu(
+            &PathBuf::from(format!("{}_mean_mesh.vtu", stem.display())),
+            &atlas
+                .mesh
+                .with_nodes(atlas.to_data_frame(&atlas.mesh.nodes)),
+            None,
+        )?;
+    }
+    write_mean_shape(atlas, atlas_path)
 }
 
 /// `ATLAS_mean.vtp` beside the atlas file: the mean shape in the data's frame and unit.

@@ -23,6 +23,7 @@
 //! | `subject_page` | a subject's page: the scene of its 3D view, its worst elements |
 //! | `model_page` | the model's page: the mean and its mesh along the modes |
 //! | `report_files` | the population plots, `report.json` and `report.html` |
+//! | `shape_files` | surfaces in correspondence read from their files on each pass of a streamed atlas |
 //! | `leave_one_out` | the leave-one-out experiment |
 //! | `batch` | batches of subjects from files or memory (a job of the engine) |
 //! | `mesh_file` | quality, conversion and repair of mesh files |
@@ -53,6 +54,7 @@ mod register_pair;
 mod report_files;
 pub mod run;
 mod sets;
+mod shape_files;
 mod solve;
 mod subject;
 mod subject_file;
@@ -80,6 +82,7 @@ pub use register_pair::{PairRegistration, register_pair};
 pub use report_files::BatchFacts;
 pub use run::{RunContext, RunPlace, Shard};
 pub use sets::*;
+pub use shape_files::{SurfaceFiles, build_streamed};
 pub use solve::*;
 pub use subject::*;
 pub use subject_file::*;

@@ -27,5 +27,6 @@ mod register;
 mod repair;
 mod solver;
 mod spine_benchmark;
+mod streamed;
 mod vertebrae;
 mod workflow;

@@ -26,6 +26,20 @@ pub struct BuildArgs {
     /// included. `instance` and `sample` then write shapes only; `fit` needs a mesh.
     #[arg(long, conflicts_with = "template_mesh")]
     no_mesh: bool,
+    /// For a cohort larger than the memory: surfaces already in correspondence (e.g.
+    /// `register`'s registered.list) read from their files on each pass, a batch at a time;
+    /// GPA in passes and the leading modes by a randomized PCA (the modes asked with --modes,
+    /// or up to --max-modes with a share of variance). Memory: the mean, one batch and the
+    /// modes, never the population.
+    #[arg(long, conflicts_with_all = ["template_mesh", "measures", "register", "landmarks", "cut"])]
+    stream: bool,
+    /// With --stream: shapes read at a time.
+    #[arg(long, value_name = "N", requires = "stream", default_value_t = 256, value_parser = crate::args::count::<1, 1_000_000>)]
+    batch: usize,
+    /// With --stream and a share of variance (--variance, or the default 0.985): the most
+    /// modes computed; the share must be reached within them.
+    #[arg(long, value_name = "M", requires = "stream", default_value_t = 100, value_parser = crate::args::count::<1, 10_000>)]
+    max_modes: usize,
 }
 
 /// Runs `atlasmesh build`.
@@ -46,6 +60,9 @@ pub fn run(mut a: BuildArgs, term: &Terminal) -> anyhow::Result<()> {
         .into());
     }
     a.pop.expand()?;
+    if a.stream {
+        return streamed(&a, term);
+    }
     if study::inputs_are_surfaces(&a.pop.shapes)? {
         build(&a, read::<3>(&a.pop, &a.run, a.no_mesh, term)?, term)
     } else {
@@ -126,5 +143,70 @@ fn build<const D: usize>(a: &BuildArgs, mut pop: Read<D>, term: &Terminal) -> an
     );
     let facts = study::write_build_facts(&a.out, &inputs, template.as_deref(), &atlas, unit)?;
     println!("inputs and registration: {}", facts.display());
+    Ok(())
+}
+
+/// `atlasmesh build --stream`: the atlas of surfaces in correspondence read from their files
+/// on each pass.
+fn streamed(a: &BuildArgs, term: &Terminal) -> anyhow::Result<()> {
+    if let Some(image) = a
+        .pop
+        .shapes
+        .iter()
+        .find(|p| atlasmesh::formats::is_image_file(p))
+    {
+        return Err(atlasmesh::Error::Parameter(format!(
+            "{}: a label map; --stream reads surfaces in correspondence: put the label maps in \
+             correspondence first (`atlasmesh register`) and stream its registered.list",
+            image.display()
+        ))
+        .into());
+    }
+    if !study::inputs_are_surfaces(&a.pop.shapes)? {
+        return Err(atlasmesh::Error::Parameter(
+            "--stream reads 3D surfaces in correspondence (PLY, STL, OBJ, VTK, VTP); build 2D \
+             outlines without it"
+                .into(),
+        )
+        .into());
+    }
+    let mut params = a.run.params_for(3)?;
+    crate::args::apply_pop(&mut params, &a.pop);
+    let stream = atlasmesh::model::StreamParams {
+        batch: a.batch,
+        max_modes: a.max_modes,
+        ..Default::default()
+    };
+    let files = study::SurfaceFiles::new(a.pop.shapes.clone())?;
+    let step = format!(
+        "streamed atlas of {} surfaces, {} at a time (GPA in passes, randomized PCA{})",
+        a.pop.shapes.len(),
+        a.batch,
+        if a.no_mesh { "" } else { ", mesh of the mean" }
+    );
+    term.step_started(&step);
+    let atlas = study::build_streamed(&files, &params, &stream, a.no_mesh, &a.out)?;
+    term.step_finished(&step);
+    let m = atlas.num_modes();
+    let unit = atlas.data_frame.as_ref().map_or(f64::NAN, |f| f.s);
+    println!(
+        "atlas: {} ({} shapes, {} points, {m} modes explaining {:.4} of the variance, {})",
+        a.out.display(),
+        atlas.training_shapes,
+        atlas.mean.len(),
+        atlas.cumulative_variance[m - 1],
+        if atlas.has_mesh() {
+            format!(
+                "mean mesh {} {} elements of size {:.3} in the shapes' unit",
+                atlas.mesh.num_elements(),
+                atlas.mesh.kind.name(),
+                atlas.params.element_size * unit
+            )
+        } else {
+            "no mean mesh".to_string()
+        }
+    );
+    let facts = study::write_build_facts(&a.out, &[], None, &atlas, unit)?;
+    println!("the mean mesh's figures: {}", facts.display());
     Ok(())
 }

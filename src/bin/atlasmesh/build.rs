@@ -207,6 +207,8 @@ fn streamed(a: &BuildArgs, term: &Terminal) -> anyhow::Result<()> {
         }
     );
     let facts = study::write_build_facts(&a.out, &[], None, &atlas, unit)?;
-    println!("the mean mesh's figures: {}", facts.display());
+    if atlas.has_mesh() {
+        println!("the mean mesh's figures: {}", facts.display());
+    }
     Ok(())
 }

@@ -178,6 +178,22 @@ class Atlas:
         template_mesh: 3D, a volume mesh of the first shape (or one per shape) instead of the
         automatic mesh (--template-mesh). What the command line says on stderr (an island
         dropped, the cut) comes as a UserWarning."""
+    @staticmethod
+    def build_streamed(
+        shapes: List[Union[str, PathLike]],
+        modes: Optional[int] = None,
+        variance: float = 0.985,
+        element_size: Union[str, float] = "auto",
+        mesh: bool = True,
+        batch: int = 256,
+        max_modes: int = 100,
+    ) -> "Atlas":
+        """The atlas of a cohort of 3D surfaces in correspondence too large to hold (the
+        command line's `build --stream`): shapes are paths (surface files, folders, .list
+        files, e.g. `atlasmesh register`'s registered.list), read from their files on each
+        pass, batch at a time; GPA in passes and the leading modes by a randomized PCA
+        (modes, or up to max_modes explaining variance). The same model as build() to
+        rounding where the modes asked plus 10 reach every mode of the population."""
     def with_sets(self, sets: Union[str, PathLike, Dict[str, Any]]) -> "Atlas":
         """This atlas with node sets, element sets and surfaces on its mean mesh, carried to
         every fitted mesh (--sets): a sets TOML file or a dict of its tables, e.g.

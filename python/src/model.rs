@@ -433,6 +433,57 @@ impl Atlas {
         Ok(Atlas { inner })
     }
 
+    /// The atlas of a cohort of 3D surfaces in correspondence too large to hold (the command
+    /// line's `build --stream`): `shapes` are paths (files, folders, `.list` files), read
+    /// from their files on each pass, `batch` at a time; GPA in passes and the leading modes
+    /// by a randomized PCA (`modes`, or up to `max_modes`, 100 by default, with a share of
+    /// `variance`); `batch` 256 by default.
+    #[staticmethod]
+    #[pyo3(signature = (shapes, modes=None, variance=None, element_size=None, mesh=true, batch=None, max_modes=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn build_streamed(
+        py: Python<'_>,
+        shapes: &Bound<'_, PyList>,
+        modes: Option<&Bound<'_, PyAny>>,
+        variance: Option<&Bound<'_, PyAny>>,
+        element_size: Option<&Bound<'_, PyAny>>,
+        mesh: bool,
+        batch: Option<&Bound<'_, PyAny>>,
+        max_modes: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let paths: Vec<PathBuf> = shapes
+            .iter()
+            .map(|o| {
+                o.extract::<PathBuf>().map_err(|_| {
+                    crate::errors::BadInputError::new_err(
+                        "build_streamed: shapes are paths (surface files, folders, .list files)",
+                    )
+                })
+            })
+            .collect::<PyResult<_>>()?;
+        if paths.is_empty() {
+            return Err(crate::errors::BadInputError::new_err("no shape given"));
+        }
+        let params = crate::population::run_params(modes, variance, element_size)?;
+        let mut stream = atlasmesh::model::StreamParams::default();
+        if let Some(b) = batch {
+            stream.batch = crate::args::size(b, "batch", 1, 1_000_000)?;
+        }
+        if let Some(m) = max_modes {
+            stream.max_modes = crate::args::size(m, "max_modes", 1, 10_000)?;
+        }
+        let atlas = py
+            .detach(|| {
+                let files = atlasmesh::study::batch::subject_files(&paths)?;
+                let files = atlasmesh::study::SurfaceFiles::new(files)?;
+                atlasmesh::study::streamed_atlas(&files, &params, &stream, !mesh)
+            })
+            .map_err(to_py)?;
+        Ok(Atlas {
+            inner: Inner::Three(context(atlas)?),
+        })
+    }
+
     /// This atlas with named node sets, element sets and surfaces on its mean mesh, carried
     /// to every fitted mesh and written with it (the command line's `--sets`): `sets` is a
     /// sets TOML file's path or a dict of its tables (`{"node_set": [{"name": "DISTAL",

@@ -524,3 +524,31 @@ def test_materials_from_a_ct_onto_arrays_a_mesh_and_a_file(data, tmp_path):
         atlasmesh.map_materials((nodes, cells, "hex27"), ct)
     with pytest.raises(atlasmesh.Error):
         atlasmesh.map_materials((nodes, cells + 10_000, "hex8"), ct)
+
+
+def test_a_streamed_atlas_of_femurs_is_the_built_one(data, tmp_path):
+    """`Atlas.build_streamed` (the command line's `build --stream`) of the 30 femurs from a
+    .list, read 7 at a time: the model `Atlas.build` makes of them (mean, variances, modes up
+    to their sign, shares of variance); a shape of another point count and a non-path refused
+    as bad input."""
+    folder = data / "knee-distal-femur-synthetic-3d/femur"
+    paths = [str(folder / f"S{k:03d}_Femur.ply") for k in range(1, 31)]
+    listed = tmp_path / "femurs.list"
+    listed.write_text("\n".join(paths) + "\n")
+    built = atlasmesh.Atlas.build(paths, modes=15, mesh=False)
+    streamed = atlasmesh.Atlas.build_streamed([listed], modes=15, mesh=False, batch=7)
+    assert streamed.mean_mesh is None and streamed.dimension == 3
+    np.testing.assert_allclose(streamed.mean, built.mean, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(streamed.variances, built.variances, rtol=1e-6)
+    # (The streamed model's shares are those of the modes it computed: the 15 asked.)
+    np.testing.assert_allclose(
+        streamed.cumulative_variance, built.cumulative_variance[:15], rtol=0, atol=1e-9
+    )
+    a = np.asarray(built.modes).reshape(15, -1)
+    b = np.asarray(streamed.modes).reshape(15, -1)
+    assert np.all(np.abs(np.sum(a * b, axis=1)) > 1 - 1e-6)
+    vertebra = data / "verse-L1-vertebrae-3d/raw/sub-verse013_segment_20.ply"
+    with pytest.raises(atlasmesh.BadInputError, match="sub-verse013_segment_20.ply"):
+        atlasmesh.Atlas.build_streamed(paths[:5] + [str(vertebra)], modes=2, mesh=False)
+    with pytest.raises(atlasmesh.BadInputError, match="paths"):
+        atlasmesh.Atlas.build_streamed([np.zeros((3, 3))], modes=2)

@@ -20,8 +20,15 @@ pub struct ShapeModelMeasures {
     pub compactness_sd: Vec<f64>,
     /// Generalization `G(M)`: each shape left out, the model of the others with `M` modes,
     /// the left-out shape (Procrustes-aligned to that model's mean) projected into it; the
-    /// mean distance between it and its projection, averaged over the shapes.
+    /// mean distance between it and its projection, averaged over the shapes. A population
+    /// of more than [`LEAVE_ONE_OUT_UP_TO`] shapes leaves out each of
+    /// [`GENERALIZATION_FOLDS`] consecutive groups in turn instead of each shape
+    /// (`generalization_folds`): as many models as folds, not as shapes.
     pub generalization: Vec<f64>,
+    /// `None`: the generalization left out each shape in turn; `Some(K)`: each of K
+    /// consecutive groups of shapes (a population of more than [`LEAVE_ONE_OUT_UP_TO`]).
+    #[serde(default)]
+    pub generalization_folds: Option<usize>,
     /// Standard error of `G(M)` over the left-out shapes.
     pub generalization_sd: Vec<f64>,
     /// Specificity `S(M)`: random instances of the model (weights drawn from `N(0, λ_m)`),
@@ -32,6 +39,14 @@ pub struct ShapeModelMeasures {
     /// Random instances per `M` in the specificity.
     pub specificity_samples: usize,
 }
+
+/// The largest population whose generalization leaves out each shape in turn (a model of
+/// the others each: as many models as shapes); a larger one leaves out each of
+/// [`GENERALIZATION_FOLDS`] groups.
+pub const LEAVE_ONE_OUT_UP_TO: usize = 200;
+
+/// The folds of a large population's generalization (10-fold, the usual choice).
+pub const GENERALIZATION_FOLDS: usize = 10;
 
 /// Compactness, generalization and specificity (see [`ShapeModelMeasures`]) of the model of
 /// `shapes` (in correspondence: same point count), for `1..=max_modes` modes (at most
@@ -45,6 +60,19 @@ pub fn shape_model_measures<const D: usize>(
     max_modes: usize,
     samples: usize,
     seed: u64,
+) -> Result<ShapeModelMeasures> {
+    let folds = (shapes.len() > LEAVE_ONE_OUT_UP_TO).then_some(GENERALIZATION_FOLDS);
+    measures_with_folds(shapes, max_modes, samples, seed, folds)
+}
+
+/// [`shape_model_measures`] with the generalization's folds chosen: `None` leaves out each
+/// shape in turn, `Some(K)` each of K consecutive groups.
+pub(crate) fn measures_with_folds<const D: usize>(
+    shapes: &[Shape<D>],
+    max_modes: usize,
+    samples: usize,
+    seed: u64,
+    folds: Option<usize>,
 ) -> Result<ShapeModelMeasures> {
     let ns = shapes.len();
     if ns < 4 {
@@ -75,7 +103,12 @@ pub fn shape_model_measures<const D: usize>(
         out.compactness.push(c);
         out.compactness_sd.push(csd);
     }
-    let errors = pop.generalization_errors(mm)?;
+    out.generalization_folds = folds;
+    let groups: Vec<Vec<usize>> = match folds {
+        None => (0..ns).map(|i| vec![i]).collect(),
+        Some(k) => super::fold_groups(ns, k)?,
+    };
+    let errors = pop.generalization_errors(&groups, mm)?;
     for m in 0..mm {
         let (g, sd) = mean_sd(&errors.iter().map(|e| e[m]).collect::<Vec<_>>());
         out.generalization.push(g);
@@ -146,32 +179,40 @@ impl<'a, const D: usize> Measured<'a, D> {
             .collect()
     }
 
-    /// Generalization: per left-out shape, the model of the others truncated to M modes, the
-    /// shape projected into it (`truncate(M).project`); its mean distance for every M.
-    fn generalization_errors(&self, mm: usize) -> Result<Vec<Vec<f64>>> {
-        (0..self.shapes.len())
-            .into_par_iter()
-            .map(|i| {
+    /// Generalization: per group of left-out shapes (`groups`: one shape each for the
+    /// leave-one-out), the model of the others truncated to M modes, each left-out shape
+    /// projected into it (`truncate(M).project`); its mean distance for every M, one row per
+    /// shape.
+    fn generalization_errors(&self, groups: &[Vec<usize>], mm: usize) -> Result<Vec<Vec<f64>>> {
+        let per_group: Vec<Vec<Vec<f64>>> = groups
+            .par_iter()
+            .map(|group| {
                 let rest: Vec<Shape<D>> = self
                     .shapes
                     .iter()
                     .enumerate()
-                    .filter(|(k, _)| *k != i)
+                    .filter(|(k, _)| !group.contains(k))
                     .map(|(_, s)| s.clone())
                     .collect();
                 let model = self.model_of(&rest)?;
                 let (unit_mean, r) = frame(&model);
-                let x = self.in_frame(i, &unit_mean, r);
-                (0..mm)
-                    .map(|m| {
-                        // A left-out model with fewer modes: its projection stays.
-                        let kept = (m + 1).min(model.num_modes());
-                        let projected = model.truncate(kept)?.project(&x);
-                        Ok(self.mean_distance(&projected, &x, r))
+                group
+                    .iter()
+                    .map(|&i| {
+                        let x = self.in_frame(i, &unit_mean, r);
+                        (0..mm)
+                            .map(|m| {
+                                // A left-out model with fewer modes: its projection stays.
+                                let kept = (m + 1).min(model.num_modes());
+                                let projected = model.truncate(kept)?.project(&x);
+                                Ok(self.mean_distance(&projected, &x, r))
+                            })
+                            .collect()
                     })
                     .collect()
             })
-            .collect()
+            .collect::<Result<_>>()?;
+        Ok(per_group.into_iter().flatten().collect())
     }
 
     /// Specificity: per sample, the distance of the instance of the first M weights to the

@@ -131,3 +131,37 @@ fn generalization_by_the_model_vocabulary_equals_the_computation_by_hand() {
             .all(|(p, q)| crate::geometry::dist2(*p, *q) < 1e-24)
     );
 }
+
+/// A population of more than `LEAVE_ONE_OUT_UP_TO` shapes measures its generalization by 10
+/// folds (10 models, not one per shape); on the same shapes, within 5 % of the leave-one-out's
+/// (each fold's model has a tenth fewer shapes and its groups are consecutive, not random).
+#[test]
+fn a_large_population_generalizes_by_ten_folds() {
+    let shapes = crate::model::tests::ellipses(LEAVE_ONE_OUT_UP_TO + 10);
+    let large = shape_model_measures(&shapes, 4, 20, 1).unwrap();
+    assert_eq!(large.generalization_folds, Some(GENERALIZATION_FOLDS));
+    let small = shape_model_measures(&shapes[..LEAVE_ONE_OUT_UP_TO], 4, 20, 1).unwrap();
+    assert_eq!(small.generalization_folds, None);
+    let every = model_measures::measures_with_folds(&shapes, 4, 20, 1, None).unwrap();
+    assert_eq!(large.modes, every.modes);
+    assert!(large.modes.len() >= 2);
+    for m in 0..large.modes.len() {
+        let (k, l) = (large.generalization[m], every.generalization[m]);
+        eprintln!(
+            "{} modes: 10-fold {k:.6}, leave-one-out {l:.6} ± {:.6}",
+            m + 1,
+            every.generalization_sd[m]
+        );
+        assert!(k.is_finite() && k >= 0.0);
+        assert!(
+            (k - l).abs() <= 0.05 * l + 1e-12,
+            "{} modes: 10-fold {k} against leave-one-out {l}",
+            m + 1
+        );
+        if m > 0 {
+            assert!(k <= large.generalization[m - 1] * (1.0 + 1e-9));
+        }
+    }
+    assert_eq!(large.compactness, every.compactness);
+    assert_eq!(large.specificity, every.specificity);
+}

@@ -161,7 +161,8 @@ pub struct Atlas<const D: usize> {
     pub modes: Mat<f64>,
     /// Eigenvalues `lambda_1..lambda_m` (reference-frame units squared).
     pub eigenvalues: Vec<f64>,
-    /// Cumulative variance share of all `n_s - 1` modes of the training PCA.
+    /// Cumulative variance share of all `n_s - 1` modes of the training PCA (of the leading
+    /// modes computed, for a streamed atlas: [`Atlas::build_streamed`]).
     pub cumulative_variance: Vec<f64>,
     /// Boundary facets of the shapes (shared by all, they correspond).
     pub facets: Vec<[usize; D]>,

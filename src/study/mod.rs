@@ -82,7 +82,7 @@ pub use register_pair::{PairRegistration, register_pair};
 pub use report_files::BatchFacts;
 pub use run::{RunContext, RunPlace, Shard};
 pub use sets::*;
-pub use shape_files::{SurfaceFiles, build_streamed};
+pub use shape_files::{SurfaceFiles, build_streamed, streamed_atlas};
 pub use solve::*;
 pub use subject::*;
 pub use subject_file::*;

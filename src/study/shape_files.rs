@@ -65,16 +65,16 @@ impl ShapeSource<3> for SurfaceFiles {
 }
 
 /// The atlas of the surfaces in `files` (in correspondence, e.g. `atlasmesh register`'s
-/// `registered.list`) built in passes over the files ([`crate::model::Atlas::build_streamed`]: GPA in
-/// passes, the leading modes by a randomized PCA, `stream.batch` shapes in memory at a
-/// time), with the automatic mesh of the mean at `params.element_size` (none with `no_mesh`),
-/// the sets of `params.sets`, saved as [`super::build_with_meshes`] saves an atlas.
-pub fn build_streamed(
+/// `registered.list`) built in passes over the files ([`crate::model::Atlas::build_streamed`]:
+/// GPA in passes, the leading modes by a randomized PCA, `stream.batch` shapes in memory at a
+/// time), with the automatic mesh of the mean at `params.element_size` (none with `no_mesh`)
+/// and the sets of `params.sets`: what `build --stream` and Python's `Atlas.build_streamed`
+/// make.
+pub fn streamed_atlas(
     files: &SurfaceFiles,
     params: &super::RunParams,
     stream: &crate::model::StreamParams,
     no_mesh: bool,
-    atlas_path: &Path,
 ) -> Result<crate::model::Atlas<3>> {
     let first = files.first()?;
     let mut used = params.atlas.element_size;
@@ -98,6 +98,19 @@ pub fn build_streamed(
             super::sets::apply_sets(&mut atlas, c)?;
         }
     }
+    Ok(atlas)
+}
+
+/// [`streamed_atlas`] saved to `atlas_path` as [`super::build_with_meshes`] saves an atlas
+/// (the mean mesh and the mean shape beside it).
+pub fn build_streamed(
+    files: &SurfaceFiles,
+    params: &super::RunParams,
+    stream: &crate::model::StreamParams,
+    no_mesh: bool,
+    atlas_path: &Path,
+) -> Result<crate::model::Atlas<3>> {
+    let atlas = streamed_atlas(files, params, stream, no_mesh)?;
     super::build::save_with_mean(&atlas, atlas_path)?;
     Ok(atlas)
 }

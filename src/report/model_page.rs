@@ -17,6 +17,12 @@ pub struct ModelPage<'a> {
     pub variances: &'a [f64],
     /// The cumulative variance share of the modes.
     pub cumulative: &'a [f64],
+    /// The data's units per reference-frame unit (the atlas's data frame scale `s`; `None`
+    /// for an atlas that does not know it): the variances in the data's unit squared are
+    /// `lambda_k s²`, as Python's `Atlas.variances` gives them.
+    pub data_per_reference: Option<f64>,
+    /// The model's points `N` (a mode is a vector of their `N·D` coordinates).
+    pub points: usize,
     /// Nodes of the mean mesh.
     pub nodes: usize,
     /// Elements of the mean mesh.
@@ -39,13 +45,31 @@ pub fn write_model_page(path: &Path, page: &ModelPage) -> Result<()> {
         escape(page.kind)
     );
     h.push_str(&viewer_html(page.scene, "scene", 760, 520));
-    h.push_str("<h2>Modes</h2>\n<table class=\"measures\"><thead><tr><th>mode</th><th>variance λ (reference frame)</th><th>cumulative share</th></tr></thead><tbody>");
+    h.push_str("<h2>Modes</h2>\n");
+    if let Some(s) = page.data_per_reference {
+        let _ = write!(
+            h,
+            "<p class=\"meta\">Each mode's variance twice: λ in the model's reference frame \
+             (the mean's largest extent 1, the frame of the fit's parameters), and in the data's \
+             unit squared, λ s² with s = {} data units per reference unit (Python's \
+             <code>Atlas.variances</code>). A mode is one vector of every point's coordinates: \
+             its standard deviation, the square root, is the length of a displacement of the {} \
+             points together (the root of the sum of their squares); one point's root mean \
+             square is √(λ s² / {}).</p>",
+            num(s, 6),
+            page.points,
+            page.points
+        );
+    }
+    h.push_str("<table class=\"measures\"><thead><tr><th>mode</th><th>variance λ (reference frame)</th><th>variance (the data's unit²)</th><th>cumulative share</th></tr></thead><tbody>");
     for (k, v) in page.variances.iter().enumerate() {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{} %</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{} %</td></tr>",
             k + 1,
             num(*v, 6),
+            page.data_per_reference
+                .map_or_else(|| "—".to_string(), |s| num(v * s * s, 6)),
             num(
                 100.0 * page.cumulative.get(k).copied().unwrap_or(f64::NAN),
                 2

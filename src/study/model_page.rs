@@ -114,6 +114,8 @@ pub(crate) fn write_model_page<const D: usize>(
             scene: &scene,
             variances: &atlas.eigenvalues,
             cumulative: &atlas.cumulative_variance,
+            data_per_reference: atlas.data_frame.as_ref().map(|t| t.s),
+            points: atlas.mean.len(),
             nodes: atlas.mesh.nodes.len(),
             elements: atlas.mesh.num_elements(),
             kind: atlas.mesh.kind.name(),

@@ -340,6 +340,11 @@ fn the_demo_report_opens_in_chromium_and_every_view_draws() {
             page.contains("class=\"am-w\"") && page.contains("mode 1"),
             "the model page has its mode slider"
         );
+        // The modes' variances in both frames, the scale between them said.
+        assert!(
+            page.contains("variance (the data's unit²)") && page.contains("λ s² with s = "),
+            "the model page's variances in the data's unit"
+        );
         // Clipped through the middle, the view draws half the boundary and the faces of the
         // cut (3D), half the cells (2D): something, and less than the whole.
         let whole = triangles(&subject_pages[0], "");

@@ -187,12 +187,14 @@ impl<'a, const D: usize> Measured<'a, D> {
         let per_group: Vec<Vec<Vec<f64>>> = groups
             .par_iter()
             .map(|group| {
+                let mut left_out = vec![false; self.shapes.len()];
+                group.iter().for_each(|&i| left_out[i] = true);
                 let rest: Vec<Shape<D>> = self
                     .shapes
                     .iter()
-                    .enumerate()
-                    .filter(|(k, _)| !group.contains(k))
-                    .map(|(_, s)| s.clone())
+                    .zip(&left_out)
+                    .filter(|(_, out)| !**out)
+                    .map(|(s, _)| s.clone())
                     .collect();
                 let model = self.model_of(&rest)?;
                 let (unit_mean, r) = frame(&model);

@@ -116,6 +116,27 @@ fn modes_kept(p: &Pca, params: &AtlasParams, shapes: usize, truncated: bool) -> 
     }
 }
 
+/// The scale from a Procrustes mean to the reference frame: one over its bounding box's
+/// largest side (the reference frame's mean has largest side 1).
+fn reference_scale<const D: usize>(mean: &[Point<D>]) -> f64 {
+    let (lo, hi) = bounding_box(mean);
+    1.0 / (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max)
+}
+
+/// Refuses a model of `shapes` identical shapes (after alignment) of `points` points:
+/// nothing to model. In the reference frame (largest side 1) the total variance of real
+/// populations is far above rounding (hands ~1e-3).
+fn check_variance(p: &Pca, points: usize, shapes: usize) -> Result<()> {
+    let total = p.total_variance;
+    if total.is_nan() || total <= 1e-20 * points as f64 {
+        return Err(Error::Population(format!(
+            "the {shapes} shapes are identical after alignment (total variance {total:.1e}): \
+             there is no variance to model; give shapes that differ"
+        )));
+    }
+    Ok(())
+}
+
 /// How a streamed atlas ([`Atlas::build_streamed`]) reads and models its population.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StreamParams {
@@ -295,9 +316,7 @@ impl<const D: usize> Atlas<D> {
         }
         let points: Vec<Vec<Point<D>>> = shapes.iter().map(|s| s.points.clone()).collect();
         let gpa = generalized_procrustes(&points)?;
-        let (lo, hi) = bounding_box(&gpa.mean);
-        let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
-        let c = 1.0 / ext;
+        let c = reference_scale(&gpa.mean);
         let mean: Vec<Point<D>> = gpa.mean.iter().map(|p| scale(*p, c)).collect();
         let aligned: Vec<Vec<Point<D>>> = gpa
             .aligned
@@ -305,16 +324,7 @@ impl<const D: usize> Atlas<D> {
             .map(|s| s.iter().map(|p| scale(*p, c)).collect())
             .collect();
         let p = pca(&aligned, &mean)?;
-        // Identical shapes (after alignment): nothing to model. In the reference frame (largest
-        // side 1) the total variance of real populations is far above rounding (hands ~1e-3).
-        let total: f64 = p.eigenvalues.iter().sum();
-        if total.is_nan() || total <= 1e-20 * mean.len() as f64 {
-            return Err(Error::Population(format!(
-                "the {} shapes are identical after alignment (total variance {total:.1e}): there \
-                 is no variance to model; give shapes that differ",
-                shapes.len()
-            )));
-        }
+        check_variance(&p, mean.len(), shapes.len())?;
         let m = modes_kept(&p, params, shapes.len(), false)?;
         let mean_shape = Shape {
             name: "mean".into(),
@@ -368,9 +378,7 @@ impl<const D: usize> Atlas<D> {
             )));
         }
         let gpa = generalized_procrustes_streamed(source, stream.batch)?;
-        let (lo, hi) = bounding_box(&gpa.mean);
-        let ext = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
-        let c = 1.0 / ext;
+        let c = reference_scale(&gpa.mean);
         let mean: Vec<Point<D>> = gpa.mean.iter().map(|p| scale(*p, c)).collect();
         let mean_shape = Shape {
             name: "mean".into(),
@@ -399,13 +407,7 @@ impl<const D: usize> Atlas<D> {
             Ok(a)
         };
         let p = randomized_pca(n, rows, asked, stream.batch, &stream.pca, &mut columns)?;
-        if p.total_variance.is_nan() || p.total_variance <= 1e-20 * mean.len() as f64 {
-            return Err(Error::Population(format!(
-                "the {n} shapes are identical after alignment (total variance {:.1e}): there \
-                 is no variance to model; give shapes that differ",
-                p.total_variance
-            )));
-        }
+        check_variance(&p, mean.len(), n)?;
         let m = modes_kept(&p, params, n, true)?;
         let frame = data_frame(&mean, source, stream.batch)?;
         let mesh = mesher(

@@ -65,25 +65,38 @@ pub fn pca<const D: usize>(aligned: &[Vec<Point<D>>], mean: &[Point<D>]) -> Resu
     )?;
     crate::clear_simd_upper_state();
     let s = svd.S().column_vector();
-    let available = (ns - 1).min(rows).min(s.nrows());
-    let mut eigenvalues: Vec<f64> = (0..available)
-        .map(|k| s[k] * s[k] / (ns - 1) as f64)
-        .collect();
-    let largest = eigenvalues.first().copied().unwrap_or(0.0);
-    eigenvalues.retain(|&l| l.is_finite() && l > largest * 1e-24);
-    let keep = eigenvalues.len();
-    if largest.is_nan() || largest <= 0.0 || keep == 0 {
-        return Err(Error::Population(
-            "the shapes are identical after alignment: there is no variance to model".into(),
-        ));
-    }
-    let modes = svd.U().subcols(0, keep).to_owned();
+    let eigenvalues = eigenvalues_of(&s, ns, (ns - 1).min(rows))?;
+    let modes = svd.U().subcols(0, eigenvalues.len()).to_owned();
     let total_variance = eigenvalues.iter().sum();
     Ok(Pca {
         modes,
         eigenvalues,
         total_variance,
     })
+}
+
+/// The eigenvalues `sigma_k² / (n_s - 1)` of the first `available` singular values `s`
+/// (decreasing) of centred data of `ns` shapes, without the trailing ones at round-off level
+/// (below 1e-24 of the largest).
+///
+/// # Errors
+/// [`Error::Population`] when none is above round-off: the shapes are identical.
+pub(crate) fn eigenvalues_of(
+    s: &faer::ColRef<'_, f64>,
+    ns: usize,
+    available: usize,
+) -> Result<Vec<f64>> {
+    let mut eigenvalues: Vec<f64> = (0..available.min(s.nrows()))
+        .map(|k| s[k] * s[k] / (ns - 1) as f64)
+        .collect();
+    let largest = eigenvalues.first().copied().unwrap_or(0.0);
+    eigenvalues.retain(|&l| l.is_finite() && l > largest * 1e-24);
+    if largest.is_nan() || largest <= 0.0 || eigenvalues.is_empty() {
+        return Err(Error::Population(
+            "the shapes are identical after alignment: there is no variance to model".into(),
+        ));
+    }
+    Ok(eigenvalues)
 }
 
 #[cfg(test)]

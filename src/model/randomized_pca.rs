@@ -5,7 +5,7 @@
 //! product is ever held: memory `N·D × l` twice and `l × n_s` once, `l` the modes asked plus
 //! the oversampling, and one batch of columns.
 
-use super::pca::Pca;
+use super::pca::{Pca, eigenvalues_of};
 use crate::error::{Error, Result};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
@@ -132,19 +132,8 @@ pub fn randomized_pca(
         Error::Numerical("the SVD of the projected shape data did not converge".into())
     })?;
     crate::clear_simd_upper_state();
-    let s = svd.S().column_vector();
-    let available = modes.min(rank).min(s.nrows());
-    let mut eigenvalues: Vec<f64> = (0..available)
-        .map(|k| s[k] * s[k] / (n - 1) as f64)
-        .collect();
-    let largest = eigenvalues.first().copied().unwrap_or(0.0);
-    eigenvalues.retain(|&v| v.is_finite() && v > largest * 1e-24);
+    let eigenvalues = eigenvalues_of(&svd.S().column_vector(), n, modes.min(rank))?;
     let keep = eigenvalues.len();
-    if largest.is_nan() || largest <= 0.0 || keep == 0 {
-        return Err(Error::Population(
-            "the shapes are identical after alignment: there is no variance to model".into(),
-        ));
-    }
     let mut u = Mat::<f64>::zeros(rows, keep);
     matmul(
         u.as_mut(),

@@ -126,12 +126,13 @@ fn boundary_with_nodes<const D: usize>(mesh: &FeMesh<D>) -> (Shape<D>, Vec<usize
 /// Moves the boundary nodes of `mesh` onto the subject (indexed by `subject`) along their
 /// normals, each by at most `reach` (a node with no compatible crossing within it stays:
 /// where the subject is partial, only the part it has is fitted; so does a node `keep`
-/// marks, where an earlier try made the mesh invalid), lets the subject's far points pull
+/// marks, such as the face on an atlas's common cut), lets the subject's far points pull
 /// their nearest boundary node onto them (`far_pulls`, three rounds, within the same reach),
-/// and carries the moves into
-/// the interior by harmonic relaxation (each interior node moved by the mean of its
-/// neighbours' moves, 40 sweeps: `RELAXATION_SWEEPS`). Linear elements only: a quadratic mesh
-/// is left as it is (its mid-edge nodes follow their corners when it is made quadratic).
+/// and carries the moves into the interior by harmonic relaxation (each interior node moved
+/// by the mean of its neighbours' moves, 40 sweeps: `RELAXATION_SWEEPS`). Every node then
+/// moves `step` (in [0, 1]; clamped, NaN taken as 1) of its move: a share of the way, for a fit in stages. Linear
+/// elements only: a quadratic mesh is left as it is (its mid-edge nodes follow their corners
+/// when it is made quadratic).
 ///
 /// The caller repairs the mesh afterwards (the elements the moves made poor) with the
 /// boundary sliding on the subject, and keeps the result only when it is valid and no farther
@@ -141,8 +142,14 @@ pub fn fit_boundary<const D: usize>(
     subject: &ClosestPointIndex<D>,
     reach: f64,
     keep: &[bool],
+    step: f64,
 ) -> BoundaryFit {
     let mut report = BoundaryFit::default();
+    let share = if step.is_nan() {
+        1.0
+    } else {
+        step.clamp(0.0, 1.0)
+    };
     if mesh.kind.linear() != mesh.kind || mesh.num_elements() == 0 {
         return report;
     }
@@ -239,7 +246,7 @@ pub fn fit_boundary<const D: usize>(
     }
     for (p, d) in mesh.nodes.iter_mut().zip(&disp) {
         for k in 0..D {
-            p[k] += d[k];
+            p[k] += share * d[k];
         }
     }
     report
@@ -304,7 +311,14 @@ mod tests {
         }
         let index = ClosestPointIndex::from_shape(&subject);
         let keep = vec![false; m.nodes.len()];
-        let r = fit_boundary(&mut m, &index, 1.0, &keep);
+        // Half the way: the faces' nodes halfway between the block and the subject.
+        let mut half = m.clone();
+        let r = fit_boundary(&mut half, &index, 1.0, &keep, 0.5);
+        assert_eq!(r.moved, 98);
+        // Node 12: (2, 2, 0), the middle of the bottom face, whose subject is at z = -0.2.
+        let d = index.closest(&half.nodes[12]).dist2.sqrt();
+        assert!((d - 0.1).abs() < 1e-9, "{d}");
+        let r = fit_boundary(&mut m, &index, 1.0, &keep, 1.0);
         assert_eq!(r.left, 0, "{r:?}");
         assert_eq!(r.moved, 98);
         // Faces move 0.2 out; corners and edges along their normals, a little more.
@@ -335,10 +349,10 @@ mod tests {
         let mut m2 = FeMesh::block(4);
         let mut keep = vec![false; m2.nodes.len()];
         keep[0] = true;
-        let r = fit_boundary(&mut m2, &index, 1.0, &keep);
+        let r = fit_boundary(&mut m2, &index, 1.0, &keep, 1.0);
         assert_eq!((r.moved, r.left), (97, 1));
         assert_eq!(m2.nodes[0], [0.0; 3]);
-        let r = fit_boundary(&mut FeMesh::block(4), &index, 0.1, &[false; 125]);
+        let r = fit_boundary(&mut FeMesh::block(4), &index, 0.1, &[false; 125], 1.0);
         assert_eq!(r.moved, 0);
     }
 }

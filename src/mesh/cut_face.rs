@@ -84,23 +84,30 @@ pub fn mark_cut_face<const D: usize>(
 /// shaft on a flat face. Returns the largest move (shape units); `None` when the mesh has no
 /// cut, or flattening would invert an element (the nodes stay where they were).
 pub fn flatten_cut_face<const D: usize>(mesh: &mut FeMesh<D>) -> Option<f64> {
-    let nodes = mesh.sets.node_sets.get(CUT_SET)?.clone();
+    let before = mesh.nodes.clone();
+    let moved = cut_face_on_its_plane(mesh)?;
+    if summarize(&mesh_quality(mesh)).inverted_elements > 0 {
+        mesh.nodes = before;
+        return None;
+    }
+    Some(moved)
+}
+
+/// [`flatten_cut_face`] whatever it does to the elements (the caller repairs them): the
+/// largest move, `None` when the mesh has no cut.
+pub(crate) fn cut_face_on_its_plane<const D: usize>(mesh: &mut FeMesh<D>) -> Option<f64> {
+    let nodes = mesh.sets.node_sets.get(CUT_SET)?;
     if nodes.len() <= D || nodes.iter().any(|&v| v >= mesh.nodes.len()) {
         return None;
     }
     let pts: Vec<Point<D>> = nodes.iter().map(|&v| mesh.nodes[v]).collect();
     let c = centroid(&pts);
     let n = principal_axes_of(&pts)[D - 1];
-    let before = mesh.nodes.clone();
     let mut moved: f64 = 0.0;
-    for &v in &nodes {
+    for &v in nodes {
         let off = dot(sub(mesh.nodes[v], c), n);
         moved = moved.max(off.abs());
         mesh.nodes[v] = sub(mesh.nodes[v], scale(n, off));
-    }
-    if summarize(&mesh_quality(mesh)).inverted_elements > 0 {
-        mesh.nodes = before;
-        return None;
     }
     Some(moved)
 }

@@ -40,6 +40,7 @@ mod voxel_mesh;
 
 pub use boundary::{BoundaryFace, FacePair, boundary_faces, boundary_surface, face_pairs};
 pub use boundary_fit::{BoundaryFit, fit_boundary};
+pub(crate) use cut_face::cut_face_on_its_plane;
 pub use cut_face::{CUT_SET, flatten_cut_face, mark_cut_face};
 pub use element::ElementKind;
 pub(crate) use element::{ALL_KINDS, HEX20_EDGES, TET10_EDGES};

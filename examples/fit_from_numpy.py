@@ -46,10 +46,10 @@ print("variance explained by mode:", np.round(np.diff(np.r_[0, atlas.cumulative_
 # The subject's fit: weights, pose, the projected surface and the morphed FE mesh.
 result = atlas.fit(points, facets)
 print(result)
-print("weights (sd):", np.round(result.weights[:5], 2))
+print("weights (sd):", np.round(result.sd[:5], 2))
 mesh = result.mesh
-print(mesh, "smallest scaled Jacobian %.3f" % mesh.scaled_jacobian.min())
-assert result.success and mesh.scaled_jacobian.min() > 0
+print(mesh, "smallest scaled Jacobian %.3f" % mesh.scaled_jacobian_min.min())
+assert result.success and mesh.scaled_jacobian_min.min() > 0
 
 with tempfile.TemporaryDirectory() as d:
     path = pathlib.Path(d) / "subject_mesh.inp"

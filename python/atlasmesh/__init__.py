@@ -34,7 +34,7 @@ _MESHIO_CELLS = {
 
 
 def to_meshio(mesh):
-    """The mesh as a ``meshio.Mesh`` (3D points; cell data ``scaled_jacobian``; node and
+    """The mesh as a ``meshio.Mesh`` (3D points; cell data ``scaled_jacobian_min``; node and
     element sets as ``point_sets`` and ``cell_sets``)."""
     import meshio
     import numpy as np
@@ -46,14 +46,14 @@ def to_meshio(mesh):
     return meshio.Mesh(
         nodes,
         [(_MESHIO_CELLS[mesh.kind], mesh.elements)],
-        cell_data={"scaled_jacobian": [mesh.scaled_jacobian]},
+        cell_data={"scaled_jacobian_min": [mesh.scaled_jacobian_min]},
         point_sets=dict(sets["nodes"]),
         cell_sets={k: [v] for k, v in sets["elements"].items()},
     )
 
 
 def to_pyvista(mesh):
-    """The mesh as a ``pyvista.UnstructuredGrid`` (3D points; cell data ``scaled_jacobian``;
+    """The mesh as a ``pyvista.UnstructuredGrid`` (3D points; cell data ``scaled_jacobian_min``;
     node and element sets as 0/1 point and cell data ``set_NAME``, as in the VTU files
     atlasmesh writes)."""
     import numpy as np
@@ -66,7 +66,7 @@ def to_pyvista(mesh):
     cells = np.hstack([np.full((len(elements), 1), elements.shape[1]), elements]).ravel()
     types = np.full(len(elements), mesh.vtk_type, dtype=np.uint8)
     grid = pv.UnstructuredGrid(cells, types, np.ascontiguousarray(nodes))
-    grid.cell_data["scaled_jacobian"] = mesh.scaled_jacobian
+    grid.cell_data["scaled_jacobian_min"] = mesh.scaled_jacobian_min
     sets = mesh.sets
     for kind, data, n in (("nodes", grid.point_data, len(nodes)), ("elements", grid.cell_data, len(elements))):
         for name, members in sets[kind].items():

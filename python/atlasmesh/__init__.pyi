@@ -68,8 +68,12 @@ class Mesh:
     @property
     def vtk_type(self) -> int: ...
     @property
+    def scaled_jacobian_min(self) -> FloatArray:
+        """Each element's smallest corner scaled Jacobian, (E,): the cell data
+        scaled_jacobian_min of the mesh files."""
+    @property
     def scaled_jacobian(self) -> FloatArray:
-        """Each element's smallest corner scaled Jacobian, (E,)."""
+        """Deprecated: the former name of scaled_jacobian_min."""
     @property
     def sets(self) -> Dict[str, Dict[str, IntArray]]:
         """{"nodes": {...}, "elements": {...}, "surfaces": {name: (n, 2) element, face}}."""
@@ -83,7 +87,7 @@ class Mesh:
     def to_meshio(self) -> Any:
         """The mesh as a meshio.Mesh."""
     def to_pyvista(self) -> Any:
-        """The mesh as a pyvista.UnstructuredGrid (cell data scaled_jacobian; sets as 0/1
+        """The mesh as a pyvista.UnstructuredGrid (cell data scaled_jacobian_min; sets as 0/1
         arrays set_NAME)."""
 
 class FitResult:
@@ -95,8 +99,12 @@ class FitResult:
     of the instance) are computed when first read."""
 
     @property
+    def sd(self) -> FloatArray:
+        """The instance's weights in standard deviations of each mode (report.json's sd,
+        scores.csv's mode_1..m; Atlas.instance(sd) makes the shape back)."""
+    @property
     def weights(self) -> FloatArray:
-        """The instance's weights in standard deviations of each mode."""
+        """Deprecated: the former name of sd."""
     @property
     def pose(self) -> Dict[str, Any]:
         """{"scale", "rotation" (D, D), "translation" (D,), "matrix" (D+1, D+1)}: reference

@@ -5,6 +5,16 @@ use crate::errors::BadInputError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+/// A `DeprecationWarning` for a former name, pointing at the caller's line.
+fn deprecated(py: Python<'_>, message: &std::ffi::CStr) -> PyResult<()> {
+    PyErr::warn(
+        py,
+        &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(),
+        message,
+        1,
+    )
+}
+
 /// An FE mesh: nodes, elements, kind, sets and each element's smallest scaled Jacobian.
 #[pyclass(frozen, module = "atlasmesh")]
 pub struct Mesh {
@@ -298,14 +308,25 @@ impl Mesh {
         self.kind.vtk_type()
     }
 
-    /// Each element's smallest corner scaled Jacobian (1 is a perfect element), `(E,)`.
+    /// Each element's smallest corner scaled Jacobian (1 is a perfect element), `(E,)`: the
+    /// cell data `scaled_jacobian_min` of the mesh files.
     #[getter]
-    fn scaled_jacobian<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn scaled_jacobian_min<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         arrays::frozen_f64(
             py,
             self.scaled_jacobian.iter().copied(),
             &[self.scaled_jacobian.len()],
         )
+    }
+
+    /// The former name of `scaled_jacobian_min` (a `DeprecationWarning`).
+    #[getter]
+    fn scaled_jacobian<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        deprecated(
+            py,
+            c"Mesh.scaled_jacobian is Mesh.scaled_jacobian_min (as the mesh files name it)",
+        )?;
+        self.scaled_jacobian_min(py)
     }
 
     /// The sets: `{"nodes": {name: indices}, "elements": {name: indices}, "surfaces": {name:
@@ -461,10 +482,21 @@ impl FitResult {
 
 #[pymethods]
 impl FitResult {
-    /// The fitted instance's weights, in standard deviations of each mode.
+    /// The fitted instance's weights, in standard deviations of each mode (`report.json`'s
+    /// `sd`, `scores.csv`'s `mode_1..m`; `Atlas.instance(sd)` makes the shape back).
+    #[getter]
+    fn sd<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        arrays::frozen_f64(py, self.sd.iter().copied(), &[self.sd.len()])
+    }
+
+    /// The former name of `sd` (a `DeprecationWarning`).
     #[getter]
     fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        arrays::frozen_f64(py, self.sd.iter().copied(), &[self.sd.len()])
+        deprecated(
+            py,
+            c"FitResult.weights is FitResult.sd (as report.json names it)",
+        )?;
+        self.sd(py)
     }
 
     /// The pose `t_{R,T,s}` (reference frame → subject, `x_subject = s R x + T`): `{"scale",

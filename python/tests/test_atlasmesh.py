@@ -60,19 +60,26 @@ def test_a_2d_atlas_from_arrays_samples_projects_and_fits():
     mesh = r.mesh
     assert mesh.kind == "quad4"
     assert mesh.nodes.shape[1] == 2 and mesh.elements.shape[1] == 4
-    assert mesh.scaled_jacobian.min() > 0.3
+    assert mesh.scaled_jacobian_min.min() > 0.3
     assert r.success and r.rms_distance < 0.01 * extent
     # The measures: typed attributes, every one in dir(), the lists empty when nothing.
     assert r.success is True and r.failed_checks == [] and isinstance(r.warnings, list)
     assert r.element_size > 0 and r.mesh_rms_distance <= r.mesh_p95_distance
-    assert r.scaled_jacobian_min == pytest.approx(mesh.scaled_jacobian.min())
+    assert r.scaled_jacobian_min == pytest.approx(mesh.scaled_jacobian_min.min())
     names = dir(r)
-    for k in ["success", "warnings", "rms_distance", "iterations", "e_d", "weights", "mesh"]:
+    for k in ["success", "warnings", "rms_distance", "iterations", "e_d", "sd", "mesh"]:
         assert k in names, k
     assert r.iterations == r.measures["iterations"]
     with pytest.raises(AttributeError):
         r.no_such_measure
-    assert r.weights.shape == (3,)
+    assert r.sd.shape == (3,)
+    # One name per quantity, as the files name them; the former names still answer, with a
+    # DeprecationWarning.
+    assert np.array_equal(r.sd, r.measures["sd"])
+    with pytest.warns(DeprecationWarning, match="FitResult.sd"):
+        assert np.array_equal(r.weights, r.sd)
+    with pytest.warns(DeprecationWarning, match="scaled_jacobian_min"):
+        assert np.array_equal(mesh.scaled_jacobian, mesh.scaled_jacobian_min)
     assert r.pose["rotation"].shape == (2, 2)
     assert r.surface.shape == (120, 2)
 
@@ -118,10 +125,10 @@ def test_errors_are_one_family_with_the_message():
     for k, shape in ((0, shapes[1]), (2, shapes[2])):
         one = atlas.fit(*shape, mesh=False)
         assert alone[k].mesh is None
-        assert np.array_equal(alone[k].weights, one.weights)
+        assert np.array_equal(alone[k].sd, one.sd)
         assert alone[k].rms_distance == one.rms_distance
         # The fit comes before the morph: the same weights as with the mesh.
-        assert np.array_equal(alone[k].weights, results[k].weights)
+        assert np.array_equal(alone[k].sd, results[k].sd)
     # The command line's bounds, before any memory is taken or thread started.
     with pytest.raises(atlasmesh.BadInputError, match="MB"):
         atlas.sample(10**6)
@@ -207,7 +214,7 @@ def test_save_load_and_mesh_files(tmp_path):
         assert sum(len(c.data) for c in m.cells) == len(r.mesh.elements)
     m = r.mesh.to_meshio()
     assert m.cells[0].type == "quad"
-    assert len(m.cell_data["scaled_jacobian"][0]) == len(r.mesh.elements)
+    assert len(m.cell_data["scaled_jacobian_min"][0]) == len(r.mesh.elements)
 
 
 def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
@@ -223,12 +230,12 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
     sets = {"nodes": {"END": [2, 5, 8, 11]}, "elements": {"LEFT": [0]}, "surfaces": {"BASE": [[0, 4], [1, 4]]}}
     m = atlasmesh.Mesh(nodes, hexes, sets=sets)
     assert m.kind == "hex8" and m.vtk_type == 12
-    assert np.allclose(m.scaled_jacobian, 1.0)
+    assert np.allclose(m.scaled_jacobian_min, 1.0)
     assert list(m.sets["nodes"]["END"]) == [2, 5, 8, 11]
     assert m.sets["surfaces"]["BASE"].tolist() == [[0, 4], [1, 4]]
     again = pickle.loads(pickle.dumps(m))
     assert np.array_equal(again.nodes, m.nodes) and np.array_equal(again.elements, m.elements)
-    assert again.kind == m.kind and np.array_equal(again.scaled_jacobian, m.scaled_jacobian)
+    assert again.kind == m.kind and np.array_equal(again.scaled_jacobian_min, m.scaled_jacobian_min)
     assert {k: {n: v.tolist() for n, v in d.items()} for k, d in again.sets.items()} == {
         k: {n: v.tolist() for n, v in d.items()} for k, d in m.sets.items()
     }
@@ -261,7 +268,7 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
     for other in (as_pv, as_meshio):
         b = atlasmesh.Atlas.build(other, modes=2, mesh=False)
         assert np.allclose(b.mean, a.mean, atol=1e-12)
-    assert np.allclose(a.fit(as_pv[0], mesh=False).weights, a.fit(*shapes[0], mesh=False).weights, atol=1e-12)
+    assert np.allclose(a.fit(as_pv[0], mesh=False).sd, a.fit(*shapes[0], mesh=False).sd, atol=1e-12)
     # An atlas pickles whole: the same model, mesh and fit after.
     meshed = atlasmesh.Atlas.build(shapes, modes=2)
     again = pickle.loads(pickle.dumps(meshed))
@@ -269,7 +276,7 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
     assert np.array_equal(again.modes, meshed.modes) and np.array_equal(again.variances, meshed.variances)
     assert np.array_equal(again.mean_mesh.nodes, meshed.mean_mesh.nodes)
     r1, r2 = meshed.fit(*ellipses(1, seed=9)[0]), again.fit(*ellipses(1, seed=9)[0])
-    assert np.array_equal(r1.mesh.nodes, r2.mesh.nodes) and np.array_equal(r1.weights, r2.weights)
+    assert np.array_equal(r1.mesh.nodes, r2.mesh.nodes) and np.array_equal(r1.sd, r2.sd)
     # Shapes of different point counts, not registered: the error says how, in Python's words.
     uneven = ellipses(3) + ellipses(1, points=118)
     with pytest.raises(atlasmesh.BadInputError, match="register=True"):
@@ -277,7 +284,7 @@ def test_a_mesh_from_arrays_pickles_and_goes_to_pyvista_and_meshio(tmp_path):
     # A result pickles too (for joblib and multiprocessing): arrays, mesh, measures, pose.
     for r in (r1, meshed.fit(*ellipses(1, seed=9)[0], mesh=False)):
         back = pickle.loads(pickle.dumps(r))
-        assert np.array_equal(back.weights, r.weights) and np.array_equal(back.surface, r.surface)
+        assert np.array_equal(back.sd, r.sd) and np.array_equal(back.surface, r.surface)
         assert np.array_equal(back.facets, r.facets) and back.measures == r.measures
         assert back.success == r.success and back.rms_distance == r.rms_distance
         assert (back.mesh is None) == (r.mesh is None)
@@ -328,7 +335,7 @@ def test_hands_leave_one_out_as_the_rust_test(data):
         atlas = atlasmesh.Atlas.build(shapes[:i] + shapes[i + 1 :], modes=11)
         r = atlas.fit(p, f)
         assert r.inverted_elements == 0
-        assert r.mesh.scaled_jacobian.min() > 0
+        assert r.mesh.scaled_jacobian_min.min() > 0
         close += r.rms_distance_relative < 0.01
     assert close >= 36, close
 
@@ -344,7 +351,7 @@ def test_a_femur_fit_from_arrays(data, femur_atlas):
     seconds = time.perf_counter() - start
     print(f"femur fit through Python, arrays in and out: {seconds:.3f} s")
     assert r.mesh.kind == "hex8"
-    assert r.mesh.scaled_jacobian.min() >= 0.2
+    assert r.mesh.scaled_jacobian_min.min() >= 0.2
     assert r.inverted_elements == 0 and r.success
     edge = np.median(np.linalg.norm(points[facets[:, 0]] - points[facets[:, 1]], axis=1))
     assert r.rms_distance <= 0.5 * edge, (r.rms_distance, edge)
@@ -366,12 +373,12 @@ def test_a_femur_mesh_read_back_by_pyvista(data, femur_atlas, tmp_path):
     grid = pv.read(f)
     assert grid.n_points == len(r.mesh.nodes) and grid.n_cells == len(r.mesh.elements)
     assert np.abs(np.asarray(grid.points) - r.mesh.nodes).max() < 1e-9
-    assert np.allclose(grid.cell_data["scaled_jacobian_min"], r.mesh.scaled_jacobian)
+    assert np.allclose(grid.cell_data["scaled_jacobian_min"], r.mesh.scaled_jacobian_min)
     # The same subject as PyVista and meshio read it: the same fit.
     for obj in [pv.read(data / "knee-distal-femur-synthetic-3d/femur/S032_Femur.ply")]:
         again = femur_atlas.fit(obj)
         assert np.allclose(again.mesh.nodes, r.mesh.nodes, atol=1e-9)
-        assert np.allclose(again.weights, r.weights, atol=1e-12)
+        assert np.allclose(again.sd, r.sd, atol=1e-12)
     meshio = pytest.importorskip("meshio")
     m = meshio.read(data / "knee-distal-femur-synthetic-3d/femur/S032_Femur.ply")
     [again] = femur_atlas.fit_many([m], jobs=1)
@@ -464,7 +471,7 @@ def test_a_label_maps_label_is_read_as_a_surface_and_fitted_as_a_subject(data, f
     # A label map where a shape goes: the femur atlas fits it (a vertebra: a poor fit, but
     # the subject is read, named and fitted in the image's frame).
     r = femur_atlas.fit(atlasmesh.LabelMap(seg, "vertebrae_L1", label_table=table), mesh=False)
-    assert np.isfinite(r.weights).all()
+    assert np.isfinite(r.sd).all()
 
 
 def test_materials_from_a_ct_onto_arrays_a_mesh_and_a_file(data, tmp_path):

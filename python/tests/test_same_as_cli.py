@@ -48,7 +48,7 @@ def assert_same(atlas, subjects, tmp_path):
         name = pathlib.Path(path).stem
         cli = by_name[name]
         r = atlas.fit(str(path))
-        assert np.abs(np.asarray(cli["sd"]) - r.weights).max() < 1e-12, name
+        assert np.abs(np.asarray(cli["sd"]) - r.sd).max() < 1e-12, name
         written = meshio.read(out / name / f"{name}_mesh.vtu")
         assert written.points.shape == r.mesh.nodes.shape
         assert np.abs(written.points - r.mesh.nodes).max() < 1e-12, name

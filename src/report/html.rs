@@ -10,8 +10,9 @@
 //! kilobytes each.
 //!
 //! When the page has loaded, a small script checks that every image decoded and records it
-//! on `<body>` (`data-images`, `data-broken`), and records script errors (`data-errors`): the
-//! test opens the page in headless Chromium and reads them back.
+//! on `<body>` (`data-images`, `data-broken`), records script errors (`data-errors`) and how
+//! far its widest table goes beyond the window (`data-overflow`, pixels): the test opens the
+//! page in headless Chromium and reads them back.
 
 use super::{Report, SubjectReport};
 use crate::error::Result;
@@ -80,7 +81,7 @@ fn sparkline(v: &[f64]) -> String {
             (a.min(x), b.max(x))
         });
     let span = (hi - lo).max(1e-12);
-    let (w, h) = (140.0, 36.0);
+    let (w, h) = (90.0, 30.0);
     let coords: Vec<String> = pts
         .iter()
         .enumerate()
@@ -356,7 +357,6 @@ fn subjects(h: &mut String, report: &Report, dir: &Path) {
         "before repair",
         "inverted",
         "E_d per iteration",
-        "files",
     ]);
     for c in &cols {
         let _ = write!(h, "<th>{}</th>", escape(c));
@@ -390,7 +390,9 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, columns: Columns) 
     };
     let _ = write!(
         h,
-        "<tr><td>{name}</td>{}<td data-v=\"{}\">{}</td><td class=\"notes\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        "<tr><td data-v=\"{}\">{name}{}</td>{}<td data-v=\"{}\">{}</td><td class=\"notes\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        escape(&s.name),
+        file_links(s),
         if columns.pictures {
             thumbnail_cell(s, dir, page)
         } else {
@@ -445,10 +447,13 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, columns: Columns) 
         s.inverted_elements,
         sparkline(&s.e_d_history)
     );
-    // Its files, linked (relative to the report's folder), each shown by what follows the
-    // subject's name (`mesh.vtu`, `fit.vtp`; its page as `page`), named whole in the title:
-    // the table then fits a 1400-pixel window.
-    h.push_str("<td class=\"files\">");
+    h.push_str("</tr>\n");
+}
+
+/// A subject's files, linked (relative to the report's folder) under its name, each shown by
+/// what follows the subject's name (`mesh.vtu`, `fit.vtp`; its page as `page`), named whole
+/// in the title: the table then fits a 1400-pixel window.
+fn file_links(s: &SubjectReport) -> String {
     fn whole(f: &str) -> &str {
         f.rsplit('/').next().unwrap_or(f)
     }
@@ -458,6 +463,7 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, columns: Columns) 
         .iter()
         .find(|f| f.ends_with(".html"))
         .map_or(s.name.as_str(), |f| whole(f).trim_end_matches(".html"));
+    let mut h = String::from("<div class=\"files\">");
     for f in s.files.iter().filter(|f| !f.ends_with(".png")) {
         let whole = whole(f);
         let short = if whole.ends_with(".html") {
@@ -477,7 +483,8 @@ fn subject_row(h: &mut String, s: &SubjectReport, dir: &Path, columns: Columns) 
             escape(short)
         );
     }
-    h.push_str("</td></tr>\n");
+    h.push_str("</div>");
+    h
 }
 
 /// The thumbnail cell of a subject's row: its picture, linked to its page.
@@ -513,9 +520,9 @@ h1{font-size:1.4em}h2{font-size:1.15em;margin-top:1.6em}\
 table{border-collapse:collapse;font-size:0.9em}th,td{border:1px solid #ccc;padding:3px 6px;text-align:right}\
 th{background:#f0f0f0;cursor:pointer}td:first-child{text-align:left}\
 .figs{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figcaption{font-size:0.85em;color:#555;max-width:640px}\
-img.fig{max-width:640px;border:1px solid #ddd}img.thumb{height:120px;margin:1px;border:1px solid #ddd}\
+img.fig{max-width:640px;border:1px solid #ddd}img.thumb{max-height:120px;max-width:220px;margin:1px;border:1px solid #ddd}\
 td.pics{white-space:nowrap;text-align:left}.wide{overflow-x:auto;max-width:100%}\
-td.notes{text-align:left;min-width:12em;max-width:28em}td.notes:empty{min-width:0}td.files{text-align:left;min-width:7em}.meta,.hint{color:#555}pre{font-size:0.8em}\
+td.notes{text-align:left;min-width:12em;max-width:28em}td.notes:empty{min-width:0}div.files{font-size:0.85em;max-width:14em}.meta,.hint{color:#555}pre{font-size:0.8em}\
 .verdict.ok{color:#1a7f37}.verdict.bad{color:#b42318;font-weight:bold}tr[data-focus]{cursor:pointer}\
 tr[data-focus]:hover{background:#f6f0ff}table.measures td{text-align:left}";
 
@@ -552,6 +559,11 @@ pub(crate) const SCRIPT: &str = r#"
     document.body.setAttribute('data-images', String(imgs.length));
     document.body.setAttribute('data-broken', String(broken.length));
     document.body.setAttribute('data-errors', errors.join(' | '));
+    var over = 0;
+    document.querySelectorAll('.wide').forEach(function (w) {
+      over = Math.max(over, w.scrollWidth - w.clientWidth);
+    });
+    document.body.setAttribute('data-overflow', String(over));
   });
 })();
 "#;

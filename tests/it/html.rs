@@ -161,6 +161,21 @@ fn view_drew(dom: &str, page: &Path) {
     );
 }
 
+/// How far (pixels) the widest table of `page` goes beyond a window `width` pixels wide, as the
+/// page measures it once loaded (`data-overflow`).
+fn overflow(page: &Path, width: usize) -> usize {
+    let o = chromium(
+        &[&format!("--window-size={width},1000"), "--dump-dom"],
+        page,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let dom = String::from_utf8_lossy(&o.stdout);
+    let body = tags(&dom, "<body").first().copied().unwrap_or_default();
+    attribute(body, "data-overflow")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("the page's check did not run: <body{body}>"))
+}
+
 /// A screenshot of `page`: its pixels (RGB rows).
 fn screenshot(page: &Path, shot: &Path) -> (usize, usize, Vec<u8>) {
     let _ = std::fs::remove_file(shot);
@@ -310,6 +325,13 @@ fn the_demo_report_opens_in_chromium_and_every_view_draws() {
         // The index: population plots and a thumbnail per subject, linked, not embedded.
         let index = dir.join("report.html");
         let dom = open(&index, 10, 10);
+        // Its tables fit a 1400-pixel window: nothing to scroll sideways.
+        assert_eq!(
+            overflow(&index, 1400),
+            0,
+            "pixels beyond a 1400-pixel window in {}",
+            index.display()
+        );
         assert!(!dom.contains("data:image/png"), "{}", index.display());
         assert!(dom.contains("href=\"model.html\""), "{}", index.display());
         let subject_pages: Vec<PathBuf> = pages(&dir, "html")

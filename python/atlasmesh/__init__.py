@@ -130,11 +130,18 @@ _fit_study = Atlas.fit_study
 
 
 def _shapes(shapes, dimension=None):
-    """Each shape of a list or tuple through ``_shape``; anything else as it is (the
-    extension refuses it with its own error)."""
-    if isinstance(shapes, (list, tuple)):
-        return [_shape(s, dimension) for s in shapes]
-    return shapes
+    """Each shape of any iterable of shapes (a list, a tuple, a generator) through
+    ``_shape``; a path, an array or anything not iterable as it is (the extension reads a
+    path, and refuses the rest with its own error)."""
+    import os
+
+    if isinstance(shapes, (str, bytes, os.PathLike, LabelMap)) or hasattr(shapes, "__array__"):
+        return shapes
+    try:
+        items = list(shapes)
+    except TypeError:
+        return shapes
+    return [_shape(s, dimension) for s in items]
 
 
 def _warn(result):

@@ -1,7 +1,7 @@
 """Type stubs of atlasmesh (the extension module atlasmesh._atlasmesh)."""
 
 from os import PathLike
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -159,7 +159,7 @@ class Atlas:
     def load(path: Union[str, PathLike]) -> "Atlas": ...
     @staticmethod
     def build(
-        shapes: List[ShapeLike],
+        shapes: Iterable[ShapeLike],
         modes: Optional[int] = None,
         variance: float = 0.985,
         element_size: Union[str, float] = "auto",
@@ -252,7 +252,7 @@ class Atlas:
         for a subject that misses parts; mesh=False for the fit alone."""
     def fit_many(
         self,
-        subjects: List[ShapeLike],
+        subjects: Iterable[ShapeLike],
         partial: bool = False,
         grid: int = 20,
         alpha: float = 50.0,
@@ -263,7 +263,7 @@ class Atlas:
         FitResult or the exception of each, in order; mesh=False for the fits alone."""
     def fit_study(
         self,
-        subjects: List[ShapeLike],
+        subjects: Iterable[ShapeLike],
         out: Union[str, PathLike],
         partial: bool = False,
         grid: int = 20,
@@ -301,7 +301,7 @@ def map_materials(
     and checks of report.json). The checks' findings are warnings too."""
 
 def leave_one_out(
-    shapes: List[ShapeLike],
+    shapes: Iterable[ShapeLike],
     out: Union[str, PathLike],
     modes: Optional[int] = None,
     variance: float = 0.985,

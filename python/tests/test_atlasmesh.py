@@ -44,6 +44,10 @@ def test_a_2d_atlas_from_arrays_samples_projects_and_fits():
     # In the data's unit: the mean is about as large as the shapes (80 across).
     extent = np.ptp(atlas.mean, axis=0).max()
     assert 60 < extent < 100, extent
+    # Any iterable of shapes: a tuple, a generator, the same atlas as the list.
+    for again in (tuple(shapes), (s for s in shapes)):
+        other = atlasmesh.Atlas.build(again, modes=3, mesh=False)
+        assert np.array_equal(other.mean, atlas.mean) and np.array_equal(other.modes, atlas.modes)
     # project(instance(w)) gives back the instance and w.
     shape = atlas.instance([1.0, -0.5])
     back, sd = atlas.project(shape)

@@ -230,7 +230,8 @@ class Atlas:
     @property
     def mean_mesh(self) -> Optional[Mesh]: ...
     def instance(self, sd: npt.ArrayLike) -> FloatArray:
-        """The shape of weights sd (standard deviations), eq. 4, (N, D)."""
+        """The shape of weights sd (standard deviations of each mode from the first; fewer:
+        the rest 0), eq. 4, (N, D). A single number is refused (BadInputError)."""
     def project(self, points: npt.ArrayLike) -> Tuple[FloatArray, FloatArray]:
         """The closest model shape to corresponding points (any pose), and its weights."""
     def sample(

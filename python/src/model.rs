@@ -605,6 +605,18 @@ impl Atlas {
         py: Python<'py>,
         sd: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
+        // A single number would be mode 1 alone: refused, as it is most likely a mistake.
+        let number = sd.is_instance_of::<pyo3::types::PyFloat>()
+            || sd.is_instance_of::<pyo3::types::PyInt>()
+            || sd
+                .getattr("ndim")
+                .and_then(|n| n.extract::<usize>())
+                .is_ok_and(|n| n == 0);
+        if number {
+            return Err(crate::errors::BadInputError::new_err(
+                "sd: a sequence of weights expected (standard deviations, one per mode from the first; fewer: the rest 0), got a single number; [x] is mode 1 alone",
+            ));
+        }
         each!(&self.inner, a, D => {
             let m = a.atlas.num_modes();
             // The count is checked below, with the model's modes named.

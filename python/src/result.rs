@@ -714,11 +714,13 @@ impl FitResult {
         })
     }
 
-    fn __repr__(&self, py: Python<'_>) -> String {
+    /// The three figures a user looks at first, `None` where the fit has none (a fit made
+    /// with `mesh=False` has no verdict and no mesh quality).
+    fn __repr__(slf: &Bound<'_, Self>) -> String {
         let v = |k: &str| {
-            self.__getattr__(py, k)
-                .map(|x| x.to_string())
-                .unwrap_or_default()
+            slf.getattr(k)
+                .and_then(|x| x.repr())
+                .map_or_else(|_| "None".to_string(), |r| r.to_string())
         };
         format!(
             "FitResult(rms_distance={}, success={}, scaled_jacobian_min={})",

@@ -50,6 +50,10 @@ def test_a_2d_atlas_from_arrays_samples_projects_and_fits():
         assert np.array_equal(other.mean, atlas.mean) and np.array_equal(other.modes, atlas.modes)
     # project(instance(w)) gives back the instance and w.
     shape = atlas.instance([1.0, -0.5])
+    # A single number is not a list of weights.
+    for number in (3.0, 3, np.float64(3.0)):
+        with pytest.raises(atlasmesh.BadInputError, match="single number"):
+            atlas.instance(number)
     back, sd = atlas.project(shape)
     assert np.abs(back - shape).max() < 1e-9 * extent
     assert np.allclose(sd, [1.0, -0.5, 0.0], atol=1e-9)
@@ -392,6 +396,8 @@ def test_a_femur_mesh_read_back_by_pyvista(data, femur_atlas, tmp_path):
     # Without a mesh there is nothing to check: success is None, the mesh's measures NaN.
     assert alone.success is None and alone.failed_checks == []
     assert np.isnan(alone.scaled_jacobian_min) and np.isnan(alone.mesh_rms_distance)
+    # Its repr says None where a fit without a mesh has no figure, never an empty value.
+    assert "success=None" in repr(alone) and "=," not in repr(alone), repr(alone)
     assert np.allclose(alone.surface, r.surface, atol=1e-9)
     assert abs(alone.rms_distance - r.rms_distance) < 1e-9
 

@@ -66,7 +66,8 @@ class Mesh:
     def kind(self) -> str:
         """quad4, hex8, tri3, tet4, hex20 or tet10."""
     @property
-    def vtk_type(self) -> int: ...
+    def vtk_type(self) -> int:
+        """The VTK cell type number of the elements."""
     @property
     def scaled_jacobian_min(self) -> FloatArray:
         """Each element's smallest corner scaled Jacobian, (E,): the cell data
@@ -114,9 +115,12 @@ class FitResult:
     def surface(self) -> FloatArray:
         """The fitted shape projected onto the subject, (N, D)."""
     @property
-    def facets(self) -> IntArray: ...
+    def facets(self) -> IntArray:
+        """The facets of surface (triangles, or outline segments), (F, D) int64."""
     @property
-    def mesh(self) -> Optional[Mesh]: ...
+    def mesh(self) -> Optional[Mesh]:
+        """The subject's FE mesh: the mean mesh morphed onto it (eq. 9), repaired, checked
+        (None for a fit made with mesh=False)."""
     @property
     def measures(self) -> Dict[str, Any]:
         """Every measure of report.json for this subject, as a dict (a copy)."""
@@ -156,7 +160,8 @@ class Atlas:
     Picklable (as the bytes save writes)."""
 
     @staticmethod
-    def load(path: Union[str, PathLike]) -> "Atlas": ...
+    def load(path: Union[str, PathLike]) -> "Atlas":
+        """Loads an atlas written by atlasmesh build or Atlas.save."""
     @staticmethod
     def build(
         shapes: Iterable[ShapeLike],
@@ -207,14 +212,17 @@ class Atlas:
         every fitted mesh (--sets): a sets TOML file or a dict of its tables, e.g.
         {"node_set": [{"name": "DISTAL", "half_space": {"axis": "longest", "below": 0.1}}]}.
         A set of an existing name is replaced; save and pickling keep them."""
-    def save(self, path: Union[str, PathLike]) -> None: ...
+    def save(self, path: Union[str, PathLike]) -> None:
+        """Writes the atlas (safetensors; atlasmesh reads it back)."""
     @property
-    def dimension(self) -> int: ...
+    def dimension(self) -> int:
+        """2 or 3."""
     @property
     def mean(self) -> FloatArray:
         """The mean shape, (N, D), in the data's frame and unit."""
     @property
-    def facets(self) -> IntArray: ...
+    def facets(self) -> IntArray:
+        """The facets of the shapes (triangles or segments), (F, D) int64."""
     @property
     def modes(self) -> FloatArray:
         """Orthonormal modes, (m, N, D)."""
@@ -222,13 +230,16 @@ class Atlas:
     def variances(self) -> FloatArray:
         """The modes' variances in the data's unit squared."""
     @property
-    def cumulative_variance(self) -> FloatArray: ...
+    def cumulative_variance(self) -> FloatArray:
+        """The cumulative share of the variance of the first 1, 2, ... modes (of all the
+        training PCA's modes)."""
     @property
     def explained_variance_ratio(self) -> FloatArray:
         """Each mode's share of the population's variance (scikit-learn's
         explained_variance_ratio_); the steps of cumulative_variance."""
     @property
-    def mean_mesh(self) -> Optional[Mesh]: ...
+    def mean_mesh(self) -> Optional[Mesh]:
+        """The atlas's FE mesh of the mean (data's frame and unit), or None (mesh=False)."""
     def instance(self, sd: npt.ArrayLike) -> FloatArray:
         """The shape of weights sd (standard deviations of each mode from the first; fewer:
         the rest 0), eq. 4, (N, D). A single number is refused (BadInputError)."""
